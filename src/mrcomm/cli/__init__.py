@@ -1,0 +1,1 @@
+"""The ``mrcomm`` command line."""

@@ -1,0 +1,1 @@
+"""Messaging layer: message types, wire encoding, the AON acknowledged protocol."""

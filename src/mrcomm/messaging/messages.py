@@ -1,0 +1,114 @@
+"""Typed messages shared by the agents (SPEC §2) and their wire encoding.
+
+Every message carries the sender id, the sender's incarnation (new each time an agent
+starts), a per-sender sequence number and the send time. Structs are msgspec-tagged so
+one decoder reads any of them.
+"""
+
+from __future__ import annotations
+
+from enum import Enum
+
+import msgspec
+
+# Topic names (the key space in live mode is mrcomm/<team>/<robot>/<topic>).
+TOPIC_ASSIGNMENT = "assignment"
+TOPIC_POSE = "pose"
+TOPIC_TASK_STATUS = "task_status"
+TOPIC_UTILITY = "utility"
+TOPIC_ROLE = "role"
+TOPIC_RSSI = "rssi"
+TOPIC_AON = "aon"
+
+#: Topics that simulated packet loss (SPL) applies to (SPEC §3). AON carries task
+#: status, so it is perturbed too.
+LOSSY_TOPICS = frozenset({TOPIC_POSE, TOPIC_TASK_STATUS, TOPIC_AON})
+
+
+class TaskState(str, Enum):
+    ASSIGNED = "ASSIGNED"
+    STARTED = "STARTED"
+    SUCCESS = "SUCCESS"
+    FAILED = "FAILED"
+    DISCONNECT_ROLE = "DISCONNECT_ROLE"
+    AGENDA_COMPLETE = "AGENDA_COMPLETE"
+
+
+class Message(msgspec.Struct, frozen=True, tag=True, kw_only=True):
+    """Common header of every message."""
+
+    sender: str
+    incarnation: int
+    seq: int
+    stamp: float
+
+
+class TaskSpec(msgspec.Struct, frozen=True):
+    """One task of the mission (SPEC §1 task file)."""
+
+    task_id: str
+    type: str
+    x: float
+    y: float
+    arrival_time: float = 0.0
+    num_robots: int = 1
+    duration: float = 0.0
+    depends: tuple[str, ...] = ()
+
+
+class Assignment(Message, frozen=True, tag="assignment"):
+    """Assigner -> executor: the robot's agenda, the team, sent once at start."""
+
+    robot: str
+    tasks: tuple[TaskSpec, ...]
+    team: tuple[str, ...]
+
+
+class PoseMsg(Message, frozen=True, tag="pose"):
+    x: float
+    y: float
+    theta: float
+    v: float = 0.0
+
+
+class TaskStatus(Message, frozen=True, tag="task_status"):
+    """A robot's report about one of its tasks (or about itself, for role events)."""
+
+    robot: str
+    task_id: str
+    state: TaskState
+
+
+class UtilityMsg(Message, frozen=True, tag="utility"):
+    round: int
+    utility: float
+
+
+class RoleMsg(Message, frozen=True, tag="role"):
+    round: int
+    role: str
+    leader: str
+
+
+class RssiMsg(Message, frozen=True, tag="rssi"):
+    """Pulse -> its robot: measured RSSI (dBm) of one peer."""
+
+    robot: str
+    peer: str
+    rssi: float
+
+
+AnyMessage = Assignment | PoseMsg | TaskStatus | UtilityMsg | RoleMsg | RssiMsg
+
+_encoder = msgspec.msgpack.Encoder()
+_decoder = msgspec.msgpack.Decoder(AnyMessage)
+
+
+def encode(message: Message) -> bytes:
+    """Compact binary wire form (msgpack)."""
+    return _encoder.encode(message)
+
+
+def decode(data: bytes) -> Message:
+    """Inverse of :func:`encode`; raises ``msgspec.DecodeError`` on bad input."""
+    return _decoder.decode(data)  # type: ignore[no-any-return]

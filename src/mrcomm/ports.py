@@ -1,0 +1,77 @@
+"""The two ports every agent acts through, so the same agent runs in every mode.
+
+* :class:`Bus` — publish/subscribe of typed messages (in-process bus in simulation,
+  Zenoh in live mode). Each agent holds its own endpoint; perturbations are applied by
+  the receiving endpoint.
+* :class:`Base` — the robot's motion layer, like ROS move_base: ``navigate_to(goal)``,
+  ``cancel()``, ``status``, ``pose``, odometry.
+
+Agents are stepped with ``step(now)``: they never sleep, block or read a global clock.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from enum import Enum
+from typing import Protocol
+
+from mrcomm.messaging.messages import Message
+from mrcomm.world.geometry import Pose
+
+Handler = Callable[[Message], None]
+
+
+class Bus(Protocol):
+    """One agent's endpoint on the team's publish/subscribe network."""
+
+    @property
+    def owner(self) -> str:
+        """Id of the agent this endpoint belongs to."""
+        ...
+
+    def publish(self, topic: str, message: Message) -> None:
+        """Send a message to every subscriber of ``topic`` (best effort)."""
+        ...
+
+    def subscribe(self, topic: str, handler: Handler) -> None:
+        """Call ``handler(message)`` for each message on ``topic`` that reaches us."""
+        ...
+
+
+class NavStatus(Enum):
+    """State of the current navigation goal, as move_base reports it."""
+
+    IDLE = "idle"
+    ACTIVE = "active"
+    SUCCEEDED = "succeeded"
+    ABORTED = "aborted"
+
+
+class Base(Protocol):
+    """A robot's navigation stack."""
+
+    def navigate_to(self, x: float, y: float) -> None:
+        """Start driving to a goal (replaces any current goal)."""
+        ...
+
+    def cancel(self) -> None:
+        """Stop and drop the current goal (status becomes IDLE)."""
+        ...
+
+    @property
+    def status(self) -> NavStatus: ...
+
+    @property
+    def pose(self) -> Pose:
+        """Localised pose estimate in the map frame."""
+        ...
+
+    @property
+    def odometry_distance(self) -> float:
+        """Distance travelled so far according to wheel odometry (m)."""
+        ...
+
+    @property
+    def speed(self) -> float:
+        """Current forward speed (m/s)."""
+        ...
