@@ -1,0 +1,171 @@
+"""Reading YAML input files and turning what is wrong with them into one-line
+:class:`~mrcomm.errors.InputError` messages.
+
+* :func:`read_yaml` — parse a file strictly (duplicate keys are an error, because
+  PyYAML would otherwise keep the last one silently).
+* :func:`validation_error` — the first error of a pydantic ``ValidationError`` as
+  ``file: [3].location.x: must be a number, got 'abc'``, with "did you mean" for
+  unknown keys.
+"""
+
+from __future__ import annotations
+
+import typing
+from pathlib import Path
+from typing import Any
+
+import pydantic
+import yaml
+
+from mrcomm.errors import InputError, did_you_mean
+
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """SafeLoader that rejects a key given twice in one mapping."""
+
+
+def _construct_unique_mapping(loader: _UniqueKeyLoader, node: yaml.MappingNode) -> Any:
+    seen: set[Any] = set()
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=True)
+        if key in seen:
+            line = key_node.start_mark.line + 1
+            raise yaml.constructor.ConstructorError(
+                None, None, f"key '{key}' given twice (line {line})", key_node.start_mark
+            )
+        seen.add(key)
+    return loader.construct_mapping(node, deep=True)
+
+
+_UniqueKeyLoader.add_constructor(
+    yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
+    _construct_unique_mapping,
+)
+
+
+def read_yaml(path: str | Path, *, field: str | None = None) -> Any:
+    """Parse a YAML file; a missing, unreadable or malformed file is an InputError.
+
+    ``field`` names the key that referred to this file (e.g. ``tasks``), so a missing
+    file is reported against the field that pointed to it.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError("file not found", file=path, field=field) from None
+    except IsADirectoryError:
+        raise InputError("is a directory, expected a YAML file", file=path, field=field) from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise InputError(f"cannot read file ({err})", file=path, field=field) from None
+    try:
+        return yaml.load(text, Loader=_UniqueKeyLoader)  # a SafeLoader subclass
+    except yaml.MarkedYAMLError as err:
+        mark = err.problem_mark or err.context_mark
+        where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark else ""
+        problem = err.problem or err.context or "syntax error"
+        raise InputError(f"not valid YAML: {problem}{where}", file=path) from None
+    except yaml.YAMLError as err:
+        raise InputError(f"not valid YAML: {err}", file=path) from None
+
+
+def format_loc(loc: tuple[int | str, ...]) -> str:
+    """``(3, 'location', 'x')`` -> ``[3].location.x``."""
+    text = ""
+    for part in loc:
+        if isinstance(part, int):
+            text += f"[{part}]"
+        else:
+            text += f".{part}" if text else str(part)
+    return text
+
+
+def _models_in(annotation: Any) -> list[type[pydantic.BaseModel]]:
+    """Every pydantic model class inside a (possibly nested) type annotation."""
+    if isinstance(annotation, type) and issubclass(annotation, pydantic.BaseModel):
+        return [annotation]
+    found: list[type[pydantic.BaseModel]] = []
+    for arg in typing.get_args(annotation):
+        found.extend(_models_in(arg))
+    return found
+
+
+def _keys_at(root: Any, loc: tuple[int | str, ...]) -> list[str]:
+    """Field names of the model found by walking ``loc`` down from ``root`` (a model
+    class or annotation); empty when the walk loses track (then no suggestion)."""
+    candidates = _models_in(root)
+    for part in loc:
+        if isinstance(part, int):
+            continue  # a list index: the element type is already among the candidates
+        nxt: list[type[pydantic.BaseModel]] = []
+        for model in candidates:
+            info = model.model_fields.get(part)
+            if info is not None:
+                nxt.extend(_models_in(info.annotation))
+        candidates = nxt
+    keys: list[str] = []
+    for model in candidates:
+        keys.extend(info.alias or name for name, info in model.model_fields.items())
+    return keys
+
+
+_TYPE_WORDS = {
+    "float_type": "must be a number",
+    "float_parsing": "must be a number",
+    "finite_number": "must be a finite number",
+    "int_type": "must be an integer",
+    "int_parsing": "must be an integer",
+    "int_from_float": "must be an integer",
+    "string_type": "must be a string",
+    "bool_type": "must be true or false",
+    "list_type": "must be a list",
+    "tuple_type": "must be a list",
+    "dict_type": "must be a mapping",
+    "model_type": "must be a mapping",
+    "model_attributes_type": "must be a mapping",
+}
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def validation_error(err: pydantic.ValidationError, *, file: str | Path, root: Any) -> InputError:
+    """The first error of ``err`` as a one-line InputError.
+
+    ``root`` is the model class (or annotation such as ``list[TaskModel]``) that was
+    validated, used to suggest the intended key for an unknown one.
+    """
+    first = err.errors(include_url=False)[0]
+    loc = tuple(first["loc"])
+    kind = first["type"]
+    if kind == "extra_forbidden":
+        key = str(loc[-1])
+        hint = did_you_mean(key, _keys_at(root, loc[:-1]))
+        return InputError(f"unknown key '{key}'{hint}", file=file, field=format_loc(loc[:-1]))
+    if kind == "missing":
+        message = "required key is missing"
+    elif kind in _TYPE_WORDS:
+        message = f"{_TYPE_WORDS[kind]}, got {_short(first.get('input'))}"
+    elif kind == "literal_error":
+        expected = str(first.get("ctx", {}).get("expected", ""))
+        choices = [c.strip(" '\"") for c in expected.replace(" or ", ",").split(",")]
+        got = first.get("input")
+        message = f"must be one of {', '.join(c for c in choices if c)}, got {_short(got)}"
+        message += did_you_mean(str(got), choices)
+    elif kind == "string_too_short":
+        message = "must not be empty"
+    elif kind == "string_pattern_mismatch":
+        pattern = first.get("ctx", {}).get("pattern", "")
+        message = f"must match {pattern}, got {_short(first.get('input'))}"
+    elif kind == "value_error":
+        message = str(first["msg"]).removeprefix("Value error, ")
+    elif kind in ("greater_than_equal", "greater_than", "less_than_equal", "less_than"):
+        message = f"{str(first['msg']).replace('Input should', 'must')}, got {first['input']}"
+    else:
+        message = str(first["msg"]).replace("Input should", "must")
+    return InputError(message, file=file, field=format_loc(loc))
+
+
+__all__ = ["format_loc", "read_yaml", "validation_error"]
