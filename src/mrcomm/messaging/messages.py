@@ -65,10 +65,14 @@ class Assignment(Message, frozen=True, tag="assignment"):
 
 
 class PoseMsg(Message, frozen=True, tag="pose"):
+    """Position, heading and speed; ``goal_dist`` (m, -1 without a goal) lets team
+    mates decide right of way at a near collision."""
+
     x: float
     y: float
     theta: float
     v: float = 0.0
+    goal_dist: float = -1.0
 
 
 class TaskStatus(Message, frozen=True, tag="task_status"):
@@ -77,6 +81,30 @@ class TaskStatus(Message, frozen=True, tag="task_status"):
     robot: str
     task_id: str
     state: TaskState
+
+
+class AonEntry(msgspec.Struct, frozen=True, array_like=True):
+    """One message's AON state as its publisher knows it (see messaging.aon).
+
+    ``have``/``recv`` are member bitmaps (little-endian bytes, members sorted by id): who
+    is known to have the message, who is known to have set *received*. ``ask`` requests
+    a reply from any member that knows more. ``payload`` is omitted once all have it.
+    """
+
+    sender: str
+    incarnation: int
+    seq: int
+    have: bytes
+    recv: bytes
+    ask: bool = False
+    payload: TaskStatus | None = None
+
+
+class AonMsg(Message, frozen=True, tag="aon"):
+    """An AON publication: the publisher's knowledge of several messages at once."""
+
+    team_crc: int
+    entries: tuple[AonEntry, ...] = ()
 
 
 class UtilityMsg(Message, frozen=True, tag="utility"):
@@ -98,7 +126,7 @@ class RssiMsg(Message, frozen=True, tag="rssi"):
     rssi: float
 
 
-AnyMessage = Assignment | PoseMsg | TaskStatus | UtilityMsg | RoleMsg | RssiMsg
+AnyMessage = Assignment | PoseMsg | TaskStatus | UtilityMsg | RoleMsg | RssiMsg | AonMsg
 
 _encoder = msgspec.msgpack.Encoder()
 _decoder = msgspec.msgpack.Decoder(AnyMessage)

@@ -1,0 +1,107 @@
+"""Task assigner agent (SPEC §1).
+
+Loads the mission, identifies the team, assigns tasks round-robin at mission start
+(the assignment topic is not perturbed), then records, without interfering, every
+message it receives. At the end it decides which tasks failed to be communicated: those
+whose SUCCESS status from the robot they were assigned to never reached it.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Sequence
+
+from mrcomm.agents.assignment import round_robin
+from mrcomm.messaging.messages import (
+    TOPIC_ASSIGNMENT,
+    TOPIC_POSE,
+    TOPIC_TASK_STATUS,
+    Assignment,
+    Message,
+    TaskSpec,
+    TaskState,
+    TaskStatus,
+)
+from mrcomm.ports import Bus
+
+ASSIGNER_ID = "assigner"
+
+
+class TaskAssigner:
+    """Assigns the mission once and records what the team reports."""
+
+    def __init__(
+        self,
+        bus: Bus,
+        team: Sequence[str],
+        tasks: Sequence[TaskSpec],
+        *,
+        incarnation: int = 1,
+    ) -> None:
+        self.bus = bus
+        self.team = tuple(team)
+        self.tasks = tuple(tasks)
+        self.incarnation = incarnation
+        self.agenda = round_robin(self.tasks, self.team)
+        self.assigned = False
+        self.received: Counter[str] = Counter()  # topic -> messages received
+        # (task_id, robot) -> time the SUCCESS status first arrived
+        self.success_received: dict[tuple[str, str], float] = {}
+        self.status_log: list[tuple[float, TaskStatus]] = []
+        self._seq = 0
+        self._now = 0.0
+        bus.subscribe(TOPIC_TASK_STATUS, self._on_status)
+        bus.subscribe(TOPIC_POSE, self._on_pose)
+
+    @property
+    def agent_id(self) -> str:
+        return self.bus.owner
+
+    def step(self, now: float) -> None:
+        self._now = now
+        if not self.assigned:
+            for robot in self.team:
+                self._seq += 1
+                self.bus.publish(
+                    TOPIC_ASSIGNMENT,
+                    Assignment(
+                        sender=self.agent_id,
+                        incarnation=self.incarnation,
+                        seq=self._seq,
+                        stamp=now,
+                        robot=robot,
+                        tasks=tuple(self.agenda[robot]),
+                        team=self.team,
+                    ),
+                )
+            self.assigned = True
+
+    def record_status(self, status: TaskStatus) -> None:
+        """Record a task status, whichever layer delivered it (plain topic or AON)."""
+        self.received[TOPIC_TASK_STATUS] += 1
+        self.status_log.append((self._now, status))
+        if status.state is TaskState.SUCCESS:
+            self.success_received.setdefault((status.task_id, status.robot), self._now)
+
+    def failed(self) -> list[tuple[str, str]]:
+        """(task_id, robot) pairs whose completion never reached the assigner."""
+        return [
+            (task.task_id, robot)
+            for robot in self.team
+            for task in self.agenda[robot]
+            if (task.task_id, robot) not in self.success_received
+        ]
+
+    def failed_tasks(self) -> list[str]:
+        """Task ids with at least one uncommunicated completion."""
+        seen: dict[str, None] = {}
+        for task_id, _ in self.failed():
+            seen.setdefault(task_id, None)
+        return list(seen)
+
+    def _on_status(self, message: Message) -> None:
+        assert isinstance(message, TaskStatus)
+        self.record_status(message)
+
+    def _on_pose(self, message: Message) -> None:
+        self.received[TOPIC_POSE] += 1

@@ -1,0 +1,79 @@
+"""Near-collision detection and right of way (SPEC §4), as pure functions.
+
+* Danger zone: a semicircle of radius ``danger_radius`` ahead of the robot. A team mate
+  (from its last received pose) inside it that is heading towards the robot or across
+  its path is a near collision; one travelling alongside, ahead or behind in the same
+  direction is not, and neither is one standing still without a goal (a parked robot is
+  an obstacle for the planner, not a collision partner).
+* Event horizon: a small circle around the footprint; any team mate inside it, whatever
+  its heading, is a near collision.
+* Right of way: the robot closer to its own goal goes first; a mate without a goal
+  yields; exact ties are broken by a team-wide random order.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from mrcomm.world.geometry import Pose, wrap_angle
+
+DANGER_ZONE = "danger_zone"
+EVENT_HORIZON = "event_horizon"
+
+
+@dataclass(frozen=True)
+class CollisionParams:
+    danger_radius: float = 1.0
+    event_horizon: float = 0.5  # centre-to-centre distance (footprint radius 0.18 m each)
+    same_direction_deg: float = 45.0
+    moving_speed: float = 0.05  # m/s below which a mate counts as standing still
+
+
+@dataclass(frozen=True)
+class MateState:
+    """What a robot knows of a team mate from its last pose message."""
+
+    robot: str
+    x: float
+    y: float
+    theta: float
+    v: float
+    goal_dist: float  # -1 when it has no goal
+
+
+def classify(own: Pose, mate: MateState, params: CollisionParams) -> str | None:
+    """Kind of near collision with ``mate`` (``EVENT_HORIZON``/``DANGER_ZONE``) or None."""
+    dx = mate.x - own.x
+    dy = mate.y - own.y
+    distance = math.hypot(dx, dy)
+    if distance <= params.event_horizon:
+        return EVENT_HORIZON
+    if distance > params.danger_radius:
+        return None
+    bearing = wrap_angle(math.atan2(dy, dx) - own.theta)
+    if abs(bearing) > math.pi / 2:
+        return None  # behind us: not in the semicircle ahead
+    if mate.v < params.moving_speed and mate.goal_dist < 0:
+        return None  # parked: the planner routes around it
+    heading_difference = abs(wrap_angle(mate.theta - own.theta))
+    if heading_difference < math.radians(params.same_direction_deg):
+        return None  # same direction: alongside, ahead or behind us
+    return DANGER_ZONE
+
+
+def has_right_of_way(
+    own_goal_dist: float,
+    mate_goal_dist: float,
+    own_rank: float,
+    mate_rank: float,
+) -> bool:
+    """Whether this robot goes first. ``*_rank`` is the team-wide random tie-break order
+    (both robots compute the same answer from the same ranks)."""
+    if mate_goal_dist < 0:
+        return True
+    if own_goal_dist < 0:
+        return False
+    if own_goal_dist != mate_goal_dist:
+        return own_goal_dist < mate_goal_dist
+    return own_rank < mate_rank

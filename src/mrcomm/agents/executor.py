@@ -1,0 +1,346 @@
+"""Task executor agent with the NB behaviour (SPEC §1, §4).
+
+One per robot. Receives its agenda, repeatedly drives to the closest available task,
+executes it, publishes its status once (plain publish-subscribe: no acknowledgement, no
+re-send), shares its pose at 5 Hz, avoids near collisions with team mates and records
+its own timeline. A navigation failure leaves the task in the agenda (a task never fails
+because the robot could not reach it; it fails only if its status is not communicated).
+Empty agenda -> idle until the mission ends.
+
+The behaviour is a state machine (``transitions``) described as data in
+:data:`NB_STATES` / :data:`NB_TRANSITIONS`, so diagrams come from the machine itself.
+Communication-aware behaviours subclass this executor (LF encloses NB).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from transitions import Machine
+
+from mrcomm.agents.collision import CollisionParams, MateState, classify, has_right_of_way
+from mrcomm.messaging.messages import (
+    TOPIC_ASSIGNMENT,
+    TOPIC_POSE,
+    TOPIC_TASK_STATUS,
+    Assignment,
+    Message,
+    PoseMsg,
+    TaskSpec,
+    TaskState,
+    TaskStatus,
+)
+from mrcomm.metrics import labels as L
+from mrcomm.metrics.timeline import ACTIVITY, Timeline
+from mrcomm.ports import Base, Bus, NavStatus
+
+NB_STATES = ["unassigned", "navigating", "avoiding", "executing", "waiting", "retrying", "idle"]
+_PLANNING_SOURCES = ["unassigned", "executing", "waiting", "retrying"]
+NB_TRANSITIONS: list[dict[str, Any]] = [
+    {"trigger": "go", "source": _PLANNING_SOURCES, "dest": "navigating"},
+    {"trigger": "wait", "source": _PLANNING_SOURCES, "dest": "waiting"},
+    {"trigger": "finish_agenda", "source": _PLANNING_SOURCES, "dest": "idle"},
+    {"trigger": "arrive", "source": "navigating", "dest": "executing"},
+    {"trigger": "nav_fail", "source": "navigating", "dest": "retrying"},
+    {"trigger": "conflict", "source": "navigating", "dest": "avoiding"},
+    {"trigger": "resume", "source": "avoiding", "dest": "navigating"},
+]
+
+#: Timeline activity recorded while in each state.
+_ACTIVITY_OF_STATE = {
+    "navigating": L.MOVING,
+    "avoiding": L.DELAY,
+    "executing": L.TASK,
+    "waiting": L.WAITING,
+    "retrying": L.WAITING,
+    "idle": L.IDLE,
+}
+
+
+@dataclass(frozen=True)
+class ExecutorParams:
+    pose_period: float = 0.2  # 5 Hz
+    collision: CollisionParams = field(default_factory=CollisionParams)
+    collision_pause: float = 1.0  # both robots pause at least this long
+    give_way_timeout: float = 10.0  # the yielding robot waits at most this long
+    clear_time: float = 0.5  # the conflict must be gone this long before resuming
+    resume_grace: float = 3.0  # no new conflict with the same mate right after resuming
+    repeat_window: float = 5.0  # repeated near collisions within this window are flagged
+    nav_retry_delay: float = 2.0
+
+
+class TaskExecutor:
+    """NB task executor: a stepped state machine acting through the Bus and Base ports."""
+
+    states = NB_STATES
+    transitions = NB_TRANSITIONS
+    state: str
+    trigger: Callable[..., bool]
+
+    def __init__(
+        self,
+        bus: Bus,
+        base: Base,
+        timeline: Timeline,
+        *,
+        tie_break_rank: Callable[[str], float],
+        params: ExecutorParams | None = None,
+        incarnation: int = 1,
+    ) -> None:
+        self.bus = bus
+        self.base = base
+        self.timeline = timeline
+        self.params = params or ExecutorParams()
+        self.incarnation = incarnation
+        self._rank = tie_break_rank
+        self.robot_id = bus.owner
+        self.team: tuple[str, ...] = ()
+        self.agenda: list[TaskSpec] = []
+        self.completed: list[str] = []
+        self.known_done: set[str] = set()  # task ids any robot reported complete
+        self.mates: dict[str, MateState] = {}
+        self.mate_heard: dict[str, float] = {}
+        self.goal: TaskSpec | None = None
+        self._now = 0.0
+        self._t0: float | None = None  # assignment received: mission start for this robot
+        self._seq = 0
+        self._next_pose = 0.0
+        self._moved_once = False
+        self._state_since = 0.0
+        self._avoid_mate: str | None = None
+        self._right_of_way = False
+        self._clear_since: float | None = None
+        self._grace_until: dict[str, float] = {}
+        self._last_conflict: dict[str, float] = {}
+        self._execute_until = 0.0
+        self.machine = Machine(
+            model=self,
+            states=self.states,
+            transitions=self.transitions,
+            initial="unassigned",
+            auto_transitions=False,
+            after_state_change="_after_state_change",
+        )
+        bus.subscribe(TOPIC_ASSIGNMENT, self._on_assignment)
+        bus.subscribe(TOPIC_POSE, self._on_pose)
+        bus.subscribe(TOPIC_TASK_STATUS, self._on_status)
+
+    # -- the agent's life ----------------------------------------------------------
+    @property
+    def done(self) -> bool:
+        """Nothing left to do: agenda complete and nothing left to communicate."""
+        return self.state == "idle"
+
+    def step(self, now: float) -> None:
+        self._now = now
+        if self._t0 is None:
+            return
+        if self.state == "unassigned":
+            self._select_next()
+        if now >= self._next_pose:
+            self._publish_pose()
+            self._next_pose = max(self._next_pose + self.params.pose_period, now)
+        handler = getattr(self, f"_step_{self.state}", None)
+        if handler is not None:
+            handler()
+
+    # -- state handlers --------------------------------------------------------------
+    def _step_navigating(self) -> None:
+        status = self.base.status
+        if not self._moved_once and self.base.speed > 1e-3:
+            self._moved_once = True
+            self.timeline.event(L.STARTED_MOVING, self._now)
+            self.timeline.set_state(ACTIVITY, L.MOVING, self._now)
+        if status is NavStatus.SUCCEEDED:
+            assert self.goal is not None
+            self.timeline.event(L.ARRIVED, self._now, task_id=self.goal.task_id)
+            self._execute_until = self._now + self.goal.duration
+            self.trigger("arrive")
+            self._step_executing()  # a zero-duration task completes right away
+        elif status is NavStatus.ABORTED:
+            self.timeline.event(L.NAV_ABORTED, self._now)
+            self.trigger("nav_fail")
+        else:
+            self._check_collisions()
+
+    def _step_executing(self) -> None:
+        if self._now + 1e-9 < self._execute_until:
+            return
+        task = self.goal
+        assert task is not None
+        self.agenda.remove(task)
+        self.completed.append(task.task_id)
+        self.known_done.add(task.task_id)
+        self.goal = None
+        self.send_status(task.task_id, TaskState.SUCCESS)
+        self.timeline.event(L.TASK_COMPLETED, self._now, task_id=task.task_id)
+        self._select_next()
+
+    def _step_waiting(self) -> None:
+        self._select_next()
+
+    def _step_retrying(self) -> None:
+        if self._now - self._state_since >= self.params.nav_retry_delay:
+            self._select_next()
+
+    def _step_avoiding(self) -> None:
+        elapsed = self._now - self._state_since
+        if elapsed < self.params.collision_pause:
+            return
+        if not self._right_of_way and elapsed < self.params.give_way_timeout:
+            mate = self.mates.get(self._avoid_mate or "")
+            in_conflict = mate is not None and (
+                classify(self.base.pose, mate, self.params.collision) is not None
+            )
+            if in_conflict:
+                self._clear_since = None
+                return
+            if self._clear_since is None:
+                self._clear_since = self._now
+            if self._now - self._clear_since < self.params.clear_time:
+                return
+        if self._avoid_mate is not None:
+            self._grace_until[self._avoid_mate] = self._now + self.params.resume_grace
+        assert self.goal is not None
+        self.base.navigate_to(self.goal.x, self.goal.y)
+        self.trigger("resume")
+
+    # -- decisions -----------------------------------------------------------------
+    def _select_next(self) -> None:
+        """Greedy agenda: the closest task that is available now."""
+        if not self.agenda:
+            self.trigger("finish_agenda")
+            return
+        assert self._t0 is not None
+        elapsed = self._now - self._t0
+        pose = self.base.pose
+        available = [
+            t
+            for t in self.agenda
+            if t.arrival_time <= elapsed + 1e-9 and all(d in self.known_done for d in t.depends)
+        ]
+        if not available:
+            if self.state != "waiting":
+                self.trigger("wait")
+            return
+        task = min(available, key=lambda t: (math.hypot(t.x - pose.x, t.y - pose.y), t.task_id))
+        self.goal = task
+        self.base.navigate_to(task.x, task.y)
+        self.trigger("go")
+
+    def _check_collisions(self) -> None:
+        pose = self.base.pose
+        params = self.params.collision
+        for mate in self.mates.values():
+            if self._grace_until.get(mate.robot, -1.0) > self._now:
+                continue
+            kind = classify(pose, mate, params)
+            if kind is None:
+                continue
+            previous = self._last_conflict.get(mate.robot)
+            repeat = previous is not None and self._now - previous < self.params.repeat_window
+            self._last_conflict[mate.robot] = self._now
+            self.timeline.event(
+                L.NEAR_COLLISION,
+                self._now,
+                mate=mate.robot,
+                kind=kind,
+                repeat=repeat,
+                x=round(pose.x, 3),
+                y=round(pose.y, 3),
+            )
+            self._avoid_mate = mate.robot
+            self._clear_since = None
+            self._right_of_way = has_right_of_way(
+                self._goal_distance(),
+                mate.goal_dist,
+                self._rank(self.robot_id),
+                self._rank(mate.robot),
+            )
+            self.base.cancel()
+            self.trigger("conflict")
+            return
+
+    # -- communication ---------------------------------------------------------------
+    def send_status(self, task_id: str, state: TaskState) -> None:
+        """NB: publish once, no acknowledgement (communication-aware behaviours
+        override this to send with AON)."""
+        self.bus.publish(TOPIC_TASK_STATUS, self._status(task_id, state))
+
+    def _status(self, task_id: str, state: TaskState) -> TaskStatus:
+        self._seq += 1
+        return TaskStatus(
+            sender=self.robot_id,
+            incarnation=self.incarnation,
+            seq=self._seq,
+            stamp=self._now,
+            robot=self.robot_id,
+            task_id=task_id,
+            state=state,
+        )
+
+    def _publish_pose(self) -> None:
+        pose = self.base.pose
+        self._seq += 1
+        self.bus.publish(
+            TOPIC_POSE,
+            PoseMsg(
+                sender=self.robot_id,
+                incarnation=self.incarnation,
+                seq=self._seq,
+                stamp=self._now,
+                x=pose.x,
+                y=pose.y,
+                theta=pose.theta,
+                v=self.base.speed,
+                goal_dist=self._goal_distance(),
+            ),
+        )
+
+    def _goal_distance(self) -> float:
+        if self.goal is None or self.state not in ("navigating", "avoiding"):
+            return -1.0
+        pose = self.base.pose
+        return math.hypot(self.goal.x - pose.x, self.goal.y - pose.y)
+
+    def _on_assignment(self, message: Message) -> None:
+        assert isinstance(message, Assignment)
+        if message.robot != self.robot_id or self._t0 is not None:
+            return
+        self.agenda = list(message.tasks)
+        self.team = tuple(r for r in message.team if r != self.robot_id)
+        self._t0 = self._now
+        self.timeline.event(L.ASSIGNMENT_RECEIVED, self._now, tasks=len(self.agenda))
+        self.timeline.set_state(ACTIVITY, L.INIT, self._now)
+
+    def _on_pose(self, message: Message) -> None:
+        assert isinstance(message, PoseMsg)
+        if message.sender == self.robot_id:
+            return
+        self.mates[message.sender] = MateState(
+            message.sender, message.x, message.y, message.theta, message.v, message.goal_dist
+        )
+        self.mate_heard[message.sender] = self._now
+
+    def _on_status(self, message: Message) -> None:
+        assert isinstance(message, TaskStatus)
+        self.on_team_status(message)
+
+    def on_team_status(self, status: TaskStatus) -> None:
+        """A team mate's status reached us (by whatever layer)."""
+        if status.state is TaskState.SUCCESS:
+            self.known_done.add(status.task_id)
+
+    def _after_state_change(self) -> None:
+        self._state_since = self._now
+        activity = _ACTIVITY_OF_STATE.get(self.state)
+        if self.state == "navigating" and not self._moved_once:
+            activity = L.INIT  # assignment received, not yet moving
+        if activity is not None:
+            self.timeline.set_state(ACTIVITY, activity, self._now)
+        if self.state == "idle":
+            self.timeline.event(L.AGENDA_COMPLETE, self._now)
+            self.send_status("", TaskState.AGENDA_COMPLETE)

@@ -1,0 +1,1 @@
+"""Analysis layer: statistics, figures and reports built from run results."""

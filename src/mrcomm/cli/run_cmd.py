@@ -1,0 +1,137 @@
+"""``mrcomm run``: simulate one mission and report what the network did to the team."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from mrcomm.cli.files import check_writable, write_atomically
+from mrcomm.errors import InputError
+from mrcomm.net.network import NetworkType
+from mrcomm.sim.config import make_config
+from mrcomm.sim.mission import MissionResult, run_mission
+
+
+def run(
+    scenario: Annotated[Path, typer.Argument(help="Scenario YAML (e.g. data/scenarios/s1.yaml).")],
+    network: Annotated[str, typer.Option(help="Network type: wlan | ah.")] = "wlan",
+    spl: Annotated[float, typer.Option(help="Simulated packet loss, percent (0-100).")] = 0.0,
+    behaviour: Annotated[str, typer.Option(help="Team behaviour: nb | lf.")] = "nb",
+    threshold: Annotated[str, typer.Option(help="Signal threshold: none | slt | ssd | esd.")] = (
+        "none"
+    ),
+    seed: Annotated[int, typer.Option(help="Random seed of the run.")] = 1,
+    max_time: Annotated[float, typer.Option(help="Mission time limit, simulated s.")] = 900.0,
+    dt: Annotated[float, typer.Option(help="Simulation step, s.")] = 0.1,
+    rssi_trace: Annotated[
+        Path | None, typer.Option(help="Recorded RSSI trace CSV (time,from,to,rssi) for ESD.")
+    ] = None,
+    signal_model: Annotated[
+        Path | None, typer.Option(help="SSD signal model JSON (default: bundled).")
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    plot: Annotated[Path | None, typer.Option(help="Write a map/trajectory figure (PNG/SVG).")] = (
+        None
+    ),
+) -> None:
+    """Run one mission in simulation (faster than real time)."""
+    if network not in {n.value for n in NetworkType}:
+        raise InputError(f"unknown network {network!r}; choose wlan or ah", field="--network")
+    config = make_config(
+        None,
+        scenario=scenario,
+        network=network,
+        spl=spl,
+        behaviour=behaviour,
+        threshold=threshold,
+        seed=seed,
+        max_time=max_time,
+        dt=dt,
+        rssi_trace=rssi_trace,
+        signal_model=signal_model,
+    )
+    if plot is not None:
+        check_writable(plot, "--plot")
+    result = run_mission(config)
+    if plot is not None:
+        from mrcomm.analysis.mission_plot import save_mission_plot
+
+        write_atomically(plot, lambda tmp: save_mission_plot(result, tmp, fmt=plot.suffix[1:]))
+    if as_json:
+        typer.echo(json.dumps(result.summary(), indent=2))
+    else:
+        print_result(result, Console())
+
+
+def print_result(result: MissionResult, console: Console) -> None:
+    """Human output: mission, per-robot and message tables."""
+    m = result.mission
+    verdict = "[green]successful[/]" if m["successful"] else "[red]failed[/]"
+    console.print(
+        f"[bold]{result.config['label']}[/] on {result.config['scenario_name']} "
+        f"(seed {result.config['seed']}): mission {verdict}; "
+        f"{result.sim_time_s:.1f} s simulated in {result.wall_time_s:.2f} s "
+        f"({result.sim_time_s / max(result.wall_time_s, 1e-9):.0f}x real time)"
+    )
+    mission = Table(title="Mission", show_header=True)
+    mission.add_column("metric")
+    mission.add_column("value", justify="right")
+    for key in (
+        "tasks_completed",
+        "failed_tasks",
+        "execution_phase_time",
+        "total_movement_time",
+        "total_distance",
+        "near_collisions",
+        "delay_time",
+        "idle_time",
+        "min_separation",
+        "max_separation",
+        "timed_out",
+    ):
+        mission.add_row(key, _fmt(m.get(key)))
+    console.print(mission)
+
+    robots = Table(title="Robots")
+    columns = (
+        "tasks_assigned",
+        "tasks_completed",
+        "tasks_failed",
+        "initialisation_time",
+        "movement_time",
+        "distance",
+        "near_collisions",
+        "delay_time",
+        "idle_time",
+        "min_separation",
+        "max_separation",
+    )
+    robots.add_column("robot")
+    for c in columns:
+        robots.add_column(c.replace("_", " "), justify="right")
+    for rid, row in result.robots.items():
+        robots.add_row(rid, *(_fmt(row.get(c)) for c in columns))
+    console.print(robots)
+
+    messages = Table(title="Messages")
+    messages.add_column("topic")
+    for c in ("sent", "received", "dropped_loss", "dropped_range"):
+        messages.add_column(c.replace("_", " "), justify="right")
+    for topic, counts in result.messages.items():
+        messages.add_row(topic, *(str(counts[c]) for c in counts))
+    console.print(messages)
+
+
+def _fmt(value: Any) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, float):
+        return f"{value:.2f}"
+    if isinstance(value, list):
+        return ", ".join(map(str, value)) or "none"
+    return str(value)

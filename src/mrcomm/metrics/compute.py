@@ -1,0 +1,103 @@
+"""SPEC §8 metrics computed from per-robot timelines.
+
+Team totals are sums of what each robot recorded about itself (distributed data
+recording), so a near collision between two robots counts once for each of them, as in
+the original study.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from mrcomm.metrics import labels as L
+from mrcomm.metrics.timeline import Timeline
+
+
+@dataclass(frozen=True)
+class RobotFacts:
+    """What the simulator (or the robot's own odometry) knows beyond the timeline."""
+
+    distance: float  # odometry distance travelled (m)
+    min_separation: float  # distance to the closest team mate, minimum over the run (m)
+    max_separation: float  # distance to the furthest team mate, maximum over the run (m)
+    tasks_assigned: int
+    tasks_failed: int
+
+
+def robot_metrics(timeline: Timeline, facts: RobotFacts) -> dict[str, Any]:
+    """Per-robot metrics (all times in seconds)."""
+    assignment = timeline.first(L.ASSIGNMENT_RECEIVED)
+    started = timeline.first(L.STARTED_MOVING)
+    init_time = (
+        started.time - assignment.time if (assignment is not None and started is not None) else None
+    )
+    collisions = [e for e in timeline.events if e.label == L.NEAR_COLLISION]
+    last_completion = timeline.last(L.TASK_COMPLETED)
+    return {
+        "tasks_assigned": facts.tasks_assigned,
+        "tasks_completed": timeline.count(L.TASK_COMPLETED),
+        "tasks_failed": facts.tasks_failed,
+        "initialisation_time": init_time,
+        "movement_time": timeline.total(L.MOVING),
+        "task_execution_time": timeline.total(L.TASK),
+        "delay_time": timeline.total(L.DELAY),
+        "idle_time": timeline.total(L.IDLE),
+        "waiting_time": timeline.total(L.WAITING),
+        "distance": facts.distance,
+        "near_collisions": len(collisions),
+        "near_collisions_filtered": sum(1 for e in collisions if not e.data.get("repeat")),
+        "nav_aborts": timeline.count(L.NAV_ABORTED),
+        "last_task_time": last_completion.time if last_completion else None,
+        "min_separation": facts.min_separation,
+        "max_separation": facts.max_separation,
+    }
+
+
+def execution_phase(timelines: Mapping[str, Timeline]) -> tuple[float | None, float | None]:
+    """(start, end) of the execution phase: every robot has its assignment -> the last
+    task completed. ``None`` where it never began or no task was completed."""
+    received = [tl.first(L.ASSIGNMENT_RECEIVED) for tl in timelines.values()]
+    if not received or any(e is None for e in received):
+        return None, None
+    start = max(e.time for e in received if e is not None)
+    completions = [e.time for tl in timelines.values() for e in tl.events if e.label == L.TASK_COMPLETED]
+    return start, (max(completions) if completions else None)
+
+
+def mission_metrics(
+    robots: Mapping[str, dict[str, Any]],
+    timelines: Mapping[str, Timeline],
+    *,
+    tasks_total: int,
+    failed_tasks: list[str],
+) -> dict[str, Any]:
+    """Team metrics: totals / extremes over the per-robot metrics."""
+    start, end = execution_phase(timelines)
+    rows = list(robots.values())
+
+    def total(key: str) -> float:
+        return float(sum(r[key] for r in rows))
+
+    return {
+        "successful": not failed_tasks and start is not None,
+        "failed_tasks": sorted(failed_tasks, key=_task_sort_key),
+        "tasks_total": tasks_total,
+        "tasks_completed": int(total("tasks_completed")),
+        "execution_phase_time": (end - start) if (start is not None and end is not None) else None,
+        "total_movement_time": total("movement_time"),
+        "total_distance": total("distance"),
+        "near_collisions": int(total("near_collisions")),
+        "near_collisions_filtered": int(total("near_collisions_filtered")),
+        "delay_time": total("delay_time"),
+        "idle_time": total("idle_time"),
+        "task_execution_time": total("task_execution_time"),
+        "min_separation": min((r["min_separation"] for r in rows), default=None),
+        "max_separation": max((r["max_separation"] for r in rows), default=None),
+    }
+
+
+def _task_sort_key(task_id: str) -> tuple[int, str]:
+    # Numeric ids sort numerically ('2' before '10'); others after, alphabetically.
+    return (int(task_id), "") if task_id.isdigit() else (1 << 30, task_id)

@@ -1,0 +1,19 @@
+"""Names of the timeline states and events the agents record (one place, so metrics,
+figures and recordings agree)."""
+
+# Activity track (mutually exclusive).
+INIT = "init"  # assignment received -> starts moving
+MOVING = "moving"  # navigating (includes re-planning and recovery)
+DELAY = "delay"  # paused for a near collision
+TASK = "task"  # at a task location, executing it (arrival -> status sent)
+WAITING = "waiting"  # agenda not empty but nothing to do now (task not yet available)
+IDLE = "idle"  # agenda complete, waiting for the team
+
+# Events.
+ASSIGNMENT_RECEIVED = "assignment_received"
+STARTED_MOVING = "started_moving"
+ARRIVED = "arrived"
+TASK_COMPLETED = "task_completed"
+NEAR_COLLISION = "near_collision"
+NAV_ABORTED = "nav_aborted"
+AGENDA_COMPLETE = "agenda_complete"

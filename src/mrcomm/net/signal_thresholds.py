@@ -1,0 +1,1 @@
+"""Signal-model thresholds (SSD, ESD) — filled in once the signal models exist."""

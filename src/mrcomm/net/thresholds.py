@@ -1,0 +1,107 @@
+"""Signal thresholds — the second perturbation of SPEC §3 — as a registry.
+
+A threshold turns the geometry of every link (distance, line of sight) into an RSSI
+estimate (where it has one) and a *warning* flag: the link is about to break. Adding a
+threshold is one class registered by name::
+
+    @register_threshold("mine")
+    class Mine(Threshold): ...
+
+Built in: ``none``, ``slt`` (distance stands in for signal strength); ``ssd`` and
+``esd`` live in :mod:`mrcomm.net.signal_thresholds`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mrcomm.errors import InputError, did_you_mean
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+_REGISTRY: dict[str, type[Threshold]] = {}
+
+
+class Threshold:
+    """Base class: evaluates RSSI and warnings for all pairs at once."""
+
+    name: ClassVar[str] = ""
+    #: Whether :meth:`evaluate` needs the line-of-sight matrix (costly: ray casts).
+    needs_line_of_sight: ClassVar[bool] = False
+    #: Network types this threshold may be combined with (None: any).
+    network_types: ClassVar[frozenset[str] | None] = None
+
+    def evaluate(
+        self, distance: FloatArray, line_of_sight: BoolArray | None, now: float
+    ) -> tuple[FloatArray | None, BoolArray]:
+        """Return (rssi or None, warning) for the (n, n) distance matrix."""
+        raise NotImplementedError
+
+    def describe(self) -> dict[str, Any]:
+        return {"threshold": self.name}
+
+
+def register_threshold(name: str) -> Callable[[type[Threshold]], type[Threshold]]:
+    def decorate(cls: type[Threshold]) -> type[Threshold]:
+        if name in _REGISTRY:
+            raise ValueError(f"threshold {name!r} registered twice")
+        cls.name = name
+        _REGISTRY[name] = cls
+        return cls
+
+    return decorate
+
+
+def threshold_names() -> list[str]:
+    _load_builtin()
+    return sorted(_REGISTRY)
+
+
+def threshold_class(name: str) -> type[Threshold]:
+    _load_builtin()
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        raise InputError(
+            f"unknown threshold {name!r}{did_you_mean(name, _REGISTRY)}; "
+            f"choose from {', '.join(sorted(_REGISTRY))}",
+            field="threshold",
+        ) from None
+
+
+def _load_builtin() -> None:
+    # Signal-model thresholds import scikit-learn-backed tables; load them on demand.
+    from mrcomm.net import signal_thresholds  # noqa: F401
+
+
+@register_threshold("none")
+class NoThreshold(Threshold):
+    """No threshold: links never warn."""
+
+    def evaluate(
+        self, distance: FloatArray, line_of_sight: BoolArray | None, now: float
+    ) -> tuple[FloatArray | None, BoolArray]:
+        return None, np.zeros(distance.shape, dtype=np.bool_)
+
+
+@register_threshold("slt")
+class DistanceThreshold(Threshold):
+    """SLT — simulated loss threshold: distance stands in for signal strength
+    (warning beyond 4.0 m by default; the limit is the network's range)."""
+
+    def __init__(self, warning_m: float = 4.0) -> None:
+        self.warning_m = warning_m
+
+    def evaluate(
+        self, distance: FloatArray, line_of_sight: BoolArray | None, now: float
+    ) -> tuple[FloatArray | None, BoolArray]:
+        with np.errstate(invalid="ignore"):
+            return None, distance > self.warning_m  # NaN (virtual node) never warns
+
+    def describe(self) -> dict[str, Any]:
+        return {"threshold": self.name, "warning_m": self.warning_m}

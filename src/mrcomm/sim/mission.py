@@ -1,0 +1,260 @@
+"""One mission in simulation: the lock-step loop (SPEC §7 run; DESIGN ``sim`` mode).
+
+Each step of ``dt`` simulated seconds:
+
+1. evaluate every link from the robots' true positions (distance, range, threshold);
+2. deliver the messages published during the previous step (receiver-side range cut
+   and packet loss happen here);
+3. step every agent (assigner, executors);
+4. advance every robot's base (navigation and kinematics).
+
+The mission ends when every executor is done and no message is in flight, or at the
+time limit. The life cycle (``step``/``done``) is separate from the results, which are
+assembled once by :meth:`Mission.result`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
+from mrcomm.agents.behaviours import behaviour_class
+from mrcomm.agents.executor import TaskExecutor
+from mrcomm.metrics.compute import RobotFacts, mission_metrics, robot_metrics
+from mrcomm.metrics.timeline import Timeline
+from mrcomm.net.inprocess import InProcessNetwork
+from mrcomm.net.links import LinkModel, LinkRecorder, LinkState
+from mrcomm.robot.navigation import SimBase
+from mrcomm.seeding import stream
+from mrcomm.sim.config import RunConfig
+from mrcomm.sim.signals import build_threshold
+from mrcomm.sim.world import SimWorld
+from mrcomm.world.scenario import Scenario
+
+TRAJECTORY_PERIOD = 0.5  # s between recorded trajectory samples
+
+
+@dataclass
+class MissionResult:
+    """Everything a run produced. ``summary()`` is the JSON of ``mrcomm run --json``."""
+
+    config: dict[str, Any]
+    mission: dict[str, Any]
+    robots: dict[str, dict[str, Any]]
+    messages: dict[str, dict[str, int]]
+    messages_by_agent: dict[str, dict[str, dict[str, int]]]
+    links: dict[str, dict[str, Any]]
+    sim_time_s: float
+    wall_time_s: float
+    timelines: dict[str, Timeline]
+    trajectories: dict[str, list[tuple[float, float, float]]]
+    scenario: Scenario
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "config": self.config,
+            "mission": self.mission,
+            "robots": self.robots,
+            "messages": self.messages,
+            "messages_by_agent": self.messages_by_agent,
+            "links": self.links,
+            "sim_time_s": self.sim_time_s,
+            "wall_time_s": self.wall_time_s,
+        }
+
+
+class Mission:
+    """A mission being simulated; drive it with :meth:`run` or :meth:`step`."""
+
+    def __init__(self, config: RunConfig, world: SimWorld | None = None) -> None:
+        self.config = config
+        self.world = world or SimWorld.load(config.scenario)
+        scenario = self.world.scenario
+        self.robot_ids = tuple(r.id for r in scenario.robots)
+        self.node_ids = (*self.robot_ids, ASSIGNER_ID)
+        seed = config.seed
+        self.network = InProcessNetwork(
+            self.node_ids,
+            loss_percent=config.spl,
+            loss_rngs={a: stream(seed, "loss", a) for a in self.node_ids},
+        )
+        self.links = LinkModel(
+            self.node_ids,
+            scenario.grid,
+            config.network,
+            build_threshold(config),
+            ah_range=config.ah_range,
+        )
+        host = scenario.assigner.host
+        skip = {(ASSIGNER_ID, host), (host, ASSIGNER_ID)} if host else set()
+        self.link_recorder = LinkRecorder(self.node_ids, skip)
+        self.bases = {
+            r.id: SimBase(
+                r.id,
+                scenario.grid,
+                self.world.planner,
+                r.pose,
+                self.world.robot_params,
+                stream(seed, "robot", r.id),
+            )
+            for r in scenario.robots
+        }
+        self.timelines = {rid: Timeline(rid) for rid in self.robot_ids}
+        ranks = stream(seed, "tie-break").permutation(len(self.robot_ids))
+        rank_of = {rid: float(ranks[i]) for i, rid in enumerate(self.robot_ids)}
+        executor_class = behaviour_class(config.behaviour)
+        self.executors: dict[str, TaskExecutor] = {
+            rid: executor_class(
+                self.network.endpoint(rid),
+                self.bases[rid],
+                self.timelines[rid],
+                tie_break_rank=rank_of.__getitem__,
+            )
+            for rid in self.robot_ids
+        }
+        self.assigner = TaskAssigner(
+            self.network.endpoint(ASSIGNER_ID), self.robot_ids, scenario.tasks
+        )
+        n = len(self.robot_ids)
+        self._min_sep = np.full(n, np.inf)
+        self._max_sep = np.zeros(n)
+        self._off_diagonal = ~np.eye(n, dtype=np.bool_)
+        self.trajectories: dict[str, list[tuple[float, float, float]]] = {
+            rid: [] for rid in self.robot_ids
+        }
+        self._next_sample = 0.0
+        self.now = 0.0
+        self.steps = 0
+        self.finished = False
+        self.last_links: LinkState | None = None
+        self._wall = 0.0
+
+    # -- life cycle ------------------------------------------------------------------
+    @property
+    def done(self) -> bool:
+        return self.finished or self.now >= self.config.max_time - 1e-9
+
+    def run(self) -> MissionResult:
+        start = time.perf_counter()
+        while not self.done:
+            self.step()
+        self._wall = time.perf_counter() - start
+        return self.result()
+
+    def step(self) -> None:
+        now = self.now
+        dt = self.config.dt
+        positions = self._node_positions()
+        links = self.links.update(positions, now)
+        self.last_links = links
+        self.network.set_connected(links.connected.tolist())
+        self.network.deliver(now)
+        self.assigner.step(now)
+        for executor in self.executors.values():
+            executor.step(now)
+        truth = [(b.true_pose.x, b.true_pose.y) for b in self.bases.values()]
+        for i, base in enumerate(self.bases.values()):
+            others = truth[:i] + truth[i + 1 :]
+            base.update(dt, now, others)
+        self.link_recorder.record(links, dt)
+        self._track_separation(links)
+        if now >= self._next_sample:
+            self._sample_trajectories(now)
+            self._next_sample += TRAJECTORY_PERIOD
+        self.steps += 1
+        self.now = round(now + dt, 9)
+        if all(e.done for e in self.executors.values()) and self.network.pending() == 0:
+            self.finished = True
+
+    # -- per-step bookkeeping ------------------------------------------------------------
+    def _node_positions(self) -> np.ndarray:
+        rows = [[b.true_pose.x, b.true_pose.y] for b in self.bases.values()]
+        spec = self.world.scenario.assigner
+        if spec.kind == "robot" and spec.host is not None:
+            host = self.bases[spec.host].true_pose
+            rows.append([host.x, host.y])
+        elif spec.kind == "base_station" and spec.position is not None:
+            rows.append([spec.position[0], spec.position[1]])
+        else:
+            rows.append([math.nan, math.nan])  # virtual: no position, never out of range
+        return np.array(rows, dtype=np.float64)
+
+    def _track_separation(self, links: LinkState) -> None:
+        n = len(self.robot_ids)
+        if n < 2:
+            return
+        d = links.distance[:n, :n]
+        closest = np.where(self._off_diagonal, d, np.inf).min(axis=1)
+        furthest = np.where(self._off_diagonal, d, -np.inf).max(axis=1)
+        np.minimum(self._min_sep, closest, out=self._min_sep)
+        np.maximum(self._max_sep, furthest, out=self._max_sep)
+
+    def _sample_trajectories(self, now: float) -> None:
+        for rid, base in self.bases.items():
+            p = base.true_pose
+            self.trajectories[rid].append((round(now, 3), round(p.x, 3), round(p.y, 3)))
+
+    # -- results -------------------------------------------------------------------------
+    def result(self) -> MissionResult:
+        end = self.now
+        self._sample_trajectories(end)
+        for tl in self.timelines.values():
+            tl.close_all(end)
+        failed_pairs = self.assigner.failed()
+        robots: dict[str, dict[str, Any]] = {}
+        for i, rid in enumerate(self.robot_ids):
+            facts = RobotFacts(
+                distance=round(self.bases[rid].odometry_distance, 6),
+                min_separation=_round(self._min_sep[i]),
+                max_separation=_round(self._max_sep[i]),
+                tasks_assigned=len(self.assigner.agenda[rid]),
+                tasks_failed=sum(1 for _, robot in failed_pairs if robot == rid),
+            )
+            metrics = robot_metrics(self.timelines[rid], facts)
+            metrics["failed_tasks"] = [t for t, robot in failed_pairs if robot == rid]
+            metrics["replans"] = getattr(self.bases[rid], "replans", None)
+            metrics["recoveries"] = getattr(self.bases[rid], "recoveries", None)
+            robots[rid] = _rounded(metrics)
+        mission = mission_metrics(
+            robots,
+            self.timelines,
+            tasks_total=len(self.world.scenario.tasks),
+            failed_tasks=self.assigner.failed_tasks(),
+        )
+        mission["timed_out"] = not self.finished
+        mission["end_time"] = round(end, 6)
+        config = self.config.model_dump(mode="json")
+        config["label"] = self.config.label()
+        config["scenario_name"] = self.world.scenario.name
+        return MissionResult(
+            config=config,
+            mission=_rounded(mission),
+            robots=robots,
+            messages=self.network.counts_by_topic(),
+            messages_by_agent=self.network.counts_by_agent(),
+            links=self.link_recorder.summaries(),
+            sim_time_s=round(end, 6),
+            wall_time_s=self._wall,
+            timelines=self.timelines,
+            trajectories=self.trajectories,
+            scenario=self.world.scenario,
+        )
+
+
+def run_mission(config: RunConfig, world: SimWorld | None = None) -> MissionResult:
+    """Simulate one mission to its end and return its results."""
+    return Mission(config, world).run()
+
+
+def _round(value: float) -> float | None:
+    return round(float(value), 6) if math.isfinite(value) else None
+
+
+def _rounded(metrics: dict[str, Any]) -> dict[str, Any]:
+    # Six decimals: stable JSON, far below any physical meaning.
+    return {k: (round(v, 6) if isinstance(v, float) else v) for k, v in metrics.items()}
