@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import sys
 
-import click
 import typer
 
 from mrcomm.cli.run_cmd import run
@@ -19,6 +18,14 @@ cli = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
+
+
+@cli.callback()
+def _group() -> None:
+    """MRComm: simulate multi-robot missions under degraded communication and measure
+    what the network did to the team."""
+
+
 cli.command("run")(run)
 
 
@@ -29,13 +36,18 @@ def app() -> None:
     except InputError as err:
         typer.echo(f"mrcomm: error: {err.one_line()}", err=True)
         sys.exit(2)
-    except click.exceptions.Exit as err:
+    except typer.Exit as err:
         sys.exit(err.exit_code)
-    except click.exceptions.Abort:
+    except typer.Abort:
         typer.echo("mrcomm: aborted", err=True)
         sys.exit(130)
-    except click.ClickException as err:
+    except typer.TyperException as err:
+        ctx = getattr(err, "ctx", None)
+        if type(err).__name__ == "NoArgsIsHelpError" and ctx is not None:
+            typer.echo(ctx.get_help())  # bare `mrcomm` or `mrcomm signal`: show help
+            sys.exit(0)
+        # Usage errors (unknown option, bad value type) exit 2, like every bad input.
         message = " ".join(err.format_message().split())
         typer.echo(f"mrcomm: error: {message}", err=True)
-        sys.exit(2 if isinstance(err, click.UsageError) else err.exit_code)
+        sys.exit(err.exit_code)
     sys.exit(code if isinstance(code, int) else 0)

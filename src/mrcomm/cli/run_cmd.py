@@ -98,24 +98,25 @@ def print_result(result: MissionResult, console: Console) -> None:
     console.print(mission)
 
     robots = Table(title="Robots")
-    columns = (
+    robots.add_column("metric")
+    for rid in result.robots:
+        robots.add_column(rid, justify="right")
+    for key in (
         "tasks_assigned",
         "tasks_completed",
         "tasks_failed",
+        "failed_tasks",
         "initialisation_time",
         "movement_time",
+        "task_execution_time",
         "distance",
         "near_collisions",
         "delay_time",
         "idle_time",
         "min_separation",
         "max_separation",
-    )
-    robots.add_column("robot")
-    for c in columns:
-        robots.add_column(c.replace("_", " "), justify="right")
-    for rid, row in result.robots.items():
-        robots.add_row(rid, *(_fmt(row.get(c)) for c in columns))
+    ):
+        robots.add_row(key, *(_fmt(row.get(key)) for row in result.robots.values()))
     console.print(robots)
 
     messages = Table(title="Messages")

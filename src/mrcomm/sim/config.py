@@ -8,8 +8,10 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from mrcomm.agents.behaviours import behaviour_class
 from mrcomm.errors import InputError, did_you_mean
 from mrcomm.net.network import AH_RANGE_M, NetworkType
+from mrcomm.net.thresholds import threshold_class
 
 
 class RunConfig(BaseModel):
@@ -34,6 +36,9 @@ class RunConfig(BaseModel):
 
     @model_validator(mode="after")
     def _combinations(self) -> RunConfig:
+        # Registry look-ups raise InputError with a "did you mean" hint.
+        threshold_class(self.threshold)
+        behaviour_class(self.behaviour)
         if self.threshold == "ssd" and self.network is not NetworkType.AH:
             raise ValueError("threshold 'ssd' needs network 'ah' (SSD is ad-hoc only)")
         if self.threshold == "esd" and self.rssi_trace is None:

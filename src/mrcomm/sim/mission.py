@@ -29,7 +29,7 @@ from mrcomm.metrics.compute import RobotFacts, mission_metrics, robot_metrics
 from mrcomm.metrics.timeline import Timeline
 from mrcomm.net.inprocess import InProcessNetwork
 from mrcomm.net.links import LinkModel, LinkRecorder, LinkState
-from mrcomm.robot.navigation import SimBase
+from mrcomm.robot.base import SimBase
 from mrcomm.seeding import stream
 from mrcomm.sim.config import RunConfig
 from mrcomm.sim.signals import build_threshold
