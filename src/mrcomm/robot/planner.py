@@ -1,0 +1,303 @@
+"""Global planner: A* (pyastar2d, C++) on a coarse, conservatively inflated copy of the
+map, with extra cost near walls, temporary circular obstacles (team mates), start/goal
+snapping and line-of-sight path simplification.
+
+Built once per map and shared by every robot of a run. The planning grid has cells of
+``params.planner_resolution`` (a whole multiple of the map's cell); a planning cell is
+free only when every map cell inside it keeps ``params.inflation_radius`` from the
+nearest obstacle, so a path through free planning cells is safe on the real map.
+
+Simplification keeps the clearance the A* path had: a shortcut from waypoint ``i`` to
+``j`` is taken only if its least clearance is at least the least clearance of the raw
+path between them (capped at the comfortable clearance, minus half a cell). Shortcuts
+therefore do not hug corners that the wall cost kept the raw path away from, which is
+what lets a simple path follower cut corners a little without touching walls.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pyastar2d
+from numpy.typing import NDArray
+
+from mrcomm.robot.params import RobotParams
+from mrcomm.world.occupancy import OccupancyGrid
+
+Point = tuple[float, float]
+
+
+@dataclass(frozen=True)
+class PlannedPath:
+    """A collision-free polyline: ``waypoints[0]`` is the start, ``waypoints[-1]`` the
+    (possibly snapped) goal."""
+
+    waypoints: tuple[Point, ...]
+    length: float
+
+    @property
+    def goal(self) -> Point:
+        return self.waypoints[-1]
+
+
+def polyline_length(points: Sequence[Point]) -> float:
+    return sum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in itertools.pairwise(points))
+
+
+class GridPlanner:
+    """A* planner for one map and one robot size (shared by the robots of a run)."""
+
+    def __init__(self, grid: OccupancyGrid, params: RobotParams) -> None:
+        self.grid = grid
+        self.params = params
+        k = max(1, round(params.planner_resolution / grid.resolution))
+        self.k = k
+        self.resolution = k * grid.resolution
+        self.origin = grid.origin
+        self.inflation = params.inflation_radius
+        fine = grid.distance_field()
+        hc, wc = -(-grid.height // k), -(-grid.width // k)
+        # Off-map cells of the padded border count as obstacles (clearance 0).
+        padded = np.zeros((hc * k, wc * k), dtype=np.float64)
+        padded[: grid.height, : grid.width] = fine
+        clear = padded.reshape(hc, k, wc, k).min(axis=(1, 3)).astype(np.float32)
+        self._clear: NDArray[np.float32] = clear
+        self._weights: NDArray[np.float32] = self._weights_from(clear)
+        self.shape = (hc, wc)
+        # Map-resolution clearance as a flat memoryview: the simulator's per-step safety
+        # check reads one float from it without a numpy call.
+        flat = np.ascontiguousarray(fine, dtype=np.float32).tobytes()
+        self._fine_view = memoryview(flat).cast("f")
+        self._fine_w = grid.width
+        self._fine_h = grid.height
+        self._fine_inv = 1.0 / grid.resolution
+
+    # ----------------------------------------------------------------- grids
+    def _weights_from(self, clear: NDArray[np.float32]) -> NDArray[np.float32]:
+        p = self.params
+        excess = np.clip((clear - self.inflation) / max(p.wall_cost_range, 1e-9), 0.0, 1.0)
+        weights = (1.0 + p.wall_cost_weight * (1.0 - excess) ** 2).astype(np.float32)
+        weights[clear <= self.inflation] = np.inf
+        return weights
+
+    @property
+    def blocked(self) -> NDArray[np.bool_]:
+        """Planning-grid cells the robot's centre may not occupy (copy)."""
+        return ~np.isfinite(self._weights)
+
+    def clearance(self, x: float, y: float) -> float:
+        """Distance (m) from the map cell holding (x, y) to the nearest obstacle on the
+        real map; 0 off the map. Fast scalar lookup for per-step safety checks."""
+        ox, oy = self.origin
+        fx = (x - ox) * self._fine_inv
+        fy = (y - oy) * self._fine_inv
+        if fx < 0.0 or fy < 0.0 or fx >= self._fine_w or fy >= self._fine_h:
+            return 0.0
+        return self._fine_view[int(fy) * self._fine_w + int(fx)]
+
+    def cell_of(self, x: float, y: float) -> tuple[int, int]:
+        """(iy, ix) of the planning cell holding a point (may be off the grid)."""
+        ox, oy = self.origin
+        return (
+            math.floor((y - oy) / self.resolution),
+            math.floor((x - ox) / self.resolution),
+        )
+
+    def cell_centre(self, iy: int, ix: int) -> Point:
+        ox, oy = self.origin
+        return ox + (ix + 0.5) * self.resolution, oy + (iy + 0.5) * self.resolution
+
+    def is_free(self, x: float, y: float) -> bool:
+        """True when (x, y) is in a free planning cell (centre keeps the inflation)."""
+        iy, ix = self.cell_of(x, y)
+        hc, wc = self.shape
+        return 0 <= iy < hc and 0 <= ix < wc and bool(self._clear[iy, ix] > self.inflation)
+
+    def snap(self, x: float, y: float) -> tuple[int, int] | None:
+        """The free planning cell nearest to (x, y) within ``params.max_snap``, or None."""
+        return self._snap(x, y, self._clear)
+
+    def _snap(self, x: float, y: float, clear: NDArray[np.float32]) -> tuple[int, int] | None:
+        iy, ix = self.cell_of(x, y)
+        hc, wc = self.shape
+        if 0 <= iy < hc and 0 <= ix < wc and clear[iy, ix] > self.inflation:
+            return iy, ix
+        m = math.ceil(self.params.max_snap / self.resolution)
+        y0, y1 = max(iy - m, 0), min(iy + m + 1, hc)
+        x0, x1 = max(ix - m, 0), min(ix + m + 1, wc)
+        if y0 >= y1 or x0 >= x1:
+            return None
+        window = clear[y0:y1, x0:x1] > self.inflation
+        if not window.any():
+            return None
+        ox, oy = self.origin
+        cy = (y - oy) / self.resolution - 0.5
+        cx = (x - ox) / self.resolution - 0.5
+        yy, xx = np.mgrid[y0:y1, x0:x1]
+        d2 = np.where(window, (yy - cy) ** 2 + (xx - cx) ** 2, np.inf)
+        best = int(np.argmin(d2))
+        if d2.flat[best] * self.resolution**2 > (self.params.max_snap + self.resolution) ** 2:
+            return None
+        return y0 + best // (x1 - x0), x0 + best % (x1 - x0)
+
+    def _with_obstacles(
+        self, obstacles: Sequence[Point], radius: float, start: Point
+    ) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+        """Copies of (weights, clearance) with discs around ``obstacles`` blocked. A disc
+        never covers the start, or the robot could not leave its own cell."""
+        weights = self._weights.copy()
+        clear = self._clear.copy()
+        hc, wc = self.shape
+        res = self.resolution
+        for ox, oy in obstacles:
+            r = min(radius, math.hypot(start[0] - ox, start[1] - oy) - res)
+            if r <= 0:
+                continue
+            iy, ix = self.cell_of(ox, oy)
+            m = math.ceil(r / res) + 1
+            y0, y1 = max(iy - m, 0), min(iy + m + 1, hc)
+            x0, x1 = max(ix - m, 0), min(ix + m + 1, wc)
+            if y0 >= y1 or x0 >= x1:
+                continue
+            yy, xx = np.ogrid[y0:y1, x0:x1]
+            cx, cy = self.cell_centre(0, 0)
+            inside = ((cx + xx * res - ox) ** 2 + (cy + yy * res - oy) ** 2) <= r * r
+            weights[y0:y1, x0:x1][inside] = np.inf
+            clear[y0:y1, x0:x1][inside] = -1.0
+        return weights, clear
+
+    # ------------------------------------------------------------- planning
+    def plan(
+        self,
+        start: Point,
+        goal: Point,
+        obstacles: Sequence[Point] = (),
+        obstacle_radius: float | None = None,
+    ) -> PlannedPath | None:
+        """Shortest safe path from ``start`` to ``goal``, or None when there is none.
+
+        ``obstacles`` are centres of temporary round obstacles (team mates); each blocks
+        a disc of ``obstacle_radius`` (default: two footprints plus the block margin and
+        one planning cell). Start and goal inside the inflated zone are snapped to the
+        nearest free cell first (on the static map: a mate on the goal means no path).
+        """
+        s_cell = self._snap(*start, self._clear)
+        g_cell = self._snap(*goal, self._clear)
+        if s_cell is None or g_cell is None:
+            return None
+        weights, clear = self._weights, self._clear
+        if obstacles:
+            if obstacle_radius is None:
+                p = self.params
+                obstacle_radius = 2 * p.radius + p.block_margin + self.resolution
+            weights, clear = self._with_obstacles(obstacles, obstacle_radius, start)
+            if not (weights[g_cell] < np.inf and weights[s_cell] < np.inf):
+                return None
+        raw = pyastar2d.astar_path(weights, s_cell, g_cell, allow_diagonal=True)
+        if raw is None:
+            return None
+        keep = self._simplify(raw, clear)
+        cells = raw[keep]
+        pts: list[Point] = [self.cell_centre(int(iy), int(ix)) for iy, ix in cells.tolist()]
+        # The robot starts where it is, not at a cell centre; same for an exact goal.
+        s_exact = self.cell_of(*start) == s_cell
+        g_exact = self.cell_of(*goal) == g_cell
+        first = (float(start[0]), float(start[1]))
+        pts = [first, *pts[1:]] if s_exact else [first, *pts]
+        if len(pts) == 1:
+            pts.append(pts[0])
+        if g_exact:
+            pts[-1] = (float(goal[0]), float(goal[1]))
+        waypoints = tuple((float(px), float(py)) for px, py in pts)
+        return PlannedPath(waypoints, polyline_length(waypoints))
+
+    def _simplify(self, raw: NDArray[np.int32], clear: NDArray[np.float32]) -> list[int]:
+        """Indices of the raw A* cells kept as waypoints.
+
+        Douglas-Peucker on the validity test: a span is kept as one segment when the
+        shortcut is valid, else split at the raw cell farthest from the chord. All spans
+        of one level are tested in a single vectorised call, so a path costs a handful
+        of numpy calls (one per level), not one per candidate shortcut.
+        """
+        n = len(raw)
+        if n <= 2:
+            return list(range(n))
+        comfort = self.inflation + self.params.wall_cost_range
+        tol = 0.5 * self.resolution
+        c = clear[raw[:, 0], raw[:, 1]].tolist()
+        centres = raw.astype(np.float64) + 0.5
+        keep = {0, n - 1}
+        spans = [(0, n - 1)]
+        while spans:
+            starts = np.array([i for i, _ in spans])
+            ends = np.array([j for _, j in spans])
+            need = np.array([min(min(c[i : j + 1]), comfort) - tol for i, j in spans])
+            ok = self._segments_ok(centres, clear, starts, ends, need)
+            nxt: list[tuple[int, int]] = []
+            for (i, j), valid in zip(spans, ok.tolist(), strict=True):
+                if valid or j - i <= 1:
+                    continue
+                m = self._farthest(centres, i, j)
+                keep.add(m)
+                nxt.append((i, m))
+                nxt.append((m, j))
+            spans = nxt
+        kept = sorted(keep)
+        # Douglas-Peucker splits where a shortcut first fails, which can leave a
+        # waypoint that a longer shortcut would skip: try dropping each one (every
+        # other waypoint per pass, so the tests of one pass are independent).
+        for parity in (1, 2, 1, 2):
+            if len(kept) <= 2:
+                break
+            mids = list(range(parity, len(kept) - 1, 2))
+            if not mids:
+                continue
+            spans = [(kept[k - 1], kept[k + 1]) for k in mids]
+            need = np.array([min(min(c[i : j + 1]), comfort) - tol for i, j in spans])
+            ok = self._segments_ok(
+                centres,
+                clear,
+                np.array([i for i, _ in spans]),
+                np.array([j for _, j in spans]),
+                need,
+            )
+            drop = {kept[k] for k, valid in zip(mids, ok.tolist(), strict=True) if valid}
+            kept = [k for k in kept if k not in drop]
+        return kept
+
+    @staticmethod
+    def _farthest(centres: NDArray[np.float64], i: int, j: int) -> int:
+        """Index strictly between i and j of the cell farthest from the chord i-j."""
+        a = centres[i]
+        d = centres[j] - a
+        rel = centres[i + 1 : j] - a
+        dist = np.abs(rel[:, 0] * d[1] - rel[:, 1] * d[0])
+        return i + 1 + int(np.argmax(dist))
+
+    def _segments_ok(
+        self,
+        centres: NDArray[np.float64],
+        clear: NDArray[np.float32],
+        starts: NDArray[np.int64],
+        ends: NDArray[np.int64],
+        need: NDArray[np.float64],
+    ) -> NDArray[np.bool_]:
+        """For each span k: does the straight segment from cell ``starts[k]`` to cell
+        ``ends[k]`` stay in free cells with at least ``need[k]`` clearance? Sampled every
+        half cell along the longer axis (the clearance field changes by at most one cell
+        size per cell, which the tolerance in ``need`` absorbs)."""
+        a = centres[starts]
+        b = centres[ends]
+        counts = (np.ceil(np.abs(b - a).max(axis=1) * 2.0) + 2).astype(np.int64)
+        offsets = np.zeros(len(counts), dtype=np.int64)
+        np.cumsum(counts[:-1], out=offsets[1:])
+        seg = np.repeat(np.arange(len(counts)), counts)
+        t = (np.arange(int(counts.sum())) - offsets[seg]) / (counts[seg] - 1)
+        pts = a[seg] + (b - a)[seg] * t[:, None]
+        vals = clear[pts[:, 0].astype(np.int64), pts[:, 1].astype(np.int64)]
+        least = np.minimum.reduceat(vals, offsets)
+        return (least > self.inflation) & (least >= need)
