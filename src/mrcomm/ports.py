@@ -75,3 +75,17 @@ class Base(Protocol):
     def speed(self) -> float:
         """Current forward speed (m/s)."""
         ...
+
+
+class LinkSensor(Protocol):
+    """How an agent judges its link to a team mate (SLT distance, SSD predicted RSSI,
+    ESD measured RSSI). Evaluated from the robot's own pose and the mate's last known
+    position, as the original did."""
+
+    def warning(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> bool:
+        """True when the link to ``peer`` has crossed the warning threshold."""
+        ...
+
+    def rssi(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> float | None:
+        """Signal strength estimate (dBm), where the sensor has one."""
+        ...

@@ -12,6 +12,7 @@ from collections import Counter
 from collections.abc import Sequence
 
 from mrcomm.agents.assignment import round_robin
+from mrcomm.messaging.aon import AonEndpoint
 from mrcomm.messaging.messages import (
     TOPIC_ASSIGNMENT,
     TOPIC_POSE,
@@ -37,6 +38,7 @@ class TaskAssigner:
         tasks: Sequence[TaskSpec],
         *,
         incarnation: int = 1,
+        use_aon: bool = False,
     ) -> None:
         self.bus = bus
         self.team = tuple(team)
@@ -50,6 +52,15 @@ class TaskAssigner:
         self.status_log: list[tuple[float, TaskStatus]] = []
         self._seq = 0
         self._now = 0.0
+        self.aon: AonEndpoint | None = None
+        if use_aon:
+            self.aon = AonEndpoint(
+                bus,
+                bus.owner,
+                incarnation,
+                (*self.team, bus.owner),
+                on_deliver=lambda status, _id: self.record_status(status),
+            )
         bus.subscribe(TOPIC_TASK_STATUS, self._on_status)
         bus.subscribe(TOPIC_POSE, self._on_pose)
 
@@ -57,8 +68,15 @@ class TaskAssigner:
     def agent_id(self) -> str:
         return self.bus.owner
 
+    @property
+    def settled(self) -> bool:
+        """No acknowledged message still in flight at the assigner."""
+        return self.aon is None or not self.aon.pending_ids()
+
     def step(self, now: float) -> None:
         self._now = now
+        if self.aon is not None:
+            self.aon.step(now)
         if not self.assigned:
             for robot in self.team:
                 self._seq += 1

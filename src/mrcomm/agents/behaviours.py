@@ -27,10 +27,12 @@ def register_behaviour(name: str) -> Callable[[type[TaskExecutor]], type[TaskExe
 
 
 def behaviour_names() -> list[str]:
+    _load_builtin()
     return sorted(_REGISTRY)
 
 
 def behaviour_class(name: str) -> type[TaskExecutor]:
+    _load_builtin()
     try:
         return _REGISTRY[name]
     except KeyError:
@@ -42,3 +44,8 @@ def behaviour_class(name: str) -> type[TaskExecutor]:
 
 
 register_behaviour("nb")(TaskExecutor)
+
+
+def _load_builtin() -> None:
+    # Behaviour modules register themselves on import; import them on first use.
+    from mrcomm.agents import lf  # noqa: F401

@@ -35,7 +35,8 @@ from mrcomm.messaging.messages import (
 )
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ACTIVITY, Timeline
-from mrcomm.ports import Base, Bus, NavStatus
+from mrcomm.ports import Base, Bus, LinkSensor, NavStatus
+from mrcomm.world.geometry import Pose
 
 NB_STATES = ["unassigned", "navigating", "avoiding", "executing", "waiting", "retrying", "idle"]
 _PLANNING_SOURCES = ["unassigned", "executing", "waiting", "retrying"]
@@ -72,11 +73,26 @@ class ExecutorParams:
     nav_retry_delay: float = 2.0
 
 
+class _NeverWarns:
+    """Link sensor of a run without a threshold."""
+
+    def warning(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> bool:
+        return False
+
+    def rssi(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> float | None:
+        return None
+
+
 class TaskExecutor:
     """NB task executor: a stepped state machine acting through the Bus and Base ports."""
 
-    states = NB_STATES
-    transitions = NB_TRANSITIONS
+    #: Whether task statuses travel with AON (the assigner then listens with AON too).
+    uses_aon = False
+
+    states: list[Any] = NB_STATES
+    transitions: list[dict[str, Any]] = NB_TRANSITIONS
+    initial = "unassigned"
+    machine_class: type[Machine] = Machine
     state: str
     trigger: Callable[..., bool]
 
@@ -87,6 +103,7 @@ class TaskExecutor:
         timeline: Timeline,
         *,
         tie_break_rank: Callable[[str], float],
+        link_sensor: LinkSensor | None = None,
         params: ExecutorParams | None = None,
         incarnation: int = 1,
     ) -> None:
@@ -94,6 +111,7 @@ class TaskExecutor:
         self.base = base
         self.timeline = timeline
         self.params = params or ExecutorParams()
+        self.link_sensor: LinkSensor = link_sensor or _NeverWarns()
         self.incarnation = incarnation
         self._rank = tie_break_rank
         self.robot_id = bus.owner
@@ -116,11 +134,12 @@ class TaskExecutor:
         self._grace_until: dict[str, float] = {}
         self._last_conflict: dict[str, float] = {}
         self._execute_until = 0.0
-        self.machine = Machine(
+        self._agenda_reported = False
+        self.machine = self.machine_class(
             model=self,
             states=self.states,
             transitions=self.transitions,
-            initial="unassigned",
+            initial=self.initial,
             auto_transitions=False,
             after_state_change="_after_state_change",
         )
@@ -132,20 +151,32 @@ class TaskExecutor:
     @property
     def done(self) -> bool:
         """Nothing left to do: agenda complete and nothing left to communicate."""
-        return self.state == "idle"
+        return self._t0 is not None and not self.agenda and self.leaf() == "idle"
+
+    def leaf(self) -> str:
+        """Innermost state name (``na_navigating`` -> ``navigating``)."""
+        return self.state.rsplit("_", 1)[-1]
 
     def step(self, now: float) -> None:
         self._now = now
         if self._t0 is None:
             return
-        if self.state == "unassigned":
+        if self.leaf() == "unassigned":
             self._select_next()
         if now >= self._next_pose:
             self._publish_pose()
             self._next_pose = max(self._next_pose + self.params.pose_period, now)
-        handler = getattr(self, f"_step_{self.state}", None)
+        self.before_state_step()
+        # A behaviour may handle a nested state itself (``_step_leader_holding``);
+        # otherwise the NB handler of the innermost state runs.
+        handler = getattr(self, f"_step_{self.state}", None) or getattr(
+            self, f"_step_{self.leaf()}", None
+        )
         if handler is not None:
             handler()
+
+    def before_state_step(self) -> None:
+        """Hook run every step before the state handler (LF monitors links here)."""
 
     # -- state handlers --------------------------------------------------------------
     def _step_navigating(self) -> None:
@@ -177,6 +208,10 @@ class TaskExecutor:
         self.goal = None
         self.send_status(task.task_id, TaskState.SUCCESS)
         self.timeline.event(L.TASK_COMPLETED, self._now, task_id=task.task_id)
+        self.after_task_completed()
+
+    def after_task_completed(self) -> None:
+        """What to do once a task is done and reported: NB picks the next one."""
         self._select_next()
 
     def _step_waiting(self) -> None:
@@ -204,9 +239,14 @@ class TaskExecutor:
                 return
         if self._avoid_mate is not None:
             self._grace_until[self._avoid_mate] = self._now + self.params.resume_grace
-        assert self.goal is not None
-        self.base.navigate_to(self.goal.x, self.goal.y)
+        target = self.navigation_target()
+        if target is not None:
+            self.base.navigate_to(*target)
         self.trigger("resume")
+
+    def navigation_target(self) -> tuple[float, float] | None:
+        """Where the robot is driving (NB: its current task)."""
+        return (self.goal.x, self.goal.y) if self.goal is not None else None
 
     # -- decisions -----------------------------------------------------------------
     def _select_next(self) -> None:
@@ -223,7 +263,7 @@ class TaskExecutor:
             if t.arrival_time <= elapsed + 1e-9 and all(d in self.known_done for d in t.depends)
         ]
         if not available:
-            if self.state != "waiting":
+            if self.leaf() != "waiting":
                 self.trigger("wait")
             return
         task = min(available, key=lambda t: (math.hypot(t.x - pose.x, t.y - pose.y), t.task_id))
@@ -301,10 +341,11 @@ class TaskExecutor:
         )
 
     def _goal_distance(self) -> float:
-        if self.goal is None or self.state not in ("navigating", "avoiding"):
+        target = self.navigation_target()
+        if target is None or self.leaf() not in ("navigating", "avoiding", "following"):
             return -1.0
         pose = self.base.pose
-        return math.hypot(self.goal.x - pose.x, self.goal.y - pose.y)
+        return math.hypot(target[0] - pose.x, target[1] - pose.y)
 
     def _on_assignment(self, message: Message) -> None:
         assert isinstance(message, Assignment)
@@ -334,13 +375,22 @@ class TaskExecutor:
         if status.state is TaskState.SUCCESS:
             self.known_done.add(status.task_id)
 
+    def activity_of(self, state: str) -> str | None:
+        """Timeline activity recorded while in ``state`` (full state name)."""
+        return _ACTIVITY_OF_STATE.get(state.rsplit("_", 1)[-1])
+
     def _after_state_change(self) -> None:
         self._state_since = self._now
-        activity = _ACTIVITY_OF_STATE.get(self.state)
-        if self.state == "navigating" and not self._moved_once:
+        activity = self.activity_of(self.state)
+        if self.leaf() == "navigating" and not self._moved_once:
             activity = L.INIT  # assignment received, not yet moving
         if activity is not None:
             self.timeline.set_state(ACTIVITY, activity, self._now)
-        if self.state == "idle":
+        if self.leaf() == "idle" and not self._agenda_reported:
+            self._agenda_reported = True
             self.timeline.event(L.AGENDA_COMPLETE, self._now)
             self.send_status("", TaskState.AGENDA_COMPLETE)
+        self.on_state_change()
+
+    def on_state_change(self) -> None:
+        """Hook after every state change (LF records roles here)."""

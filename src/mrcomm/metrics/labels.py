@@ -17,3 +17,21 @@ TASK_COMPLETED = "task_completed"
 NEAR_COLLISION = "near_collision"
 NAV_ABORTED = "nav_aborted"
 AGENDA_COMPLETE = "agenda_complete"
+
+# Leader-Follower (activity track).
+ROLE_ASSIGNMENT = "role_assignment"  # collecting utilities and roles
+LEADER_DISCONNECT = "leader_disconnect"  # leader stopped, waiting for followers
+FOLLOWER_WAITING = "follower_waiting"  # follower at the leader, waiting
+SWITCHING = "switching"  # stopping / resuming between roles
+
+# Role track (LF): na / leader / follower / assigning / regrouping.
+ROLE_NA = "na"
+ROLE_LEADER = "leader"
+ROLE_FOLLOWER = "follower"
+ROLE_ASSIGNING = "assigning"
+ROLE_REGROUPING = "regrouping"
+
+# LF events.
+DISCONNECT_DETECTED = "disconnect_detected"
+ROLE_ASSIGNED = "role_assigned"
+ROLES_DISSOLVED = "roles_dissolved"

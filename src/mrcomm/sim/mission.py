@@ -32,7 +32,7 @@ from mrcomm.net.links import LinkModel, LinkRecorder, LinkState
 from mrcomm.robot.base import SimBase
 from mrcomm.seeding import stream
 from mrcomm.sim.config import RunConfig
-from mrcomm.sim.signals import build_threshold
+from mrcomm.sim.signals import build_link_sensor, build_threshold
 from mrcomm.sim.world import SimWorld
 from mrcomm.world.scenario import Scenario
 
@@ -114,11 +114,15 @@ class Mission:
                 self.bases[rid],
                 self.timelines[rid],
                 tie_break_rank=rank_of.__getitem__,
+                link_sensor=build_link_sensor(config, scenario.grid),
             )
             for rid in self.robot_ids
         }
         self.assigner = TaskAssigner(
-            self.network.endpoint(ASSIGNER_ID), self.robot_ids, scenario.tasks
+            self.network.endpoint(ASSIGNER_ID),
+            self.robot_ids,
+            scenario.tasks,
+            use_aon=executor_class.uses_aon,
         )
         n = len(self.robot_ids)
         self._min_sep = np.full(n, np.inf)
@@ -168,7 +172,11 @@ class Mission:
             self._next_sample += TRAJECTORY_PERIOD
         self.steps += 1
         self.now = round(now + dt, 9)
-        if all(e.done for e in self.executors.values()) and self.network.pending() == 0:
+        if (
+            all(e.done for e in self.executors.values())
+            and self.assigner.settled
+            and self.network.pending() == 0
+        ):
             self.finished = True
 
     # -- per-step bookkeeping ------------------------------------------------------------

@@ -1,0 +1,471 @@
+"""LF — the communication-aware Leader-Follower behaviour (SPEC §4), enclosing NB.
+
+A hierarchical state machine: ``na`` is NB plus a network trigger; ``leader`` and
+``follower`` are sub-machines; ``assigning`` collects utilities and roles;
+``regrouping`` drives back to the team's last known position when nobody answers.
+
+* Trigger: an NA robot whose link to a team mate (judged by its link sensor from the
+  mate's last known pose) crosses the warning threshold stops, cancels its goal,
+  publishes DISCONNECT_ROLE and opens a new role-assignment *round*. Robots that hear a
+  newer round join it; an idle robot joins with utility 0 (so it follows) but never
+  opens one.
+* Role assignment: every member publishes its utility at 4 Hz until it has every
+  member's; the highest utility leads (ties by the team-wide random order). Roles are
+  then published the same way. A role message settles the round for whoever still
+  collects, and a member already past the round answers late utilities with its role,
+  so no exchange waits on another; a timeout decides with what was collected.
+* Leader: drives to its closest task and holds while any follower's link is in
+  warning (leader disconnect time). On completion it reports with AON and dissolves
+  the roles.
+* Follower: drives to the leader's last known position, refreshing the goal as leader
+  poses arrive (more often when far), and waits there (follower waiting time). It
+  returns to NA when the leader's completion reaches it.
+* Task statuses go with AON (acknowledged all-or-nothing), to every robot and the
+  assigner.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from transitions.extensions import HierarchicalMachine
+
+from mrcomm.agents.behaviours import register_behaviour
+from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS, TaskExecutor
+from mrcomm.agents.utility import UtilityInputs, utility_function
+from mrcomm.messaging.aon import AonEndpoint, MessageId
+from mrcomm.messaging.messages import (
+    TOPIC_ROLE,
+    TOPIC_TASK_STATUS,
+    TOPIC_UTILITY,
+    Assignment,
+    Message,
+    RoleMsg,
+    TaskState,
+    TaskStatus,
+    UtilityMsg,
+)
+from mrcomm.metrics import labels as L
+from mrcomm.metrics.timeline import ROLE
+from mrcomm.ports import NavStatus
+
+_DRIVE = [
+    {"trigger": "arrive", "source": "navigating", "dest": "executing"},
+    {"trigger": "conflict", "source": "navigating", "dest": "avoiding"},
+    {"trigger": "resume", "source": "avoiding", "dest": "navigating"},
+    {"trigger": "nav_fail", "source": "navigating", "dest": "retrying"},
+    {"trigger": "retry", "source": "retrying", "dest": "navigating"},
+]
+LF_STATES: list[Any] = [
+    {"name": "na", "children": NB_STATES, "initial": "unassigned", "transitions": NB_TRANSITIONS},
+    "assigning",
+    {
+        "name": "leader",
+        "children": ["navigating", "avoiding", "executing", "retrying", "holding"],
+        "initial": "navigating",
+        "transitions": [
+            *_DRIVE,
+            {"trigger": "hold", "source": "navigating", "dest": "holding"},
+            {"trigger": "release", "source": "holding", "dest": "navigating"},
+        ],
+    },
+    {
+        "name": "follower",
+        "children": ["following", "avoiding", "waiting"],
+        "initial": "following",
+        "transitions": [
+            {"trigger": "conflict", "source": "following", "dest": "avoiding"},
+            {"trigger": "resume", "source": "avoiding", "dest": "following"},
+            {"trigger": "reach", "source": "following", "dest": "waiting"},
+            {"trigger": "follow", "source": "waiting", "dest": "following"},
+        ],
+    },
+    "regrouping",
+]
+LF_TRANSITIONS: list[dict[str, Any]] = [
+    {"trigger": "disconnect", "source": ["na", "leader", "follower", "regrouping"], "dest": "assigning"},
+    {"trigger": "become_leader", "source": "assigning", "dest": "leader"},
+    {"trigger": "become_follower", "source": "assigning", "dest": "follower"},
+    {"trigger": "regroup", "source": "assigning", "dest": "regrouping"},
+    {"trigger": "dissolve", "source": ["leader", "follower", "assigning", "regrouping"], "dest": "na"},
+]
+
+_ACTIVITY_OF_FULL_STATE = {
+    "assigning": L.ROLE_ASSIGNMENT,
+    "leader_holding": L.LEADER_DISCONNECT,
+    "follower_following": L.MOVING,
+    "follower_waiting": L.FOLLOWER_WAITING,
+    "regrouping": L.MOVING,
+}
+_ROLE_OF_TOP_STATE = {
+    "na": L.ROLE_NA,
+    "assigning": L.ROLE_ASSIGNING,
+    "leader": L.ROLE_LEADER,
+    "follower": L.ROLE_FOLLOWER,
+    "regrouping": L.ROLE_REGROUPING,
+}
+
+
+@dataclass(frozen=True)
+class LfParams:
+    utility: str = "original"
+    announce_period: float = 0.25  # utilities and roles at 4 Hz
+    assign_timeout: float = 6.0  # decide with what was collected after this long
+    roles_timeout: float = 3.0  # stop collecting roles after this long
+    follow_distance: float = 1.5  # a follower stops this close to the leader
+    refollow_distance: float = 2.5  # and moves again when the leader is this far
+    refresh_period_near: float = 1.0  # follower goal refresh when the leader is near
+    refresh_period_far: float = 0.4  # ... and when it is beyond the warning threshold
+    lost_timeout: float = 60.0  # a follower silent this long no longer holds the leader
+    aon_lease: float | None = None  # AON: report members silent this long as left out
+
+
+@register_behaviour("lf")
+class LeaderFollowerExecutor(TaskExecutor):
+    """LF task executor (see the module docstring)."""
+
+    states = LF_STATES
+    transitions = LF_TRANSITIONS
+    initial = "na"
+    machine_class = HierarchicalMachine
+    uses_aon = True
+    lf = LfParams()
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        self._utility = utility_function(self.lf.utility)
+        self.aon: AonEndpoint | None = None
+        self._round = 0
+        self._scores: dict[str, float] = {}
+        self._roles: dict[str, str] = {}
+        self.leader: str | None = None
+        self._decided_at = 0.0
+        self._next_announce = 0.0
+        self._just_completed = False
+        self._follow_target: tuple[float, float] | None = None
+        self._next_refresh = 0.0
+        self._next_monitor = 0.0
+        super().__init__(*args, **kwargs)
+        self.bus.subscribe(TOPIC_UTILITY, self._on_utility)
+        self.bus.subscribe(TOPIC_ROLE, self._on_role)
+
+    # -- completion and communication ----------------------------------------------------
+    @property
+    def done(self) -> bool:
+        """Agenda complete, back in NA, and every status finished with AON."""
+        settled = self._t0 is not None and not self.agenda and self.state == "na_idle"
+        return settled and (self.aon is None or not self.aon.pending_ids())
+
+    def send_status(self, task_id: str, state: TaskState) -> None:
+        status = self._status(task_id, state)
+        if self.aon is None or state is not TaskState.SUCCESS:
+            self.bus.publish(TOPIC_TASK_STATUS, status)  # informational statuses: plain
+            return
+        self.aon.send(status, self._now)
+
+    def _on_aon_deliver(self, status: TaskStatus, msg_id: MessageId) -> None:
+        self.on_team_status(status)
+
+    def on_team_status(self, status: TaskStatus) -> None:
+        super().on_team_status(status)
+        if (
+            status.state is TaskState.SUCCESS
+            and status.robot == self.leader
+            and self.state.startswith("follower")
+        ):
+            self._dissolve("leader completed its task")
+
+    def _on_assignment(self, message: Message) -> None:
+        first = self._t0 is None
+        super()._on_assignment(message)
+        if first and self._t0 is not None:
+            assert isinstance(message, Assignment)
+            self.aon = AonEndpoint(
+                self.bus,
+                self.robot_id,
+                self.incarnation,
+                (*message.team, message.sender),
+                lease=self.lf.aon_lease,
+                on_deliver=self._on_aon_deliver,
+            )
+
+    # -- every step ----------------------------------------------------------------------
+    def before_state_step(self) -> None:
+        if self.aon is not None:
+            for mate, heard in self.mate_heard.items():
+                if heard == self._now:
+                    self.aon.heard_from(mate, self._now)
+            self.aon.step(self._now)
+        # Idle robots join rounds but never open one; links are judged at the pose rate.
+        if (
+            self.state.startswith("na_")
+            and self.leaf() not in ("unassigned", "idle")
+            and self._now >= self._next_monitor
+        ):
+            self._next_monitor = self._now + self.params.pose_period
+            self._monitor_links()
+
+    def _monitor_links(self) -> None:
+        pose = self.base.pose
+        for mate in self.team:
+            known = self.mates.get(mate)
+            if known is not None and self.link_sensor.warning(mate, pose, known.x, known.y, self._now):
+                self.timeline.event(L.DISCONNECT_DETECTED, self._now, mate=mate)
+                self.send_status("", TaskState.DISCONNECT_ROLE)
+                self._open_round(self._round + 1)
+                return
+
+    # -- role assignment -----------------------------------------------------------------
+    def _open_round(self, round_no: int) -> None:
+        self.base.cancel()
+        self._round = round_no
+        self._scores = {self.robot_id: self._my_utility()}
+        self._roles = {}
+        self.leader = None
+        self._next_announce = self._now
+        if self.state == "assigning":
+            self._state_since = self._now  # a newer round restarts the collection
+        else:
+            self.trigger("disconnect")
+
+    def _my_utility(self) -> float:
+        if not self.agenda:
+            return 0.0
+        target = self._closest_task_distance()
+        return self._utility(UtilityInputs(target, len(self.agenda), self._just_completed))
+
+    def _closest_task_distance(self) -> float | None:
+        pose = self.base.pose
+        if self.goal is not None:
+            return math.hypot(self.goal.x - pose.x, self.goal.y - pose.y)
+        distances = [math.hypot(t.x - pose.x, t.y - pose.y) for t in self.agenda]
+        return min(distances) if distances else None
+
+    def _step_assigning(self) -> None:
+        elapsed = self._now - self._state_since
+        members = (self.robot_id, *self.team)
+        if self.leader is None:
+            if self._now >= self._next_announce:
+                self._announce_utility()
+            if len(self._scores) == len(members) or elapsed >= self.lf.assign_timeout:
+                self._decide()
+            return
+        if self._now >= self._next_announce:
+            self._announce_role()
+        have_all = all(m in self._roles for m in self._scores)
+        if have_all or self._now - self._decided_at >= self.lf.roles_timeout:
+            self._take_role()
+
+    def _decide(self) -> None:
+        if len(self._scores) == 1 and self.team:
+            self.trigger("regroup")  # nobody answered: go back towards the team
+            return
+        best = max(self._scores, key=lambda r: (self._scores[r], -self._rank(r)))
+        if self._scores[best] <= 0.0:
+            self._dissolve("no robot has work left")
+            return
+        self._settle(best)
+
+    def _settle(self, leader: str) -> None:
+        self.leader = leader
+        self._decided_at = self._now
+        self._roles[self.robot_id] = L.ROLE_LEADER if leader == self.robot_id else L.ROLE_FOLLOWER
+        self._next_announce = self._now
+
+    def _take_role(self) -> None:
+        self._just_completed = False
+        self.timeline.event(L.ROLE_ASSIGNED, self._now, round=self._round, leader=self.leader)
+        if self.leader == self.robot_id:
+            self.trigger("become_leader")
+            self._lead_next_task()
+        else:
+            self._follow_target = None
+            self._next_refresh = self._now
+            self.trigger("become_follower")
+
+    def _announce_utility(self) -> None:
+        self._seq += 1
+        self.bus.publish(
+            TOPIC_UTILITY,
+            UtilityMsg(
+                sender=self.robot_id,
+                incarnation=self.incarnation,
+                seq=self._seq,
+                stamp=self._now,
+                round=self._round,
+                utility=self._scores[self.robot_id],
+            ),
+        )
+        self._next_announce = self._now + self.lf.announce_period
+
+    def _announce_role(self) -> None:
+        assert self.leader is not None
+        self._seq += 1
+        self.bus.publish(
+            TOPIC_ROLE,
+            RoleMsg(
+                sender=self.robot_id,
+                incarnation=self.incarnation,
+                seq=self._seq,
+                stamp=self._now,
+                round=self._round,
+                role=self._roles[self.robot_id],
+                leader=self.leader,
+            ),
+        )
+        self._next_announce = self._now + self.lf.announce_period
+
+    def _on_utility(self, message: Message) -> None:
+        assert isinstance(message, UtilityMsg)
+        if self._t0 is None or message.sender == self.robot_id:
+            return
+        if message.round > self._round:
+            self._open_round(message.round)  # join the newer round (idle: utility 0)
+        if message.round != self._round:
+            return
+        if self.state == "assigning":
+            self._scores.setdefault(message.sender, message.utility)
+        elif self.leader is not None:
+            self._announce_role()  # it is still collecting: answer, never deadlock
+
+    def _on_role(self, message: Message) -> None:
+        assert isinstance(message, RoleMsg)
+        if self._t0 is None or message.sender == self.robot_id:
+            return
+        if message.round > self._round:
+            self._open_round(message.round)
+        if message.round != self._round or self.state != "assigning":
+            return
+        self._roles[message.sender] = message.role
+        self._scores.setdefault(message.sender, 0.0)
+        if self.leader is None:
+            self._settle(message.leader)  # decided by a member that had every score
+
+    def _dissolve(self, reason: str) -> None:
+        self.timeline.event(L.ROLES_DISSOLVED, self._now, reason=reason)
+        self.leader = None
+        self.base.cancel()
+        self.trigger("dissolve")
+        self._select_next()
+
+    # -- leader --------------------------------------------------------------------------
+    def _lead_next_task(self) -> None:
+        pose = self.base.pose
+        elapsed = self._now - (self._t0 or 0.0)
+        available = [
+            t
+            for t in self.agenda
+            if t.arrival_time <= elapsed + 1e-9 and all(d in self.known_done for d in t.depends)
+        ]
+        if not available:
+            self._dissolve("leader has no available task")
+            return
+        self.goal = min(available, key=lambda t: (math.hypot(t.x - pose.x, t.y - pose.y), t.task_id))
+        self.base.navigate_to(self.goal.x, self.goal.y)
+
+    def _followers_out(self) -> bool:
+        pose = self.base.pose
+        for mate in self.team:
+            known = self.mates.get(mate)
+            if known is None or self._now - self.mate_heard.get(mate, -1e9) > self.lf.lost_timeout:
+                continue
+            if self.link_sensor.warning(mate, pose, known.x, known.y, self._now):
+                return True
+        return False
+
+    def _step_leader_navigating(self) -> None:
+        if self.base.status is NavStatus.ACTIVE and self._followers_out():
+            self.base.cancel()
+            self.trigger("hold")
+            return
+        self._step_navigating()
+
+    def _step_leader_holding(self) -> None:
+        if not self._followers_out():
+            assert self.goal is not None
+            self.base.navigate_to(self.goal.x, self.goal.y)
+            self.trigger("release")
+
+    def _step_leader_retrying(self) -> None:
+        if self._now - self._state_since >= self.params.nav_retry_delay:
+            assert self.goal is not None
+            self.base.navigate_to(self.goal.x, self.goal.y)
+            self.trigger("retry")
+
+    def after_task_completed(self) -> None:
+        self._just_completed = True
+        if self.state.startswith("leader"):
+            self._dissolve("task completed")
+        else:
+            self._select_next()
+
+    # -- follower ------------------------------------------------------------------------
+    def navigation_target(self) -> tuple[float, float] | None:
+        if self.state.startswith("follower") or self.state == "regrouping":
+            return self._follow_target
+        return super().navigation_target()
+
+    def _leader_position(self) -> tuple[float, float] | None:
+        known = self.mates.get(self.leader or "")
+        return (known.x, known.y) if known is not None else None
+
+    def _step_follower_following(self) -> None:
+        target = self._leader_position()
+        if target is None:
+            return
+        pose = self.base.pose
+        distance = math.hypot(target[0] - pose.x, target[1] - pose.y)
+        if distance <= self.lf.follow_distance:
+            self.base.cancel()
+            self.trigger("reach")
+            return
+        far = self.link_sensor.warning(self.leader or "", pose, target[0], target[1], self._now)
+        moved = self._follow_target is None or math.hypot(
+            target[0] - self._follow_target[0], target[1] - self._follow_target[1]
+        ) > 0.5
+        stalled = self.base.status in (NavStatus.ABORTED, NavStatus.IDLE)
+        if (moved and self._now >= self._next_refresh) or stalled:
+            self._follow_target = target
+            self.base.navigate_to(*target)
+            period = self.lf.refresh_period_far if far else self.lf.refresh_period_near
+            self._next_refresh = self._now + period
+        self._check_collisions()
+
+    def _step_follower_waiting(self) -> None:
+        target = self._leader_position()
+        if target is None:
+            return
+        pose = self.base.pose
+        if math.hypot(target[0] - pose.x, target[1] - pose.y) > self.lf.refollow_distance:
+            self._follow_target = target
+            self.base.navigate_to(*target)
+            self._next_refresh = self._now + self.lf.refresh_period_near
+            self.trigger("follow")
+
+    # -- regrouping ----------------------------------------------------------------------
+    def _step_regrouping(self) -> None:
+        """Nobody answered the round: drive to the closest mate's last known position
+        and try again once someone is heard (emergent regrouping)."""
+        heard_recently = any(self._now - t < 1.0 for t in self.mate_heard.values())
+        if heard_recently and self._now - self._state_since > 1.0:
+            self._open_round(self._round + 1)
+            return
+        if self._follow_target is None:
+            pose = self.base.pose
+            known = sorted(
+                self.mates.values(), key=lambda m: math.hypot(m.x - pose.x, m.y - pose.y)
+            )
+            if known:
+                self._follow_target = (known[0].x, known[0].y)
+                self.base.navigate_to(*self._follow_target)
+
+    # -- timeline ------------------------------------------------------------------------
+    def activity_of(self, state: str) -> str | None:
+        return _ACTIVITY_OF_FULL_STATE.get(state) or super().activity_of(state)
+
+    def on_state_change(self) -> None:
+        top = self.state.split("_", 1)[0]
+        self.timeline.set_state(ROLE, _ROLE_OF_TOP_STATE.get(top), self._now)
+        if top == "regrouping":
+            self._follow_target = None

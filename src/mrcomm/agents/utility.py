@@ -1,0 +1,69 @@
+"""Utility functions of LF role assignment, registered by name (SPEC §4, §9).
+
+The robot with the highest utility leads. The original's utility is
+``u = d_score × n_incomplete × rec_complete`` with ``d_score = 1 / distance to the
+current goal``, ``n_incomplete`` the robot's tasks not yet completed and
+``rec_complete = 0.5`` right after completing a task (else 1.0). An idle robot (agenda
+complete) always has utility 0, so it follows.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from mrcomm.errors import InputError, did_you_mean
+
+
+@dataclass(frozen=True)
+class UtilityInputs:
+    goal_distance: float | None  # m to the current (or next) goal; None when none
+    n_incomplete: int
+    just_completed: bool
+
+
+UtilityFunction = Callable[[UtilityInputs], float]
+_REGISTRY: dict[str, UtilityFunction] = {}
+
+
+def register_utility(name: str) -> Callable[[UtilityFunction], UtilityFunction]:
+    def decorate(fn: UtilityFunction) -> UtilityFunction:
+        if name in _REGISTRY:
+            raise ValueError(f"utility {name!r} registered twice")
+        _REGISTRY[name] = fn
+        return fn
+
+    return decorate
+
+
+def utility_function(name: str) -> UtilityFunction:
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        raise InputError(
+            f"unknown utility {name!r}{did_you_mean(name, _REGISTRY)}; "
+            f"choose from {', '.join(sorted(_REGISTRY))}",
+            field="utility",
+        ) from None
+
+
+def utility_names() -> list[str]:
+    return sorted(_REGISTRY)
+
+
+@register_utility("original")
+def original_utility(inputs: UtilityInputs) -> float:
+    """The original's product: closer goal, more work left, not just rewarded."""
+    if inputs.n_incomplete == 0 or inputs.goal_distance is None:
+        return 0.0
+    d_score = 1.0 / max(inputs.goal_distance, 0.1)
+    rec_complete = 0.5 if inputs.just_completed else 1.0
+    return d_score * inputs.n_incomplete * rec_complete
+
+
+@register_utility("greedy")
+def greedy_utility(inputs: UtilityInputs) -> float:
+    """Whoever is closest to its goal leads, whatever its workload."""
+    if inputs.n_incomplete == 0 or inputs.goal_distance is None:
+        return 0.0
+    return 1.0 / max(inputs.goal_distance, 0.1)

@@ -1,0 +1,78 @@
+"""Agent-side link sensors (the :class:`~mrcomm.ports.LinkSensor` port): what a robot
+itself can tell about its link to a team mate, from its own pose and the mate's last
+known position (SLT, SSD) or from its pulse process's measurements (ESD)."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from mrcomm.world.geometry import Pose
+from mrcomm.world.occupancy import OccupancyGrid
+
+if TYPE_CHECKING:
+    from mrcomm.net.signal.table import RssiTable
+
+
+class NoSensor:
+    """No threshold: never warns."""
+
+    def warning(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> bool:
+        return False
+
+    def rssi(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> float | None:
+        return None
+
+
+class DistanceSensor:
+    """SLT: distance stands in for signal strength."""
+
+    def __init__(self, warning_m: float) -> None:
+        self.warning_m = warning_m
+
+    def warning(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> bool:
+        return math.hypot(peer_x - own.x, peer_y - own.y) > self.warning_m
+
+    def rssi(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> float | None:
+        return None
+
+
+class ModelSensor:
+    """SSD: RSSI predicted by the signal model for the distance, with the line-of-sight
+    or obstructed model chosen by ray casting on the robot's own map."""
+
+    def __init__(self, grid: OccupancyGrid, table: RssiTable, warning_dbm: float) -> None:
+        self.grid = grid
+        self.table = table
+        self.warning_dbm = warning_dbm
+
+    def rssi(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> float | None:
+        distance = math.hypot(peer_x - own.x, peer_y - own.y)
+        visible = self.grid.line_of_sight(own.x, own.y, peer_x, peer_y)
+        value = self.table.rssi(np.array([distance]), np.array([visible]))
+        return float(value[0])
+
+    def warning(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> bool:
+        value = self.rssi(peer, own, peer_x, peer_y, now)
+        return value is not None and value < self.warning_dbm
+
+
+class MeasuredSensor:
+    """ESD: the latest RSSI per peer measured by the robot's pulse process (live) or
+    replayed from a recorded trace (simulation). Unknown peers never warn."""
+
+    def __init__(self, warning_dbm: float) -> None:
+        self.warning_dbm = warning_dbm
+        self.latest: dict[str, float] = {}
+
+    def update(self, peer: str, rssi: float) -> None:
+        self.latest[peer] = rssi
+
+    def rssi(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> float | None:
+        return self.latest.get(peer)
+
+    def warning(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> bool:
+        value = self.latest.get(peer)
+        return value is not None and value < self.warning_dbm
