@@ -1,0 +1,413 @@
+"""AON — all-or-nothing acknowledged messaging over the Bus port (SPEC §5, §9).
+
+One :class:`AonEndpoint` per agent. It carries task-status payloads to every member of
+a fixed team over plain best-effort publish/subscribe (topic ``TOPIC_AON``), with the
+four stages of the original protocol:
+
+1. the sender publishes the message;
+2. each member that gets it re-publishes it (acknowledging: "I have it");
+3. once a member knows every member has it, it sets *received* and publishes that;
+4. once a member knows every member has set *received*, the message is *finished*
+   there; its state is released.
+
+Unfinished messages are re-sent at ``resend_period`` (3 Hz) when nothing was learnt
+meanwhile; after ``failsafe_timeout`` (15 s) without finishing, the exchange is
+restarted (the payload is re-announced to everyone with a request to reply).
+
+Why it cannot deadlock (the original did, with two messages in flight):
+
+* Every message is identified by (sender, incarnation, sequence) and has its own state;
+  nothing is global, so messages never wait for each other, in any order.
+* A publication carries the publisher's whole knowledge of every message it holds:
+  per message two member bitmaps, ``have`` (known to have it) and ``recv`` (known to
+  have set *received*), plus the payload while someone may still lack it. Knowledge
+  is only ever merged by union of bitmaps that came from real receipts (the publisher
+  of an entry has the message; its bitmaps are its own such knowledge), so it only
+  grows and is never false, whatever order, duplication or delay.
+* A re-send asks for replies: every member that knows something the asker does not
+  answers — including a member that already finished and released the message, from a
+  compact record (per (sender, incarnation): a contiguous watermark plus a small set),
+  answering "everyone has it and set received". So the last member to finish is never
+  stranded, and a stale copy is recognised and never delivered twice.
+
+Aggregation: acknowledgements are bitmaps and several messages share a publication, so
+in the loss-free case one message costs 2n publications (1 + (n-1) acknowledgements +
+n *received*), against the original's n(n+1) — and concurrent messages share even those.
+
+What it can honestly promise over lossy links (and no more):
+
+* Never reports a message finished unless every member has it (or, with a lease,
+  unless every member not named as left out has it).
+* Delivers each payload to the application at most once per member incarnation, and
+  exactly once to every member the network eventually lets it reach.
+* Finishes at every member once the network lets enough publications through, for any
+  loss rate below 100 %, any reordering, duplication or delay, and after partitions of
+  any length — there is no give-up without a lease.
+* With ``lease`` set: a member silent (no AON traffic and no :meth:`heard_from`) for
+  longer than the lease no longer blocks the others — pending messages that every
+  other member has are reported finished with it named in ``left_out``. Their state is
+  kept, and when it is heard again it is brought up to date (the messages are re-sent
+  to it) and a second, ``late`` report follows once it has them.
+
+Limits: the endpoint is single-threaded (the bus must call its handler from the
+agent's thread, between ``step`` calls, or from inside them). A member that restarts
+with a new incarnation has lost what it held; peers still count its former
+incarnation as having the messages it acknowledged. State for a message reported with
+left-out members is kept until they return.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+
+from mrcomm.messaging.aon_state import (
+    AonStats,
+    FinishReport,
+    MessageId,
+    MsgState,
+    SeqRecord,
+    TeamIndex,
+)
+from mrcomm.messaging.messages import TOPIC_AON, AonEntry, AonMsg, Message, TaskStatus
+from mrcomm.ports import Bus
+
+__all__ = ["AonEndpoint", "AonStats", "FinishReport", "MessageId"]
+
+DeliverFn = Callable[[TaskStatus, MessageId], None]
+FinishFn = Callable[[MessageId, FinishReport], None]
+
+# Placeholder time for state created before the endpoint first saw a clock (a message
+# delivered before the first step); fixed up at the first step.
+_UNSET = -math.inf
+
+
+class AonEndpoint:
+    """One agent's AON endpoint (see the module docstring for the protocol)."""
+
+    def __init__(
+        self,
+        bus: Bus,
+        owner: str,
+        incarnation: int,
+        team: Sequence[str],
+        *,
+        resend_period: float = 1.0 / 3.0,
+        failsafe_timeout: float = 15.0,
+        lease: float | None = None,
+        on_deliver: DeliverFn,
+        on_finished: FinishFn | None = None,
+    ) -> None:
+        if resend_period <= 0.0:
+            raise ValueError("resend_period must be positive")
+        if failsafe_timeout <= 0.0:
+            raise ValueError("failsafe_timeout must be positive")
+        if lease is not None and lease <= 0.0:
+            raise ValueError("lease must be positive (or None for no lease)")
+        self._team = TeamIndex(team)
+        if owner not in self._team.bit:
+            raise ValueError(f"AON owner {owner!r} is not in the team {list(team)}")
+        self._bus = bus
+        self.owner = owner
+        self.incarnation = incarnation
+        self._self_bit = self._team.bit[owner]
+        self._resend = resend_period
+        self._failsafe = failsafe_timeout
+        self._lease = lease
+        self._on_deliver = on_deliver
+        self._on_finished = on_finished
+        self._seq = 0
+        self._pub_seq = 0
+        self._states: dict[MessageId, MsgState] = {}
+        self._records: dict[tuple[str, int], SeqRecord] = {}
+        self._dirty: set[MessageId] = set()  # our own bits changed: publish soon
+        self._replies: set[MessageId] = set()  # a peer asked and we know more
+        self._now: float | None = None
+        self._last_heard: dict[str, float] = {}
+        self._heard: set[str] = set()  # publishers heard since the last step
+        self._expired_bits = 0
+        self.stats = AonStats()
+        bus.subscribe(TOPIC_AON, self._on_message)
+
+    # ------------------------------------------------------------------ public API
+
+    @property
+    def team(self) -> tuple[str, ...]:
+        """Team members, sorted by id (the bitmap order)."""
+        return self._team.members
+
+    def send(self, payload: TaskStatus, now: float) -> MessageId:
+        """Start communicating ``payload`` to the team; publishes at once (stage 1)."""
+        self._clock(now)
+        msg_id: MessageId = (self.owner, self.incarnation, self._seq)
+        self._seq += 1
+        st = MsgState(
+            payload=payload,
+            have=self._self_bit,
+            recv=0,
+            known_at=now,
+            next_ask=now + self._resend,
+            restart_at=now + self._failsafe,
+        )
+        self._states[msg_id] = st
+        self._dirty.add(msg_id)
+        self._advance(msg_id, st)
+        self._publish(now)
+        return msg_id
+
+    def step(self, now: float) -> None:
+        """Advance time: lease checks, fail-safe restarts, re-sends and replies."""
+        self._clock(now)
+        if self._lease is not None:
+            self._check_lease(now)
+        for st in self._states.values():
+            if now >= st.restart_at and not self._paused(st):
+                st.restart = True
+                st.restart_at = now + self._failsafe
+                self.stats.restarts += 1
+        due = any(
+            (now >= st.next_ask or st.restart) and not self._paused(st)
+            for st in self._states.values()
+        )
+        if due or self._dirty or self._replies:
+            self._publish(now)
+
+    def heard_from(self, member: str, now: float) -> None:
+        """Record that ``member`` is alive (any traffic from it, e.g. a pose)."""
+        if member in self._team.bit and member != self.owner:
+            self._last_heard[member] = max(self._last_heard.get(member, now), now)
+
+    def pending_ids(self) -> tuple[MessageId, ...]:
+        """Messages held here that have not been reported finished yet."""
+        return tuple(m for m, st in self._states.items() if st.reported_left_out is None)
+
+    def left_out_ids(self) -> tuple[MessageId, ...]:
+        """Messages reported finished with left-out members; state kept to bring them
+        up to date when they are heard again."""
+        return tuple(m for m, st in self._states.items() if st.reported_left_out is not None)
+
+    def is_finished(self, msg_id: MessageId) -> bool:
+        """True once ``msg_id`` has been reported finished here (also after release)."""
+        st = self._states.get(msg_id)
+        if st is not None:
+            return st.reported_left_out is not None
+        record = self._records.get((msg_id[0], msg_id[1]))
+        return record is not None and msg_id[2] in record
+
+    def memory(self) -> dict[str, int]:
+        """Size of the protocol state: per-message states held, finished records and
+        the out-of-order seqs those records hold above their watermark."""
+        return {
+            "states": len(self._states),
+            "records": len(self._records),
+            "record_extras": sum(len(r.above) for r in self._records.values()),
+        }
+
+    # ------------------------------------------------------------------ receiving
+
+    def _on_message(self, message: Message) -> None:
+        if not isinstance(message, AonMsg) or message.sender == self.owner:
+            return
+        publisher_bit = self._team.bit.get(message.sender)
+        if publisher_bit is None or message.team_crc != self._team.crc:
+            self.stats.foreign += 1
+            return
+        self._heard.add(message.sender)
+        for entry in message.entries:
+            self._on_entry(publisher_bit, entry)
+
+    def _on_entry(self, publisher_bit: int, entry: AonEntry) -> None:
+        sender_bit = self._team.bit.get(entry.sender)
+        if sender_bit is None:
+            return
+        msg_id: MessageId = (entry.sender, entry.incarnation, entry.seq)
+        # The publisher and the original sender certainly have the message.
+        have = self._team.decode(entry.have) | publisher_bit | sender_bit
+        recv = self._team.decode(entry.recv)
+        st = self._states.get(msg_id)
+        if st is not None:
+            new_have, new_recv = st.have | have, st.recv | recv
+            if (new_have, new_recv) != (st.have, st.recv):
+                st.have, st.recv = new_have, new_recv
+                # Progress: postpone our own re-send.
+                st.next_ask = self._time() + self._resend
+            if entry.ask and (st.have & ~have or st.recv & ~recv):
+                self._replies.add(msg_id)
+            self._advance(msg_id, st)
+            return
+        record = self._records.get((entry.sender, entry.incarnation))
+        if record is not None and entry.seq in record:
+            self.stats.stale += 1
+            if entry.ask and recv != self._team.full:
+                self._replies.add(msg_id)
+            return
+        if entry.payload is None:
+            # Knowledge about a message we never held: nothing to deliver, and keeping
+            # bitmaps without the payload would not let us help anyone.
+            return
+        now = self._time()
+        st = MsgState(
+            payload=entry.payload,
+            have=have | self._self_bit,
+            recv=recv,
+            known_at=now,
+            next_ask=now + self._resend,
+            restart_at=now + self._failsafe,
+        )
+        self._states[msg_id] = st
+        self._dirty.add(msg_id)  # stage 2: acknowledge
+        self.stats.deliveries += 1
+        self._on_deliver(entry.payload, msg_id)
+        self._advance(msg_id, st)
+
+    # ------------------------------------------------------------------ progress
+
+    def _advance(self, msg_id: MessageId, st: MsgState) -> None:
+        full = self._team.full
+        if st.have == full and not st.recv & self._self_bit:
+            st.recv |= self._self_bit  # stage 3
+            self._dirty.add(msg_id)
+        if st.recv == full:
+            self._finish(msg_id, st)  # stage 4
+
+    def _finish(self, msg_id: MessageId, st: MsgState) -> None:
+        now = self._time()
+        del self._states[msg_id]
+        if msg_id in self._dirty:
+            # We set *received* in this very step (the last bit missing): the others
+            # still need to hear it, from the finished record ("all set received").
+            self._dirty.discard(msg_id)
+            self._replies.add(msg_id)
+        self._records.setdefault((msg_id[0], msg_id[1]), SeqRecord()).add(msg_id[2])
+        if st.reported_left_out is None:
+            self._report(msg_id, st, (), now, late=False)
+        elif st.reported_left_out:
+            self._report(msg_id, st, (), now, late=True)
+
+    def _report(
+        self,
+        msg_id: MessageId,
+        st: MsgState,
+        left_out: tuple[str, ...],
+        now: float,
+        *,
+        late: bool,
+    ) -> None:
+        if not late:
+            self.stats.finished += 1
+            self.stats.finish_times[msg_id] = now - st.known_at
+            if left_out:
+                self.stats.left_out_reports += 1
+        if self._on_finished is not None:
+            report = FinishReport(msg_id, left_out, st.known_at, now, late=late)
+            self._on_finished(msg_id, report)
+
+    def _check_lease(self, now: float) -> None:
+        assert self._lease is not None
+        expired = 0
+        for member, heard in self._last_heard.items():
+            if now - heard > self._lease:
+                expired |= self._team.bit[member]
+        # A member heard again un-pauses the messages it blocked; their overdue re-send
+        # then goes out at once, bringing it up to date.
+        self._expired_bits = expired
+        full = self._team.full
+        for msg_id, st in self._states.items():
+            if st.reported_left_out is not None:
+                continue
+            blockers = full & ~st.recv
+            missing = full & ~st.have
+            # Give up waiting only for silent members, and only once every member still
+            # heard from has the message.
+            if blockers & expired and not missing & ~expired:
+                left_out = self._team.names(missing)
+                st.reported_left_out = left_out
+                self._report(msg_id, st, left_out, now, late=False)
+
+    def _paused(self, st: MsgState) -> bool:
+        """Reported with left-out members that are still silent: re-sending is futile."""
+        return (
+            st.reported_left_out is not None
+            and (self._team.full & ~st.recv & self._expired_bits) != 0
+        )
+
+    # ------------------------------------------------------------------ sending
+
+    def _publish(self, now: float) -> None:
+        full = self._team.full
+        if full == self._self_bit:  # a team of one: nobody to tell
+            self._dirty.clear()
+            self._replies.clear()
+            return
+        entries: list[AonEntry] = []
+        asked = False
+        replies = 0
+        for msg_id, st in self._states.items():
+            paused = self._paused(st)
+            if paused and msg_id not in self._dirty and msg_id not in self._replies:
+                continue
+            ask = not paused and (now >= st.next_ask or st.restart)
+            if ask:
+                st.next_ask = now + self._resend
+                asked = True
+            if msg_id in self._replies:
+                replies += 1
+            entries.append(
+                AonEntry(
+                    sender=msg_id[0],
+                    incarnation=msg_id[1],
+                    seq=msg_id[2],
+                    have=self._team.encode(st.have),
+                    recv=self._team.encode(st.recv),
+                    ask=ask,
+                    payload=st.payload if st.have != full or st.restart else None,
+                )
+            )
+            st.restart = False
+        full_bytes = self._team.encode(full)
+        for msg_id in self._replies:
+            if msg_id in self._states:
+                continue
+            # Finished and released here: everyone has it and set received.
+            replies += 1
+            entries.append(AonEntry(msg_id[0], msg_id[1], msg_id[2], full_bytes, full_bytes))
+        self._dirty.clear()
+        self._replies.clear()
+        if not entries:
+            return
+        self._bus.publish(
+            TOPIC_AON,
+            AonMsg(
+                sender=self.owner,
+                incarnation=self.incarnation,
+                seq=self._pub_seq,
+                stamp=now,
+                team_crc=self._team.crc,
+                entries=tuple(entries),
+            ),
+        )
+        self._pub_seq += 1
+        self.stats.publications += 1
+        self.stats.replies += replies
+        if asked:
+            self.stats.resend_publications += 1
+
+    # ------------------------------------------------------------------ time
+
+    def _clock(self, now: float) -> None:
+        if self._now is None:
+            for st in self._states.values():
+                if st.known_at == _UNSET:
+                    st.known_at = now
+                    st.next_ask = now + self._resend
+                    st.restart_at = now + self._failsafe
+            for member in self._team.members:
+                if member != self.owner:
+                    self._last_heard.setdefault(member, now)
+        self._now = now
+        for member in self._heard:
+            self._last_heard[member] = now
+        self._heard.clear()
+
+    def _time(self) -> float:
+        return self._now if self._now is not None else _UNSET
