@@ -36,9 +36,18 @@ from mrcomm.messaging.messages import (
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ACTIVITY, Timeline
 from mrcomm.ports import Base, Bus, LinkSensor, NavStatus
-from mrcomm.world.geometry import Pose
+from mrcomm.world.geometry import Pose, wrap_angle
 
-NB_STATES = ["unassigned", "navigating", "avoiding", "executing", "waiting", "retrying", "idle"]
+NB_STATES = [
+    "unassigned",
+    "navigating",
+    "avoiding",
+    "executing",
+    "waiting",
+    "retrying",
+    "idle",
+    "clearing",
+]
 _PLANNING_SOURCES = ["unassigned", "executing", "waiting", "retrying"]
 NB_TRANSITIONS: list[dict[str, Any]] = [
     {"trigger": "go", "source": _PLANNING_SOURCES, "dest": "navigating"},
@@ -48,6 +57,8 @@ NB_TRANSITIONS: list[dict[str, Any]] = [
     {"trigger": "nav_fail", "source": "navigating", "dest": "retrying"},
     {"trigger": "conflict", "source": "navigating", "dest": "avoiding"},
     {"trigger": "resume", "source": "avoiding", "dest": "navigating"},
+    {"trigger": "make_way", "source": "idle", "dest": "clearing"},
+    {"trigger": "cleared", "source": "clearing", "dest": "idle"},
 ]
 
 #: Timeline activity recorded while in each state.
@@ -58,6 +69,7 @@ _ACTIVITY_OF_STATE = {
     "waiting": L.WAITING,
     "retrying": L.WAITING,
     "idle": L.IDLE,
+    "clearing": L.MOVING,
 }
 
 
@@ -69,8 +81,12 @@ class ExecutorParams:
     give_way_timeout: float = 10.0  # the yielding robot waits at most this long
     clear_time: float = 0.5  # the conflict must be gone this long before resuming
     resume_grace: float = 3.0  # no new conflict with the same mate right after resuming
+    max_grace: float = 24.0  # grace doubles with each repeat, up to this (breaks livelock)
     repeat_window: float = 5.0  # repeated near collisions within this window are flagged
     nav_retry_delay: float = 2.0
+    make_way_radius: float = 1.4  # a robot without a goal this close to a mate that has one
+    make_way_step: float = 1.5  # ... steps this far aside
+    make_way_timeout: float = 6.0
 
 
 class _NeverWarns:
@@ -133,6 +149,8 @@ class TaskExecutor:
         self._clear_since: float | None = None
         self._grace_until: dict[str, float] = {}
         self._last_conflict: dict[str, float] = {}
+        self._repeats: dict[str, int] = {}
+        self._clearing_goals: list[tuple[float, float]] = []
         self._execute_until = 0.0
         self._agenda_reported = False
         self.machine = self.machine_class(
@@ -217,6 +235,51 @@ class TaskExecutor:
     def _step_waiting(self) -> None:
         self._select_next()
 
+    def _step_idle(self) -> None:
+        for mate in self.mates.values():
+            if self.in_way_of(mate):
+                self.make_way(mate)
+                return
+
+    # -- making way ------------------------------------------------------------------
+    def in_way_of(self, mate: MateState) -> bool:
+        """This robot (without a goal of its own, or following) stands close to a mate
+        that has a goal: ahead of it, or next to it while it is stuck."""
+        if mate.goal_dist < 0:
+            return False
+        pose = self.base.pose
+        dx, dy = pose.x - mate.x, pose.y - mate.y
+        if math.hypot(dx, dy) > self.params.make_way_radius:
+            return False
+        ahead = abs(wrap_angle(math.atan2(dy, dx) - mate.theta)) < math.radians(75)
+        return ahead or mate.v < self.params.collision.moving_speed
+
+    def make_way(self, mate: MateState) -> None:
+        """Step aside of the mate's heading (left, right, then straight away from it);
+        the base snaps each candidate to free space and aborts unreachable ones."""
+        pose = self.base.pose
+        away = math.atan2(pose.y - mate.y, pose.x - mate.x)
+        side = 1.0 if wrap_angle(away - mate.theta) >= 0 else -1.0
+        angles = [mate.theta + side * math.pi / 2, mate.theta - side * math.pi / 2, away]
+        step = self.params.make_way_step
+        self._clearing_goals = [
+            (pose.x + step * math.cos(a), pose.y + step * math.sin(a)) for a in angles
+        ]
+        self.timeline.event(L.MADE_WAY, self._now, mate=mate.robot)
+        self.base.navigate_to(*self._clearing_goals.pop(0))
+        self.trigger("make_way")
+
+    def _step_clearing(self) -> None:
+        status = self.base.status
+        if status is NavStatus.ABORTED and self._clearing_goals:
+            self.base.navigate_to(*self._clearing_goals.pop(0))
+            return
+        timed_out = self._now - self._state_since > self.params.make_way_timeout
+        if status is NavStatus.ACTIVE and not timed_out:
+            return  # finish the step aside
+        self.base.cancel()
+        self.trigger("cleared")
+
     def _step_retrying(self) -> None:
         if self._now - self._state_since >= self.params.nav_retry_delay:
             self._select_next()
@@ -238,7 +301,11 @@ class TaskExecutor:
             if self._now - self._clear_since < self.params.clear_time:
                 return
         if self._avoid_mate is not None:
-            self._grace_until[self._avoid_mate] = self._now + self.params.resume_grace
+            # Pausing again and again for the same mate means the bases are jammed:
+            # leave it to navigation (re-planning, stuck recovery) for longer each time.
+            repeats = self._repeats.get(self._avoid_mate, 0)
+            grace = min(self.params.resume_grace * 2**repeats, self.params.max_grace)
+            self._grace_until[self._avoid_mate] = self._now + grace
         target = self.navigation_target()
         if target is not None:
             self.base.navigate_to(*target)
@@ -283,6 +350,7 @@ class TaskExecutor:
             previous = self._last_conflict.get(mate.robot)
             repeat = previous is not None and self._now - previous < self.params.repeat_window
             self._last_conflict[mate.robot] = self._now
+            self._repeats[mate.robot] = self._repeats.get(mate.robot, 0) + 1 if repeat else 0
             self.timeline.event(
                 L.NEAR_COLLISION,
                 self._now,

@@ -50,6 +50,7 @@ from mrcomm.messaging.messages import (
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ROLE
 from mrcomm.ports import NavStatus
+from mrcomm.world.geometry import wrap_angle
 
 _DRIVE = [
     {"trigger": "arrive", "source": "navigating", "dest": "executing"},
@@ -73,13 +74,15 @@ LF_STATES: list[Any] = [
     },
     {
         "name": "follower",
-        "children": ["following", "avoiding", "waiting"],
+        "children": ["following", "avoiding", "waiting", "clearing"],
         "initial": "following",
         "transitions": [
             {"trigger": "conflict", "source": "following", "dest": "avoiding"},
             {"trigger": "resume", "source": "avoiding", "dest": "following"},
             {"trigger": "reach", "source": "following", "dest": "waiting"},
             {"trigger": "follow", "source": "waiting", "dest": "following"},
+            {"trigger": "make_way", "source": ["following", "waiting"], "dest": "clearing"},
+            {"trigger": "cleared", "source": "clearing", "dest": "following"},
         ],
     },
     "regrouping",
@@ -97,6 +100,7 @@ _ACTIVITY_OF_FULL_STATE = {
     "leader_holding": L.LEADER_DISCONNECT,
     "follower_following": L.MOVING,
     "follower_waiting": L.FOLLOWER_WAITING,
+    "follower_clearing": L.MOVING,
     "regrouping": L.MOVING,
 }
 _ROLE_OF_TOP_STATE = {
@@ -410,9 +414,22 @@ class LeaderFollowerExecutor(TaskExecutor):
         known = self.mates.get(self.leader or "")
         return (known.x, known.y) if known is not None else None
 
+    def _in_leaders_way(self) -> bool:
+        leader = self.mates.get(self.leader or "")
+        return leader is not None and self.in_way_of(leader)
+
+    def _step_follower_clearing(self) -> None:
+        self._step_clearing()
+        if not self.state.endswith("clearing"):
+            self._follow_target = None
+            self._next_refresh = self._now
+
     def _step_follower_following(self) -> None:
         target = self._leader_position()
         if target is None:
+            return
+        if self._in_leaders_way():
+            self.make_way(self.mates[self.leader or ""])
             return
         pose = self.base.pose
         distance = math.hypot(target[0] - pose.x, target[1] - pose.y)
@@ -435,6 +452,9 @@ class LeaderFollowerExecutor(TaskExecutor):
     def _step_follower_waiting(self) -> None:
         target = self._leader_position()
         if target is None:
+            return
+        if self._in_leaders_way():
+            self.make_way(self.mates[self.leader or ""])
             return
         pose = self.base.pose
         if math.hypot(target[0] - pose.x, target[1] - pose.y) > self.lf.refollow_distance:

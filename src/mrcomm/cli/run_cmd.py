@@ -26,7 +26,7 @@ def run(
         "none"
     ),
     seed: Annotated[int, typer.Option(help="Random seed of the run.")] = 1,
-    max_time: Annotated[float, typer.Option(help="Mission time limit, simulated s.")] = 900.0,
+    max_time: Annotated[float, typer.Option(help="Mission time limit, simulated s.")] = 1800.0,
     dt: Annotated[float, typer.Option(help="Simulation step, s.")] = 0.1,
     rssi_trace: Annotated[
         Path | None, typer.Option(help="Recorded RSSI trace CSV (time,from,to,rssi) for ESD.")

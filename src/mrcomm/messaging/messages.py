@@ -7,7 +7,7 @@ one decoder reads any of them.
 
 from __future__ import annotations
 
-from enum import Enum
+from enum import StrEnum
 
 import msgspec
 
@@ -25,7 +25,7 @@ TOPIC_AON = "aon"
 LOSSY_TOPICS = frozenset({TOPIC_POSE, TOPIC_TASK_STATUS, TOPIC_AON})
 
 
-class TaskState(str, Enum):
+class TaskState(StrEnum):
     ASSIGNED = "ASSIGNED"
     STARTED = "STARTED"
     SUCCESS = "SUCCESS"
@@ -139,4 +139,4 @@ def encode(message: Message) -> bytes:
 
 def decode(data: bytes) -> Message:
     """Inverse of :func:`encode`; raises ``msgspec.DecodeError`` on bad input."""
-    return _decoder.decode(data)  # type: ignore[no-any-return]
+    return _decoder.decode(data)

@@ -17,6 +17,7 @@ TASK_COMPLETED = "task_completed"
 NEAR_COLLISION = "near_collision"
 NAV_ABORTED = "nav_aborted"
 AGENDA_COMPLETE = "agenda_complete"
+MADE_WAY = "made_way"  # stepped aside for a team mate
 
 # Leader-Follower (activity track).
 ROLE_ASSIGNMENT = "role_assignment"  # collecting utilities and roles

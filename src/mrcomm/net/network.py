@@ -3,10 +3,10 @@ range limit, 8.0 m by default)."""
 
 from __future__ import annotations
 
-from enum import Enum
+from enum import StrEnum
 
 
-class NetworkType(str, Enum):
+class NetworkType(StrEnum):
     WLAN = "wlan"
     AH = "ah"
 

@@ -25,7 +25,7 @@ class RunConfig(BaseModel):
     threshold: str = "none"
     behaviour: str = "nb"
     seed: int = Field(1, ge=0)
-    max_time: float = Field(900.0, gt=0.0, description="mission time limit, simulated s")
+    max_time: float = Field(1800.0, gt=0.0, description="mission time limit, simulated s")
     dt: float = Field(0.1, gt=0.0, le=0.5, description="simulation step, s")
     ah_range: float = Field(AH_RANGE_M, gt=0.0)
     slt_warning: float = Field(4.0, gt=0.0, description="SLT warning distance, m")
