@@ -8,6 +8,7 @@ import sys
 
 import typer
 
+from mrcomm.cli.fsm_cmd import fsm
 from mrcomm.cli.run_cmd import run
 from mrcomm.errors import InputError
 
@@ -27,6 +28,7 @@ def _group() -> None:
 
 
 cli.command("run")(run)
+cli.command("fsm")(fsm)
 
 
 def app() -> None:

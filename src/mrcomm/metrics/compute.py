@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from mrcomm.metrics import labels as L
-from mrcomm.metrics.timeline import Timeline
+from mrcomm.metrics.timeline import ACTIVITY, ROLE, Timeline
 
 
 @dataclass(frozen=True)
@@ -49,10 +49,72 @@ def robot_metrics(timeline: Timeline, facts: RobotFacts) -> dict[str, Any]:
         "near_collisions": len(collisions),
         "near_collisions_filtered": sum(1 for e in collisions if not e.data.get("repeat")),
         "nav_aborts": timeline.count(L.NAV_ABORTED),
+        "made_way": timeline.count(L.MADE_WAY),
         "last_task_time": last_completion.time if last_completion else None,
         "min_separation": facts.min_separation,
         "max_separation": facts.max_separation,
     }
+
+
+def overlap(timeline: Timeline, activity: str, role: str) -> float:
+    """Time spent in ``activity`` (activity track) while holding ``role`` (role track)."""
+    acts = [i for i in timeline.intervals if i.track == ACTIVITY and i.label == activity]
+    roles = [i for i in timeline.intervals if i.track == ROLE and i.label == role]
+    total = 0.0
+    for a in acts:
+        for r in roles:
+            total += max(0.0, min(a.end, r.end) - max(a.start, r.start))
+    return total
+
+
+def switching_time(timeline: Timeline) -> float:
+    """Time from each role change (roles assigned or dissolved) until the robot moves
+    again, when it moves before the next change: stopping, re-planning, restarting."""
+    changes = sorted(
+        e.time for e in timeline.events if e.label in (L.ROLE_ASSIGNED, L.ROLES_DISSOLVED)
+    )
+    starts = sorted(
+        i.start for i in timeline.intervals if i.track == ACTIVITY and i.label == L.MOVING
+    )
+    total = 0.0
+    for k, t in enumerate(changes):
+        horizon = changes[k + 1] if k + 1 < len(changes) else float("inf")
+        nxt = next((s for s in starts if s >= t), None)
+        if nxt is not None and nxt < horizon:
+            total += nxt - t
+    return total
+
+
+def lf_metrics(timeline: Timeline) -> dict[str, Any]:
+    """Leader-Follower metrics (SPEC §8) of one robot."""
+    return {
+        "na_movement_time": overlap(timeline, L.MOVING, L.ROLE_NA),
+        "leader_movement_time": overlap(timeline, L.MOVING, L.ROLE_LEADER),
+        "follower_movement_time": overlap(timeline, L.MOVING, L.ROLE_FOLLOWER),
+        "regrouping_movement_time": overlap(timeline, L.MOVING, L.ROLE_REGROUPING),
+        "leader_disconnect_time": timeline.total(L.LEADER_DISCONNECT),
+        "follower_waiting_time": timeline.total(L.FOLLOWER_WAITING),
+        "role_assignment_time": timeline.total(L.ROLE_ASSIGNMENT),
+        "switching_time": switching_time(timeline),
+        "disconnects_detected": timeline.count(L.DISCONNECT_DETECTED),
+        "roles_assigned": timeline.count(L.ROLE_ASSIGNED),
+        "times_leader": sum(
+            1
+            for e in timeline.events
+            if e.label == L.ROLE_ASSIGNED and e.data.get("leader") == timeline.owner
+        ),
+    }
+
+
+LF_TOTALS = (
+    "na_movement_time",
+    "leader_movement_time",
+    "follower_movement_time",
+    "leader_disconnect_time",
+    "follower_waiting_time",
+    "role_assignment_time",
+    "switching_time",
+)
 
 
 def execution_phase(timelines: Mapping[str, Timeline]) -> tuple[float | None, float | None]:
@@ -93,6 +155,7 @@ def mission_metrics(
         "delay_time": total("delay_time"),
         "idle_time": total("idle_time"),
         "task_execution_time": total("task_execution_time"),
+        **{k: total(k) for k in LF_TOTALS if rows and k in rows[0]},
         "min_separation": min((r["min_separation"] for r in rows), default=None),
         "max_separation": max((r["max_separation"] for r in rows), default=None),
     }

@@ -25,7 +25,7 @@ import numpy as np
 from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
 from mrcomm.agents.behaviours import behaviour_class
 from mrcomm.agents.executor import TaskExecutor
-from mrcomm.metrics.compute import RobotFacts, mission_metrics, robot_metrics
+from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robot_metrics
 from mrcomm.metrics.timeline import Timeline
 from mrcomm.net.inprocess import InProcessNetwork
 from mrcomm.net.links import LinkModel, LinkRecorder, LinkState
@@ -48,6 +48,7 @@ class MissionResult:
     robots: dict[str, dict[str, Any]]
     messages: dict[str, dict[str, int]]
     messages_by_agent: dict[str, dict[str, dict[str, int]]]
+    aon: dict[str, Any]
     links: dict[str, dict[str, Any]]
     sim_time_s: float
     wall_time_s: float
@@ -62,6 +63,7 @@ class MissionResult:
             "robots": self.robots,
             "messages": self.messages,
             "messages_by_agent": self.messages_by_agent,
+            "aon": self.aon,
             "links": self.links,
             "sim_time_s": self.sim_time_s,
             "wall_time_s": self.wall_time_s,
@@ -224,6 +226,8 @@ class Mission:
                 tasks_failed=sum(1 for _, robot in failed_pairs if robot == rid),
             )
             metrics = robot_metrics(self.timelines[rid], facts)
+            if self.executors[rid].uses_aon:
+                metrics.update(lf_metrics(self.timelines[rid]))
             metrics["failed_tasks"] = [t for t, robot in failed_pairs if robot == rid]
             metrics["replans"] = getattr(self.bases[rid], "replans", None)
             metrics["recoveries"] = getattr(self.bases[rid], "recoveries", None)
@@ -235,6 +239,7 @@ class Mission:
             failed_tasks=self.assigner.failed_tasks(),
         )
         mission["timed_out"] = not self.finished
+        aon = self._aon_summary()
         mission["end_time"] = round(end, 6)
         config = self.config.model_dump(mode="json")
         config["label"] = self.config.label()
@@ -245,6 +250,7 @@ class Mission:
             robots=robots,
             messages=self.network.counts_by_topic(),
             messages_by_agent=self.network.counts_by_agent(),
+            aon=aon,
             links=self.link_recorder.summaries(),
             sim_time_s=round(end, 6),
             wall_time_s=self._wall,
@@ -252,6 +258,43 @@ class Mission:
             trajectories=self.trajectories,
             scenario=self.world.scenario,
         )
+
+
+    def _aon_summary(self) -> dict[str, Any]:
+        """AON statistics per agent and in total (empty when statuses go plain)."""
+        endpoints = {rid: getattr(e, "aon", None) for rid, e in self.executors.items()}
+        endpoints[ASSIGNER_ID] = self.assigner.aon
+        per_agent: dict[str, Any] = {}
+        for agent, aon in endpoints.items():
+            if aon is None:
+                continue
+            st = aon.stats
+            times = list(st.finish_times.values())
+            per_agent[agent] = {
+                "publications": st.publications,
+                "resend_publications": st.resend_publications,
+                "replies": st.replies,
+                "restarts": st.restarts,
+                "deliveries": st.deliveries,
+                "finished": st.finished,
+                "left_out_reports": st.left_out_reports,
+                "pending": len(aon.pending_ids()),
+                "mean_finish_time": round(sum(times) / len(times), 6) if times else None,
+                "max_finish_time": round(max(times), 6) if times else None,
+            }
+        if not per_agent:
+            return {}
+        rows = per_agent.values()
+        finish = [r["max_finish_time"] for r in rows if r["max_finish_time"] is not None]
+        total = {
+            k: sum(r[k] for r in rows)
+            for k in ("publications", "resend_publications", "replies", "restarts", "pending")
+        }
+        total["statuses_sent"] = sum(
+            1 for tl in self.timelines.values() for e in tl.events if e.label == "task_completed"
+        )
+        total["max_finish_time"] = max(finish) if finish else None
+        return {"total": total, "agents": per_agent}
 
 
 def run_mission(config: RunConfig, world: SimWorld | None = None) -> MissionResult:
