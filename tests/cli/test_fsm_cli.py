@@ -1,0 +1,46 @@
+"""`mrcomm fsm`: diagrams generated from the behaviour machines."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+from mrcomm.agents.diagram import mermaid
+from tests.cli.test_run_cli import mrcomm
+
+
+def test_mermaid_text_lists_the_nested_states(tmp_path: Path) -> None:
+    out = tmp_path / "lf.mmd"
+    proc = mrcomm("fsm", "--behaviour", "lf", "--out", str(out))
+    assert proc.returncode == 0, proc.stderr
+    text = out.read_text()
+    assert "stateDiagram-v2" in text
+    for state in ("na_navigating", "leader_holding", "follower_following", "assigning", "regrouping"):
+        assert state in text, state
+    assert "disconnect" in text and "dissolve" in text
+
+
+def test_nb_diagram_has_only_nb_states() -> None:
+    text = mermaid("nb")
+    assert "navigating" in text and "avoiding" in text
+    assert "leader" not in text
+
+
+@pytest.mark.skipif(shutil.which("dot") is None, reason="graphviz (dot) not installed: `make test` installs it as root")
+def test_svg_through_graphviz(tmp_path: Path) -> None:
+    out = tmp_path / "lf.svg"
+    proc = mrcomm("fsm", "--behaviour", "lf", "--out", str(out))
+    assert proc.returncode == 0, proc.stderr
+    svg = out.read_text()
+    assert svg.lstrip().startswith("<?xml") or "<svg" in svg[:500]
+    assert "holding" in svg and "following" in svg
+
+
+def test_bad_behaviour_or_format_exits_2(tmp_path: Path) -> None:
+    proc = mrcomm("fsm", "--behaviour", "lff", "--out", str(tmp_path / "x.svg"))
+    assert proc.returncode == 2 and "did you mean 'lf'" in proc.stderr
+    proc = mrcomm("fsm", "--out", str(tmp_path / "x.gif"))
+    assert proc.returncode == 2 and ".gif" in proc.stderr
+    assert not any(tmp_path.iterdir())

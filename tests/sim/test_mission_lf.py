@@ -1,0 +1,76 @@
+"""Whole S1 missions with LF and AON (issue 4 "must show")."""
+
+from __future__ import annotations
+
+import json
+import statistics
+
+import pytest
+
+from mrcomm.sim.config import make_config
+from mrcomm.sim.mission import MissionResult, run_mission
+from tests.conftest import S1_PATH
+
+
+def _run(world, **options) -> MissionResult:  # type: ignore[no-untyped-def]
+    return run_mission(make_config(None, scenario=S1_PATH, **options), world)
+
+
+@pytest.mark.parametrize("spl", [0, 25, 50, 75])
+@pytest.mark.parametrize(("network", "threshold"), [("wlan", "slt"), ("ah", "slt")])
+def test_lf_missions_succeed(s1_world, network: str, threshold: str, spl: int) -> None:  # type: ignore[no-untyped-def]
+    result = _run(s1_world, network=network, threshold=threshold, behaviour="lf", spl=spl, seed=7)
+    m = result.mission
+    assert m["successful"], (m["failed_tasks"], m["timed_out"])
+    assert m["failed_tasks"] == [] and m["tasks_completed"] == 7
+    assert not m["timed_out"]
+    assert result.aon["total"]["pending"] == 0  # every status finished at every member
+    assert m["max_separation"] < 8.0  # the team never broke the ad-hoc range
+    roles = sum(r["roles_assigned"] for r in result.robots.values())
+    assert roles > 0 and m["leader_movement_time"] > 0 and m["follower_movement_time"] > 0
+
+
+def test_lf_keeps_the_team_together_at_a_movement_cost(s1_world) -> None:  # type: ignore[no-untyped-def]
+    lf_sep, nb_sep, lf_move, nb_move = [], [], [], []
+    for seed in (1, 2, 3):
+        lf = _run(s1_world, network="ah", threshold="slt", behaviour="lf", spl=25, seed=seed)
+        nb = _run(s1_world, network="ah", threshold="slt", behaviour="nb", spl=25, seed=seed)
+        lf_sep.append(lf.mission["max_separation"])
+        nb_sep.append(nb.mission["max_separation"])
+        lf_move.append(lf.mission["total_movement_time"])
+        nb_move.append(nb.mission["total_movement_time"])
+    assert statistics.mean(lf_sep) < 0.5 * statistics.mean(nb_sep)
+    assert statistics.mean(lf_move) > 1.3 * statistics.mean(nb_move)
+
+
+def test_role_split_movement_adds_up_and_aon_reaches_the_assigner(s1_world) -> None:  # type: ignore[no-untyped-def]
+    result = _run(s1_world, network="ah", threshold="slt", behaviour="lf", spl=50, seed=3)
+    for robot, r in result.robots.items():
+        split = (
+            r["na_movement_time"]
+            + r["leader_movement_time"]
+            + r["follower_movement_time"]
+            + r["regrouping_movement_time"]
+        )
+        assert split == pytest.approx(r["movement_time"], abs=1.0), robot
+        assert r["leader_disconnect_time"] >= 0 and r["follower_waiting_time"] >= 0
+    assigner = result.aon["agents"]["assigner"]
+    assert assigner["deliveries"] == 7  # every SUCCESS delivered exactly once
+    assert result.messages["aon"]["dropped_loss"] > 0  # AON overcame real losses
+
+
+def test_without_a_threshold_lf_never_switches(s1_world) -> None:  # type: ignore[no-untyped-def]
+    result = _run(s1_world, network="wlan", threshold="none", behaviour="lf", spl=0, seed=1)
+    assert result.mission["successful"]
+    assert all(r["roles_assigned"] == 0 for r in result.robots.values())
+    assert result.mission["leader_movement_time"] == 0
+
+
+def test_lf_is_deterministic(s1_world) -> None:  # type: ignore[no-untyped-def]
+    def run(seed: int) -> str:
+        summary = _run(s1_world, network="ah", threshold="slt", behaviour="lf", spl=50, seed=seed).summary()
+        summary.pop("wall_time_s")
+        return json.dumps(summary, sort_keys=True)
+
+    assert run(5) == run(5)
+    assert run(5) != run(6)
