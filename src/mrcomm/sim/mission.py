@@ -37,6 +37,7 @@ from mrcomm.sim.world import SimWorld
 from mrcomm.world.scenario import Scenario
 
 TRAJECTORY_PERIOD = 0.5  # s between recorded trajectory samples
+RSSI_PERIOD = 0.5  # s between recorded RSSI samples (the pulse rate, 2 Hz)
 
 
 @dataclass
@@ -55,6 +56,8 @@ class MissionResult:
     timelines: dict[str, Timeline]
     trajectories: dict[str, list[tuple[float, float, float]]]
     scenario: Scenario
+    #: (time, from, to, rssi dBm) for robot pairs at 2 Hz, when the threshold has RSSI.
+    rssi_series: list[tuple[float, str, str, float]]
 
     def summary(self) -> dict[str, Any]:
         return {
@@ -134,6 +137,8 @@ class Mission:
             rid: [] for rid in self.robot_ids
         }
         self._next_sample = 0.0
+        self._next_rssi = 0.0
+        self.rssi_series: list[tuple[float, str, str, float]] = []
         self.now = 0.0
         self.steps = 0
         self.finished = False
@@ -172,6 +177,9 @@ class Mission:
         if now >= self._next_sample:
             self._sample_trajectories(now)
             self._next_sample += TRAJECTORY_PERIOD
+        if links.rssi is not None and now >= self._next_rssi:
+            self._sample_rssi(now, links)
+            self._next_rssi += RSSI_PERIOD
         self.steps += 1
         self.now = round(now + dt, 9)
         if (
@@ -203,6 +211,17 @@ class Mission:
         furthest = np.where(self._off_diagonal, d, -np.inf).max(axis=1)
         np.minimum(self._min_sep, closest, out=self._min_sep)
         np.maximum(self._max_sep, furthest, out=self._max_sep)
+
+    def _sample_rssi(self, now: float, links: LinkState) -> None:
+        assert links.rssi is not None
+        n = len(self.robot_ids)
+        for i in range(n):
+            for j in range(n):
+                value = links.rssi[i, j]
+                if i != j and math.isfinite(value):
+                    self.rssi_series.append(
+                        (round(now, 3), self.robot_ids[i], self.robot_ids[j], round(float(value), 3))
+                    )
 
     def _sample_trajectories(self, now: float) -> None:
         for rid, base in self.bases.items():
@@ -257,6 +276,7 @@ class Mission:
             timelines=self.timelines,
             trajectories=self.trajectories,
             scenario=self.world.scenario,
+            rssi_series=self.rssi_series,
         )
 
 
