@@ -42,8 +42,10 @@ def main() -> None:
     started = time.perf_counter()
     world = SimWorld.load(S1)
     load_s = time.perf_counter() - started
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"Python {platform.python_version()}; pinned to 1 core; scenario load {load_s:.2f} s")
+    print(
+        f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"Python {platform.python_version()}; pinned to 1 core; scenario load {load_s:.2f} s"
+    )
     print()
     print("| case | sim s (median) | wall s (median) | real-time factor (median) | min..max |")
     print("|---|---|---|---|---|")

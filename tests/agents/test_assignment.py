@@ -8,7 +8,10 @@ from mrcomm.messaging.messages import TaskSpec
 
 def _tasks(n: int, robots_needed: dict[int, int] | None = None) -> list[TaskSpec]:
     needed = robots_needed or {}
-    return [TaskSpec(str(i), "SENSOR_SWEEP", float(i), 0.0, num_robots=needed.get(i, 1)) for i in range(1, n + 1)]
+    return [
+        TaskSpec(str(i), "SENSOR_SWEEP", float(i), 0.0, num_robots=needed.get(i, 1))
+        for i in range(1, n + 1)
+    ]
 
 
 def test_three_robots_seven_tasks_matches_the_spec() -> None:

@@ -17,7 +17,13 @@ def test_mermaid_text_lists_the_nested_states(tmp_path: Path) -> None:
     assert proc.returncode == 0, proc.stderr
     text = out.read_text()
     assert "stateDiagram-v2" in text
-    for state in ("na_navigating", "leader_holding", "follower_following", "assigning", "regrouping"):
+    for state in (
+        "na_navigating",
+        "leader_holding",
+        "follower_following",
+        "assigning",
+        "regrouping",
+    ):
         assert state in text, state
     assert "disconnect" in text and "dissolve" in text
 
@@ -28,7 +34,10 @@ def test_nb_diagram_has_only_nb_states() -> None:
     assert "leader" not in text
 
 
-@pytest.mark.skipif(shutil.which("dot") is None, reason="graphviz (dot) not installed: `make test` installs it as root")
+@pytest.mark.skipif(
+    shutil.which("dot") is None,
+    reason="graphviz (dot) not installed: `make test` installs it as root",
+)
 def test_svg_through_graphviz(tmp_path: Path) -> None:
     out = tmp_path / "lf.svg"
     proc = mrcomm("fsm", "--behaviour", "lf", "--out", str(out))

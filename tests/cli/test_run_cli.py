@@ -15,18 +15,42 @@ MRCOMM = [sys.executable, "-c", "from mrcomm.cli.main import app; app()"]
 
 
 def mrcomm(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([*MRCOMM, *args], capture_output=True, text=True, cwd=cwd or ROOT, timeout=300)
+    return subprocess.run(
+        [*MRCOMM, *args], capture_output=True, text=True, cwd=cwd or ROOT, timeout=300
+    )
 
 
 def test_json_output_has_the_documented_keys(tmp_path: Path) -> None:
     plot = tmp_path / "s1.png"
-    proc = mrcomm("run", str(S1_PATH), "--network", "ah", "--spl", "25", "--seed", "3", "--json", "--plot", str(plot))
+    proc = mrcomm(
+        "run",
+        str(S1_PATH),
+        "--network",
+        "ah",
+        "--spl",
+        "25",
+        "--seed",
+        "3",
+        "--json",
+        "--plot",
+        str(plot),
+    )
     assert proc.returncode == 0, proc.stderr
     out = json.loads(proc.stdout)
     assert {"config", "mission", "robots", "messages", "sim_time_s", "wall_time_s"} <= set(out)
-    for key in ("successful", "failed_tasks", "tasks_completed", "execution_phase_time",
-                "total_movement_time", "total_distance", "near_collisions", "delay_time",
-                "idle_time", "min_separation", "max_separation"):
+    for key in (
+        "successful",
+        "failed_tasks",
+        "tasks_completed",
+        "execution_phase_time",
+        "total_movement_time",
+        "total_distance",
+        "near_collisions",
+        "delay_time",
+        "idle_time",
+        "min_separation",
+        "max_separation",
+    ):
         assert key in out["mission"], key
     assert set(out["robots"]) == {"robot_1", "robot_2", "robot_3"}
     assert out["config"]["network"] == "ah" and out["config"]["spl"] == 25
@@ -75,7 +99,11 @@ def test_task_inside_a_wall_names_file_and_field(tmp_path: Path) -> None:
     scenario = tmp_path / "s.yaml"
     tasks = tmp_path / "tasks.yaml"
     src = (ROOT / "data" / "scenarios" / "s1.yaml").read_text()
-    scenario.write_text(src.replace("../maps/office.yaml", str(ROOT / "data" / "maps" / "office.yaml")).replace("s1_tasks.yaml", str(tasks)))
+    scenario.write_text(
+        src.replace("../maps/office.yaml", str(ROOT / "data" / "maps" / "office.yaml")).replace(
+            "s1_tasks.yaml", str(tasks)
+        )
+    )
     tasks.write_text(
         "- task_id: '1'\n  type: SENSOR_SWEEP\n  location: {x: 0.01, y: 0.01}\n"
         "  arrival_time: 0\n  num_robots: 1\n  duration: 0\n  depends: []\n"

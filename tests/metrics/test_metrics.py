@@ -1,5 +1,7 @@
 """Metric computation from hand-made timelines (SPEC §8)."""
 
+import itertools
+
 import pytest
 
 from mrcomm.metrics import labels as L
@@ -35,12 +37,14 @@ def test_intervals_and_totals() -> None:
     assert tl.total(L.IDLE) == pytest.approx(8.0)
     assert tl.total("na", ROLE) == pytest.approx(29.9)
     acts = [i for i in tl.intervals if i.track == ACTIVITY]
-    for earlier, later in zip(acts, acts[1:], strict=False):
+    for earlier, later in itertools.pairwise(acts):
         assert earlier.end <= later.start  # one activity at a time
 
 
 def test_robot_metrics_from_a_hand_made_timeline() -> None:
-    facts = RobotFacts(distance=12.5, min_separation=0.7, max_separation=9.0, tasks_assigned=1, tasks_failed=0)
+    facts = RobotFacts(
+        distance=12.5, min_separation=0.7, max_separation=9.0, tasks_assigned=1, tasks_failed=0
+    )
     m = robot_metrics(_timeline(), facts)
     assert m["initialisation_time"] == pytest.approx(0.5)
     assert m["movement_time"] == pytest.approx(15.9)
@@ -61,7 +65,9 @@ def test_mission_metrics_sum_robots_and_take_extremes() -> None:
     assert execution_phase({"r1": t1, "r2": t2}) == (0.3, 25.0)
     r1 = robot_metrics(t1, RobotFacts(10.0, 0.7, 9.0, 1, 0))
     r2 = robot_metrics(t2, RobotFacts(4.0, 0.9, 12.0, 1, 1))
-    m = mission_metrics({"r1": r1, "r2": r2}, {"r1": t1, "r2": t2}, tasks_total=2, failed_tasks=["10", "2"])
+    m = mission_metrics(
+        {"r1": r1, "r2": r2}, {"r1": t1, "r2": t2}, tasks_total=2, failed_tasks=["10", "2"]
+    )
     assert m["execution_phase_time"] == pytest.approx(24.7)
     assert m["total_distance"] == pytest.approx(14.0)
     assert m["near_collisions"] == 2

@@ -24,7 +24,9 @@ IDS = ("a", "b", "c")
 
 
 def _network(loss: float, seed: int = 0) -> InProcessNetwork:
-    return InProcessNetwork(IDS, loss_percent=loss, loss_rngs={i: stream(seed, "loss", i) for i in IDS})
+    return InProcessNetwork(
+        IDS, loss_percent=loss, loss_rngs={i: stream(seed, "loss", i) for i in IDS}
+    )
 
 
 def _pose(sender: str, seq: int) -> PoseMsg:
@@ -49,7 +51,13 @@ def test_publishing_from_a_handler_waits_for_the_next_delivery() -> None:
     net = _network(0.0)
     b = net.endpoint("b")
     echoes: list[Message] = []
-    b.subscribe(TOPIC_POSE, lambda m: b.publish(TOPIC_UTILITY, UtilityMsg(sender="b", incarnation=1, seq=m.seq, stamp=0.0, round=0, utility=1.0)))
+    b.subscribe(
+        TOPIC_POSE,
+        lambda m: b.publish(
+            TOPIC_UTILITY,
+            UtilityMsg(sender="b", incarnation=1, seq=m.seq, stamp=0.0, round=0, utility=1.0),
+        ),
+    )
     net.endpoint("a").subscribe(TOPIC_UTILITY, echoes.append)
     net.endpoint("a").publish(TOPIC_POSE, _pose("a", 7))
     net.deliver(0.0)
@@ -63,7 +71,9 @@ def test_spl_drops_the_configured_fraction_at_each_receiver(loss: float) -> None
     net = _network(loss, seed=3)
     received = {i: 0 for i in IDS}
     for i in IDS:
-        net.endpoint(i).subscribe(TOPIC_POSE, lambda m, i=i: received.__setitem__(i, received[i] + 1))
+        net.endpoint(i).subscribe(
+            TOPIC_POSE, lambda m, i=i: received.__setitem__(i, received[i] + 1)
+        )
     n = 4000
     a = net.endpoint("a")
     for k in range(n):
@@ -76,7 +86,10 @@ def test_spl_drops_the_configured_fraction_at_each_receiver(loss: float) -> None
         assert abs(dropped - n * p) < 4 * sigma, (receiver, dropped)
         assert dropped + received[receiver] == n
     # receivers draw independently: their drop patterns differ
-    assert net.counts[("b", TOPIC_POSE)].dropped_loss != net.counts[("c", TOPIC_POSE)].dropped_loss or loss == 0
+    assert (
+        net.counts[("b", TOPIC_POSE)].dropped_loss != net.counts[("c", TOPIC_POSE)].dropped_loss
+        or loss == 0
+    )
 
 
 def test_spl_is_reproducible_from_the_seed() -> None:

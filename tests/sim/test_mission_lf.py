@@ -68,7 +68,9 @@ def test_without_a_threshold_lf_never_switches(s1_world) -> None:  # type: ignor
 
 def test_lf_is_deterministic(s1_world) -> None:  # type: ignore[no-untyped-def]
     def run(seed: int) -> str:
-        summary = _run(s1_world, network="ah", threshold="slt", behaviour="lf", spl=50, seed=seed).summary()
+        summary = _run(
+            s1_world, network="ah", threshold="slt", behaviour="lf", spl=50, seed=seed
+        ).summary()
         summary.pop("wall_time_s")
         return json.dumps(summary, sort_keys=True)
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 
 import pytest
@@ -74,9 +75,11 @@ def test_same_seed_same_json_and_different_seeds_differ(s1_world) -> None:  # ty
 def test_timelines_cover_the_run_without_overlap(s1_world) -> None:  # type: ignore[no-untyped-def]
     result = _run(s1_world, network="wlan", spl=25, behaviour="nb", seed=5)
     for robot, timeline in result.timelines.items():
-        activity = sorted((i for i in timeline.intervals if i.track == "activity"), key=lambda i: i.start)
+        activity = sorted(
+            (i for i in timeline.intervals if i.track == "activity"), key=lambda i: i.start
+        )
         assert activity, robot
-        for earlier, later in zip(activity, activity[1:], strict=False):
+        for earlier, later in itertools.pairwise(activity):
             assert earlier.end <= later.start + 1e-9
         assert activity[-1].end == pytest.approx(result.sim_time_s)
         r = result.robots[robot]

@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 import shutil
-from typing import Any
+from typing import Any, Literal
 
 from transitions.extensions.diagrams import HierarchicalGraphMachine
 
@@ -20,7 +20,7 @@ def graphviz_available() -> bool:
     return shutil.which("dot") is not None
 
 
-def behaviour_graph(behaviour: str, engine: str) -> Any:
+def behaviour_graph(behaviour: str, engine: Literal["graphviz", "mermaid"]) -> Any:
     """The transitions graph of a behaviour's machine (``engine``: graphviz|mermaid)."""
     cls = behaviour_class(behaviour)
     model = _Model()

@@ -50,7 +50,6 @@ from mrcomm.messaging.messages import (
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ROLE
 from mrcomm.ports import NavStatus
-from mrcomm.world.geometry import wrap_angle
 
 _DRIVE = [
     {"trigger": "arrive", "source": "navigating", "dest": "executing"},
@@ -88,11 +87,19 @@ LF_STATES: list[Any] = [
     "regrouping",
 ]
 LF_TRANSITIONS: list[dict[str, Any]] = [
-    {"trigger": "disconnect", "source": ["na", "leader", "follower", "regrouping"], "dest": "assigning"},
+    {
+        "trigger": "disconnect",
+        "source": ["na", "leader", "follower", "regrouping"],
+        "dest": "assigning",
+    },
     {"trigger": "become_leader", "source": "assigning", "dest": "leader"},
     {"trigger": "become_follower", "source": "assigning", "dest": "follower"},
     {"trigger": "regroup", "source": "assigning", "dest": "regrouping"},
-    {"trigger": "dissolve", "source": ["leader", "follower", "assigning", "regrouping"], "dest": "na"},
+    {
+        "trigger": "dissolve",
+        "source": ["leader", "follower", "assigning", "regrouping"],
+        "dest": "na",
+    },
 ]
 
 _ACTIVITY_OF_FULL_STATE = {
@@ -214,7 +221,9 @@ class LeaderFollowerExecutor(TaskExecutor):
         pose = self.base.pose
         for mate in self.team:
             known = self.mates.get(mate)
-            if known is not None and self.link_sensor.warning(mate, pose, known.x, known.y, self._now):
+            if known is not None and self.link_sensor.warning(
+                mate, pose, known.x, known.y, self._now
+            ):
                 self.timeline.event(L.DISCONNECT_DETECTED, self._now, mate=mate)
                 self.send_status("", TaskState.DISCONNECT_ROLE)
                 self._open_round(self._round + 1)
@@ -365,7 +374,9 @@ class LeaderFollowerExecutor(TaskExecutor):
         if not available:
             self._dissolve("leader has no available task")
             return
-        self.goal = min(available, key=lambda t: (math.hypot(t.x - pose.x, t.y - pose.y), t.task_id))
+        self.goal = min(
+            available, key=lambda t: (math.hypot(t.x - pose.x, t.y - pose.y), t.task_id)
+        )
         self.base.navigate_to(self.goal.x, self.goal.y)
 
     def _followers_out(self) -> bool:
@@ -438,9 +449,11 @@ class LeaderFollowerExecutor(TaskExecutor):
             self.trigger("reach")
             return
         far = self.link_sensor.warning(self.leader or "", pose, target[0], target[1], self._now)
-        moved = self._follow_target is None or math.hypot(
-            target[0] - self._follow_target[0], target[1] - self._follow_target[1]
-        ) > 0.5
+        moved = (
+            self._follow_target is None
+            or math.hypot(target[0] - self._follow_target[0], target[1] - self._follow_target[1])
+            > 0.5
+        )
         stalled = self.base.status in (NavStatus.ABORTED, NavStatus.IDLE)
         if (moved and self._now >= self._next_refresh) or stalled:
             self._follow_target = target

@@ -9,10 +9,10 @@ from typing import TYPE_CHECKING
 import matplotlib
 
 matplotlib.use("Agg")  # figures are files; never open a window
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from mrcomm.metrics import labels as L  # noqa: E402
+from mrcomm.metrics import labels as L
 
 if TYPE_CHECKING:
     from mrcomm.sim.mission import MissionResult
@@ -37,11 +37,11 @@ def save_mission_plot(result: MissionResult, path: Path, fmt: str = "png") -> No
         interpolation="nearest",
     )
     for i, robot in enumerate(scenario.robots):
-        colour = _COLOURS(i % 10)
+        robot_colour = _COLOURS(i % 10)
         track = np.array([(x, y) for _, x, y in result.trajectories.get(robot.id, [])])
         if len(track):
-            ax.plot(track[:, 0], track[:, 1], "-", color=colour, lw=1.4, label=robot.id)
-        ax.plot(robot.pose.x, robot.pose.y, "o", color=colour, ms=7, mec="black")
+            ax.plot(track[:, 0], track[:, 1], "-", color=robot_colour, lw=1.4, label=robot.id)
+        ax.plot(robot.pose.x, robot.pose.y, "o", color=robot_colour, ms=7, mec="black")
         timeline = result.timelines.get(robot.id)
         if timeline is not None:
             points = [

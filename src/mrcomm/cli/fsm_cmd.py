@@ -36,8 +36,16 @@ def fsm(
         out, fmt = fallback, "mermaid"
     if fmt == "mermaid":
         text = mermaid(behaviour)
-        write_atomically(out, lambda tmp: tmp.write_text(text + "\n"))
+        write_atomically(out, lambda tmp: _write_text(tmp, text + "\n"))
     else:
         data = render(behaviour, fmt)
-        write_atomically(out, lambda tmp: tmp.write_bytes(data))
+        write_atomically(out, lambda tmp: _write_bytes(tmp, data))
     typer.echo(f"wrote {out}")
+
+
+def _write_text(path: Path, text: str) -> None:
+    path.write_text(text)
+
+
+def _write_bytes(path: Path, data: bytes) -> None:
+    path.write_bytes(data)

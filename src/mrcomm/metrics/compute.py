@@ -20,8 +20,8 @@ class RobotFacts:
     """What the simulator (or the robot's own odometry) knows beyond the timeline."""
 
     distance: float  # odometry distance travelled (m)
-    min_separation: float  # distance to the closest team mate, minimum over the run (m)
-    max_separation: float  # distance to the furthest team mate, maximum over the run (m)
+    min_separation: float | None  # closest team mate, minimum over the run (m); None alone
+    max_separation: float | None  # furthest team mate, maximum over the run (m)
     tasks_assigned: int
     tasks_failed: int
 
@@ -124,7 +124,9 @@ def execution_phase(timelines: Mapping[str, Timeline]) -> tuple[float | None, fl
     if not received or any(e is None for e in received):
         return None, None
     start = max(e.time for e in received if e is not None)
-    completions = [e.time for tl in timelines.values() for e in tl.events if e.label == L.TASK_COMPLETED]
+    completions = [
+        e.time for tl in timelines.values() for e in tl.events if e.label == L.TASK_COMPLETED
+    ]
     return start, (max(completions) if completions else None)
 
 
@@ -156,8 +158,12 @@ def mission_metrics(
         "idle_time": total("idle_time"),
         "task_execution_time": total("task_execution_time"),
         **{k: total(k) for k in LF_TOTALS if rows and k in rows[0]},
-        "min_separation": min((r["min_separation"] for r in rows), default=None),
-        "max_separation": max((r["max_separation"] for r in rows), default=None),
+        "min_separation": min(
+            (r["min_separation"] for r in rows if r["min_separation"] is not None), default=None
+        ),
+        "max_separation": max(
+            (r["max_separation"] for r in rows if r["max_separation"] is not None), default=None
+        ),
     }
 
 

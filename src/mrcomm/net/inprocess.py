@@ -151,7 +151,9 @@ class InProcessNetwork:
                 else:
                     counts.dropped_range += 1
                 if self.observer is not None:
-                    self.observer(now, topic, self.ids[sender], self.ids[receiver], message, outcome)
+                    self.observer(
+                        now, topic, self.ids[sender], self.ids[receiver], message, outcome
+                    )
                 if outcome == "received":
                     for handler in handlers:
                         handler(message)

@@ -220,7 +220,12 @@ class Mission:
                 value = links.rssi[i, j]
                 if i != j and math.isfinite(value):
                     self.rssi_series.append(
-                        (round(now, 3), self.robot_ids[i], self.robot_ids[j], round(float(value), 3))
+                        (
+                            round(now, 3),
+                            self.robot_ids[i],
+                            self.robot_ids[j],
+                            round(float(value), 3),
+                        )
                     )
 
     def _sample_trajectories(self, now: float) -> None:
@@ -278,7 +283,6 @@ class Mission:
             scenario=self.world.scenario,
             rssi_series=self.rssi_series,
         )
-
 
     def _aon_summary(self) -> dict[str, Any]:
         """AON statistics per agent and in total (empty when statuses go plain)."""
