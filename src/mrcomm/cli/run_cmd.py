@@ -38,6 +38,9 @@ def run(
     plot: Annotated[Path | None, typer.Option(help="Write a map/trajectory figure (PNG/SVG).")] = (
         None
     ),
+    record: Annotated[
+        Path | None, typer.Option(help="Record the run to an MCAP file (opens in Foxglove).")
+    ] = None,
 ) -> None:
     """Run one mission in simulation (faster than real time)."""
     if network not in {n.value for n in NetworkType}:
@@ -57,7 +60,13 @@ def run(
     )
     if plot is not None:
         check_writable(plot, "--plot")
-    result = run_mission(config)
+    if record is not None:
+        from mrcomm.experiment.recording import run_and_record
+
+        check_writable(record, "--record")
+        result = run_and_record(config, None, record)
+    else:
+        result = run_mission(config)
     if plot is not None:
         from mrcomm.analysis.mission_plot import save_mission_plot
 

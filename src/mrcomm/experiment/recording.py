@@ -13,7 +13,7 @@ itself and writes one MCAP file (JSON message encoding, ``jsonschema`` schemas, 
   scene rate;
 * ``/messages`` — every delivery decision of the network (received / dropped_loss /
   dropped_range): exactly the network's per-topic bookkeeping;
-* ``/publications`` — every message published (seen at its first delivery decision);
+* ``/publications`` — every message published, as it is published;
 * ``/roles`` — every robot's behaviour state and LF role, whenever one changes;
 * ``/events`` — ``foxglove.Log``: the robots' timeline events and the statuses the
   assigner received;
@@ -132,7 +132,6 @@ class MissionRecorder:
         self._next_scene = 0  # index k of the next scene, due at k * scene_period
         self._event_index = dict.fromkeys(mission.robot_ids, 0)
         self._status_index = 0
-        self._seen: set[tuple[str, str, int, int]] = set()
         self._last_states: dict[str, str] = {}
         self._last_roles: dict[str, str | None] = {}
         for topic, schema in (
@@ -161,6 +160,7 @@ class MissionRecorder:
         )
         out.write(TOPIC_MAP, 0.0, scene.grid_message(scenario.grid, 0.0))
         mission.network.observer = self._on_delivery
+        mission.network.publish_observer = self._on_publish
 
     # -- driving -----------------------------------------------------------------------
     def step(self) -> None:
@@ -189,20 +189,6 @@ class MissionRecorder:
     def _on_delivery(
         self, now: float, topic: str, sender: str, receiver: str, message: Message, outcome: str
     ) -> None:
-        key = (topic, sender, message.incarnation, message.seq)
-        if key not in self._seen:
-            self._seen.add(key)
-            self.out.write(
-                TOPIC_PUBLICATIONS,
-                now,
-                {
-                    "t": message.stamp,
-                    "topic": topic,
-                    "sender": sender,
-                    "seq": message.seq,
-                    "kind": type(message).__name__,
-                },
-            )
         self.out.write(
             TOPIC_MESSAGES,
             now,
@@ -214,6 +200,19 @@ class MissionRecorder:
                 "outcome": outcome,
                 "seq": message.seq,
                 "stamp": message.stamp,
+            },
+        )
+
+    def _on_publish(self, stamp: float, topic: str, sender: str, message: Message) -> None:
+        self.out.write(
+            TOPIC_PUBLICATIONS,
+            stamp,
+            {
+                "t": stamp,
+                "topic": topic,
+                "sender": sender,
+                "seq": message.seq,
+                "kind": type(message).__name__,
             },
         )
 

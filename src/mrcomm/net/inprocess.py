@@ -27,6 +27,9 @@ from mrcomm.ports import Handler
 #: with outcome "received" | "dropped_loss" | "dropped_range". Used by recordings.
 DeliveryObserver = Callable[[float, str, str, str, Message, str], None]
 
+#: Observer of every publication: (stamp, topic, sender, message).
+PublishObserver = Callable[[float, str, str, Message], None]
+
 _UNIFORM_BATCH = 1024
 
 
@@ -110,6 +113,7 @@ class InProcessNetwork:
         self._connected: list[list[bool]] = [[True] * n for _ in range(n)]
         self.counts: dict[tuple[str, str], TopicCounts] = {}
         self.observer: DeliveryObserver | None = None
+        self.publish_observer: PublishObserver | None = None
         self._now = 0.0
 
     def endpoint(self, agent_id: str) -> InProcessEndpoint:
@@ -162,6 +166,8 @@ class InProcessNetwork:
     def _publish(self, sender: int, topic: str, message: Message) -> None:
         self._count(sender, topic).sent += 1
         self._outbox.append((sender, topic, message))
+        if self.publish_observer is not None:
+            self.publish_observer(message.stamp, topic, self.ids[sender], message)
 
     def _subscribe(self, receiver: int, topic: str, handler: Handler) -> None:
         self._subs.setdefault(topic, {}).setdefault(receiver, []).append(handler)
