@@ -1,0 +1,174 @@
+"""``mrcomm signal``: fit SSD signal models from measurements, show and plot them.
+
+* ``mrcomm signal fit CSV --out MODEL.json`` — fit and save (atomically), print a summary.
+* ``mrcomm signal show [MODEL] [--threshold -42] [--json]`` — threshold crossings and
+  RSSI at 1, 2, 4 and 8 m for line of sight and obstructed.
+* ``mrcomm signal plot [MODEL] [--csv CSV] --out FIG`` — a figure (PNG, SVG or PDF).
+
+Without MODEL the bundled model (fitted from the synthetic calibration set) is used.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from mrcomm.errors import InputError
+
+signal_app = typer.Typer(
+    help="SSD signal models: fit from RSSI measurements, show, plot.",
+    no_args_is_help=True,
+)
+
+SAMPLE_DISTANCES = (1.0, 2.0, 4.0, 8.0)
+CLASS_LABELS = {"line_of_sight": "line of sight", "obstructed": "obstructed"}
+
+ModelArg = Annotated[
+    Path | None,
+    typer.Argument(help="Model JSON (default: the bundled model).", show_default=False),
+]
+ThresholdOpt = Annotated[
+    float | None,
+    typer.Option("--threshold", help="Warning threshold in dBm (default: the model's, -42)."),
+]
+
+
+def _load(model_path: Path | None) -> tuple[Any, Path]:
+    from mrcomm.net.signal.bundled import default_model_path
+    from mrcomm.net.signal.svr import load_model
+
+    path = model_path if model_path is not None else default_model_path()
+    return load_model(path), path
+
+
+def summarise(model: Any, threshold: float | None, source: str) -> dict[str, Any]:
+    """Crossings, sample RSSI values and training facts of a model, as plain data."""
+    from mrcomm.net.signal.table import RssiTable
+
+    table = RssiTable.from_model(model)
+    thr = model.threshold_dbm if threshold is None else threshold
+    crossings = table.crossings(thr)
+    out: dict[str, Any] = {
+        "model": source,
+        "threshold_dbm": thr,
+        "provenance": dict(model.provenance),
+    }
+    for name in CLASS_LABELS:
+        los = name == "line_of_sight"
+        curve = model.curve(los)
+        lo, hi = curve.trained_range
+        out[name] = {
+            "crossings": [{"distance_m": d, "direction": how} for d, how in crossings[name]],
+            "below_at_start": bool(table.rssi_at(0.0, los) < thr),
+            "rssi_dbm": {f"{d:g}": round(table.rssi_at(d, los), 2) for d in SAMPLE_DISTANCES},
+            "trained_range_m": [lo, hi],
+            "saturation_dbm": round(float(curve.predict(hi)), 2),
+            "support_vectors": int(curve.support_vectors.size),
+            "readings": curve.n_samples,
+        }
+    return out
+
+
+def _print_summary(info: dict[str, Any]) -> None:
+    prov = info["provenance"]
+    origin = ""
+    if prov.get("source"):
+        kind = "SYNTHETIC calibration" if prov.get("synthetic") else "calibration"
+        origin = f" ({kind} {prov['source']})"
+    typer.echo(f"model: {info['model']}{origin}")
+    thr = info["threshold_dbm"]
+    typer.echo(f"threshold: {thr:g} dBm")
+    for name, label in CLASS_LABELS.items():
+        cls = info[name]
+        events = [f"{c['direction']} at {c['distance_m']:.2f} m" for c in cls["crossings"]]
+        if cls["below_at_start"]:
+            events.insert(0, "below from 0 m")
+        typer.echo(f"{label}: " + (", ".join(events) if events else f"never below {thr:g} dBm"))
+        values = ", ".join(f"{d} m {v:.1f}" for d, v in cls["rssi_dbm"].items())
+        typer.echo(f"  RSSI (dBm): {values}")
+        lo, hi = cls["trained_range_m"]
+        typer.echo(
+            f"  trained on {cls['readings']} readings at {lo:g}-{hi:g} m "
+            f"(saturates at {cls['saturation_dbm']:.1f} dBm beyond), "
+            f"{cls['support_vectors']} support vectors"
+        )
+
+
+@signal_app.command("fit")
+def fit_cmd(
+    csv: Annotated[Path, typer.Argument(help="Calibration CSV: distance,rssi,line_of_sight.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Model JSON to write.")],
+    gamma: Annotated[float, typer.Option(help="RBF kernel gamma (1/m^2).", min=1e-9)] = 0.1,
+    c: Annotated[float, typer.Option("--C", help="SVR regularisation C.", min=1e-9)] = 100.0,
+    epsilon: Annotated[float, typer.Option(help="SVR epsilon tube (dB).", min=0.0)] = 0.1,
+    threshold: Annotated[float, typer.Option(help="Default warning threshold (dBm).")] = -42.0,
+) -> None:
+    """Fit line-of-sight and obstructed SVR models to a calibration CSV."""
+    from mrcomm.net.signal.calibration import load_calibration
+    from mrcomm.net.signal.pathloss import fit_log_distance
+    from mrcomm.net.signal.svr import fit, save_model
+
+    calibration = load_calibration(csv)
+    model = fit(calibration, gamma=gamma, C=c, epsilon=epsilon, threshold_dbm=threshold)
+    try:
+        save_model(model, out)
+    except OSError as err:
+        raise InputError(f"cannot write: {err.strerror or err}", file=out, field="--out") from None
+    typer.echo(f"wrote {out}")
+    typer.echo(f"SVR: rbf, gamma {gamma:g}, C {c:g}, epsilon {epsilon:g}")
+    for los, label in ((True, "line of sight"), (False, "obstructed")):
+        d, r = calibration.of_class(los)
+        positive = d > 0
+        a_db, n = fit_log_distance(d[positive], r[positive])
+        typer.echo(f"log-distance fit, {label}: A = {a_db:.1f} dB, n = {n:.2f}")
+    _print_summary(summarise(model, None, str(out)))
+
+
+@signal_app.command("show")
+def show_cmd(
+    model: ModelArg = None,
+    threshold: ThresholdOpt = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")] = False,
+) -> None:
+    """Where RSSI crosses the threshold, and RSSI at 1, 2, 4 and 8 m."""
+    loaded, path = _load(model)
+    info = summarise(loaded, threshold, str(path))
+    if as_json:
+        typer.echo(json.dumps(info, indent=2))
+    else:
+        _print_summary(info)
+
+
+@signal_app.command("plot")
+def plot_cmd(
+    out: Annotated[Path, typer.Option("--out", "-o", help="Figure file: .png, .svg or .pdf.")],
+    model: ModelArg = None,
+    csv: Annotated[
+        Path | None,
+        typer.Option(
+            "--csv",
+            help="Calibration readings to draw (default with the bundled "
+            "model: the bundled synthetic set).",
+            show_default=False,
+        ),
+    ] = None,
+    threshold: ThresholdOpt = None,
+) -> None:
+    """Plot readings, per-distance means, both fitted curves and the threshold."""
+    from mrcomm.net.signal.bundled import bundled_calibration_path
+    from mrcomm.net.signal.calibration import load_calibration
+    from mrcomm.net.signal.plot import plot_format, plot_model
+
+    plot_format(out)  # reject a bad suffix before any work
+    loaded, _ = _load(model)
+    if csv is None and model is None:
+        csv = bundled_calibration_path()
+    calibration = load_calibration(csv) if csv is not None else None
+    try:
+        plot_model(loaded, out, calibration=calibration, threshold=threshold)
+    except OSError as err:
+        raise InputError(f"cannot write: {err.strerror or err}", file=out, field="--out") from None
+    typer.echo(f"wrote {out}")

@@ -1,0 +1,1 @@
+"""Network layer: link evaluation, network types, perturbations, signal models, buses."""
