@@ -7,8 +7,6 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from mrcomm.world.geometry import Pose
 from mrcomm.world.occupancy import OccupancyGrid
 
@@ -51,8 +49,7 @@ class ModelSensor:
     def rssi(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> float | None:
         distance = math.hypot(peer_x - own.x, peer_y - own.y)
         visible = self.grid.line_of_sight(own.x, own.y, peer_x, peer_y)
-        value = self.table.rssi(np.array([distance]), np.array([visible]))
-        return float(value[0])
+        return self.table.rssi_at(distance, visible)
 
     def warning(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> bool:
         value = self.rssi(peer, own, peer_x, peer_y, now)

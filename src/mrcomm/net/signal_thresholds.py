@@ -1,1 +1,67 @@
-"""Signal-model thresholds (SSD, ESD) — filled in once the signal models exist."""
+"""Signal-strength thresholds (SPEC §3): SSD and ESD, registered with the threshold
+registry of :mod:`mrcomm.net.thresholds`.
+
+* SSD — simulated signal degradation: RSSI predicted from each pair's distance by the
+  line-of-sight or the obstructed SVR model (chosen by ray casting on the map),
+  evaluated through a precomputed lookup table (never scikit-learn per step); warning
+  below -42 dBm by default; ad-hoc networks only.
+* ESD — effective signal degradation: the RSSI each robot measured of each peer (its
+  pulse process on a real robot; a recorded trace replayed in simulation); warning
+  below -41 dBm by default. A pair without a reading yet never warns.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from mrcomm.net.signal.table import RssiTable
+from mrcomm.net.signal.trace import RssiTrace
+from mrcomm.net.thresholds import BoolArray, FloatArray, Threshold, register_threshold
+
+
+@register_threshold("ssd")
+class ModelThreshold(Threshold):
+    """SSD: RSSI from the signal model's lookup table."""
+
+    needs_line_of_sight = True
+    network_types = frozenset({"ah"})
+
+    def __init__(self, table: RssiTable, warning_dbm: float = -42.0) -> None:
+        self.table = table
+        self.warning_dbm = warning_dbm
+
+    def evaluate(
+        self, distance: FloatArray, line_of_sight: BoolArray | None, now: float
+    ) -> tuple[FloatArray | None, BoolArray]:
+        assert line_of_sight is not None
+        finite = np.isfinite(distance)
+        rssi = self.table.rssi(np.where(finite, distance, 0.0), line_of_sight)
+        rssi = np.where(finite, rssi, np.nan)
+        with np.errstate(invalid="ignore"):
+            return rssi, rssi < self.warning_dbm  # NaN (virtual node) never warns
+
+    def describe(self) -> dict[str, Any]:
+        return {"threshold": self.name, "warning_dbm": self.warning_dbm}
+
+
+@register_threshold("esd")
+class MeasuredThreshold(Threshold):
+    """ESD: measured RSSI replayed from a trace (time, from, to, rssi)."""
+
+    def __init__(self, trace: RssiTrace, ids: Sequence[str], warning_dbm: float = -41.0) -> None:
+        self.trace = trace
+        self.ids = tuple(ids)
+        self.warning_dbm = warning_dbm
+
+    def evaluate(
+        self, distance: FloatArray, line_of_sight: BoolArray | None, now: float
+    ) -> tuple[FloatArray | None, BoolArray]:
+        rssi = self.trace.matrix_at(now, self.ids)
+        with np.errstate(invalid="ignore"):
+            return rssi, rssi < self.warning_dbm
+
+    def describe(self) -> dict[str, Any]:
+        return {"threshold": self.name, "warning_dbm": self.warning_dbm}

@@ -28,11 +28,12 @@ from mrcomm.agents.executor import TaskExecutor
 from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robot_metrics
 from mrcomm.metrics.timeline import Timeline
 from mrcomm.net.inprocess import InProcessNetwork
+from mrcomm.net.link_sensors import MeasuredSensor
 from mrcomm.net.links import LinkModel, LinkRecorder, LinkState
 from mrcomm.robot.base import SimBase
 from mrcomm.seeding import stream
 from mrcomm.sim.config import RunConfig
-from mrcomm.sim.signals import build_link_sensor, build_threshold
+from mrcomm.sim.signals import TracePulse, build_link_sensor, build_threshold
 from mrcomm.sim.world import SimWorld
 from mrcomm.world.scenario import Scenario
 
@@ -92,7 +93,7 @@ class Mission:
             self.node_ids,
             scenario.grid,
             config.network,
-            build_threshold(config),
+            build_threshold(config, self.world, self.node_ids),
             ah_range=config.ah_range,
         )
         host = scenario.assigner.host
@@ -113,13 +114,19 @@ class Mission:
         ranks = stream(seed, "tie-break").permutation(len(self.robot_ids))
         rank_of = {rid: float(ranks[i]) for i, rid in enumerate(self.robot_ids)}
         executor_class = behaviour_class(config.behaviour)
+        self.sensors = {rid: build_link_sensor(config, self.world) for rid in self.robot_ids}
+        self.pulse: TracePulse | None = None
+        if config.threshold == "esd" and config.rssi_trace is not None:
+            measured = {r: s for r, s in self.sensors.items() if isinstance(s, MeasuredSensor)}
+            trace = self.world.rssi_trace(config.rssi_trace)
+            self.pulse = TracePulse(trace, measured, self.robot_ids)
         self.executors: dict[str, TaskExecutor] = {
             rid: executor_class(
                 self.network.endpoint(rid),
                 self.bases[rid],
                 self.timelines[rid],
                 tie_break_rank=rank_of.__getitem__,
-                link_sensor=build_link_sensor(config, scenario.grid),
+                link_sensor=self.sensors[rid],
             )
             for rid in self.robot_ids
         }
@@ -165,6 +172,8 @@ class Mission:
         self.last_links = links
         self.network.set_connected(links.connected.tolist())
         self.network.deliver(now)
+        if self.pulse is not None:
+            self.pulse.step(now)
         self.assigner.step(now)
         for executor in self.executors.values():
             executor.step(now)

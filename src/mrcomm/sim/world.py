@@ -1,11 +1,15 @@
-"""A loaded scenario plus what every run on it can share (the planner's cost grid), so a
-sweep builds it once per process."""
+"""A loaded scenario plus what every run on it can share (the planner's cost grid,
+signal lookup tables, RSSI traces), so a sweep builds each once per process."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
+from mrcomm.net.signal.bundled import default_model
+from mrcomm.net.signal.svr import load_model
+from mrcomm.net.signal.table import RssiTable
+from mrcomm.net.signal.trace import RssiTrace
 from mrcomm.robot.params import RobotParams
 from mrcomm.robot.planner import GridPlanner
 from mrcomm.world.scenario import Scenario, load_scenario
@@ -16,9 +20,26 @@ class SimWorld:
     scenario: Scenario
     robot_params: RobotParams
     planner: GridPlanner
+    _tables: dict[Path | None, RssiTable] = field(default_factory=dict, repr=False)
+    _traces: dict[Path, RssiTrace] = field(default_factory=dict, repr=False)
 
     @classmethod
     def load(cls, scenario_path: Path, robot_params: RobotParams | None = None) -> SimWorld:
         scenario = load_scenario(scenario_path)
         params = robot_params or RobotParams()
         return cls(scenario, params, GridPlanner(scenario.grid, params))
+
+    def signal_table(self, model_path: Path | None) -> RssiTable:
+        """The SSD lookup table of a signal model file (None: the bundled model)."""
+        table = self._tables.get(model_path)
+        if table is None:
+            model = default_model() if model_path is None else load_model(model_path)
+            table = self._tables[model_path] = RssiTable.from_model(model)
+        return table
+
+    def rssi_trace(self, path: Path) -> RssiTrace:
+        """A recorded RSSI trace for ESD replay."""
+        trace = self._traces.get(path)
+        if trace is None:
+            trace = self._traces[path] = RssiTrace.load(path)
+        return trace
