@@ -17,7 +17,7 @@ def _run(world, **options) -> MissionResult:  # type: ignore[no-untyped-def]
 
 
 @pytest.mark.parametrize("spl", [0, 25, 50, 75])
-@pytest.mark.parametrize(("network", "threshold"), [("wlan", "slt"), ("ah", "slt")])
+@pytest.mark.parametrize(("network", "threshold"), [("wlan", "slt"), ("ah", "slt"), ("ah", "ssd")])
 def test_lf_missions_succeed(s1_world, network: str, threshold: str, spl: int) -> None:  # type: ignore[no-untyped-def]
     result = _run(s1_world, network=network, threshold=threshold, behaviour="lf", spl=spl, seed=7)
     m = result.mission

@@ -125,8 +125,8 @@ class LfParams:
     announce_period: float = 0.25  # utilities and roles at 4 Hz
     assign_timeout: float = 6.0  # decide with what was collected after this long
     roles_timeout: float = 3.0  # stop collecting roles after this long
-    follow_distance: float = 1.5  # a follower stops this close to the leader
-    refollow_distance: float = 2.5  # and moves again when the leader is this far
+    follow_distance: float = 1.2  # a follower stops this close to the leader
+    refollow_distance: float = 1.7  # and moves again when the leader is this far
     refresh_period_near: float = 1.0  # follower goal refresh when the leader is near
     refresh_period_far: float = 0.4  # ... and when it is beyond the warning threshold
     lost_timeout: float = 60.0  # a follower silent this long no longer holds the leader
@@ -157,6 +157,8 @@ class LeaderFollowerExecutor(TaskExecutor):
         self._follow_target: tuple[float, float] | None = None
         self._next_refresh = 0.0
         self._next_monitor = 0.0
+        self._next_followers_check = 0.0
+        self._followers_were_out = False
         super().__init__(*args, **kwargs)
         self.bus.subscribe(TOPIC_UTILITY, self._on_utility)
         self.bus.subscribe(TOPIC_ROLE, self._on_role)
@@ -380,6 +382,14 @@ class LeaderFollowerExecutor(TaskExecutor):
         self.base.navigate_to(self.goal.x, self.goal.y)
 
     def _followers_out(self) -> bool:
+        # Followers' poses arrive at the pose rate: judge them at that rate too.
+        if self._now < self._next_followers_check:
+            return self._followers_were_out
+        self._next_followers_check = self._now + self.params.pose_period
+        self._followers_were_out = self._judge_followers()
+        return self._followers_were_out
+
+    def _judge_followers(self) -> bool:
         pose = self.base.pose
         for mate in self.team:
             known = self.mates.get(mate)
@@ -444,11 +454,11 @@ class LeaderFollowerExecutor(TaskExecutor):
             return
         pose = self.base.pose
         distance = math.hypot(target[0] - pose.x, target[1] - pose.y)
-        if distance <= self.lf.follow_distance:
+        far = self.link_sensor.warning(self.leader or "", pose, target[0], target[1], self._now)
+        if distance <= self.lf.follow_distance and not far:
             self.base.cancel()
             self.trigger("reach")
             return
-        far = self.link_sensor.warning(self.leader or "", pose, target[0], target[1], self._now)
         moved = (
             self._follow_target is None
             or math.hypot(target[0] - self._follow_target[0], target[1] - self._follow_target[1])
@@ -466,11 +476,15 @@ class LeaderFollowerExecutor(TaskExecutor):
         target = self._leader_position()
         if target is None:
             return
-        if self._in_leaders_way():
-            self.make_way(self.mates[self.leader or ""])
-            return
+        # A waiting follower steps aside for the leader, and for any mate it blocks
+        # (e.g. a follower stuck behind it on its way into the leader's sight).
+        for mate in self.mates.values():
+            if self.in_way_of(mate):
+                self.make_way(mate)
+                return
         pose = self.base.pose
-        if math.hypot(target[0] - pose.x, target[1] - pose.y) > self.lf.refollow_distance:
+        far = self.link_sensor.warning(self.leader or "", pose, target[0], target[1], self._now)
+        if far or math.hypot(target[0] - pose.x, target[1] - pose.y) > self.lf.refollow_distance:
             self._follow_target = target
             self.base.navigate_to(*target)
             self._next_refresh = self._now + self.lf.refresh_period_near

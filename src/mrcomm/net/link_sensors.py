@@ -8,7 +8,7 @@ import math
 from typing import TYPE_CHECKING
 
 from mrcomm.world.geometry import Pose
-from mrcomm.world.occupancy import OccupancyGrid
+from mrcomm.world.occupancy import LineOfSightCache, OccupancyGrid
 
 if TYPE_CHECKING:
     from mrcomm.net.signal.table import RssiTable
@@ -43,12 +43,13 @@ class ModelSensor:
 
     def __init__(self, grid: OccupancyGrid, table: RssiTable, warning_dbm: float) -> None:
         self.grid = grid
+        self.sight = LineOfSightCache(grid)
         self.table = table
         self.warning_dbm = warning_dbm
 
     def rssi(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> float | None:
         distance = math.hypot(peer_x - own.x, peer_y - own.y)
-        visible = self.grid.line_of_sight(own.x, own.y, peer_x, peer_y)
+        visible = self.sight.line_of_sight(own.x, own.y, peer_x, peer_y)
         return self.table.rssi_at(distance, visible)
 
     def warning(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> bool:

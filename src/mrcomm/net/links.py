@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from mrcomm.net.network import AH_RANGE_M, NetworkType
 from mrcomm.net.thresholds import BoolArray, FloatArray, Threshold
-from mrcomm.world.occupancy import OccupancyGrid
+from mrcomm.world.occupancy import LineOfSightCache, OccupancyGrid
 
 
 @dataclass(frozen=True)
@@ -53,6 +53,7 @@ class LinkModel:
         iu = np.triu_indices(n, k=1)
         self._pairs_i, self._pairs_j = iu
         self._eye = np.eye(n, dtype=np.bool_)
+        self.sight = LineOfSightCache(grid)
 
     def update(self, positions: NDArray[np.float64], now: float) -> LinkState:
         """``positions``: (n, 2), NaN rows for nodes without a position."""
@@ -81,7 +82,7 @@ class LinkModel:
         cast = np.isfinite(d) & (d > 0.0) & (d <= reach)
         if cast.any():
             ci, cj = i[cast], j[cast]
-            visible = self.grid.line_of_sight_many(positions[ci], positions[cj])
+            visible = self.sight.line_of_sight_many(positions[ci], positions[cj])
             los[ci, cj] = visible
             los[cj, ci] = visible
         far = np.isfinite(d) & (d > reach)
