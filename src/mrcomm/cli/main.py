@@ -9,7 +9,10 @@ import sys
 import typer
 
 from mrcomm.cli.fsm_cmd import fsm
+from mrcomm.cli.pulse_cmd import pulse
+from mrcomm.cli.replay_cmd import replay
 from mrcomm.cli.run_cmd import run
+from mrcomm.cli.signal_cmd import signal_app
 from mrcomm.errors import InputError
 
 cli = typer.Typer(
@@ -29,6 +32,9 @@ def _group() -> None:
 
 cli.command("run")(run)
 cli.command("fsm")(fsm)
+cli.command("replay")(replay)
+cli.add_typer(signal_app, name="signal")
+cli.command("pulse")(pulse)
 
 
 def app() -> None:
