@@ -13,6 +13,7 @@ from mrcomm.cli.pulse_cmd import pulse
 from mrcomm.cli.replay_cmd import replay
 from mrcomm.cli.run_cmd import run
 from mrcomm.cli.signal_cmd import signal_app
+from mrcomm.cli.sweep_cmd import export, sweep
 from mrcomm.errors import InputError
 
 cli = typer.Typer(
@@ -32,6 +33,8 @@ def _group() -> None:
 
 cli.command("run")(run)
 cli.command("fsm")(fsm)
+cli.command("sweep")(sweep)
+cli.command("export")(export)
 cli.command("replay")(replay)
 cli.add_typer(signal_app, name="signal")
 cli.command("pulse")(pulse)

@@ -1,0 +1,74 @@
+"""Notebook API: a sweep's results as pandas DataFrames in one call.
+
+    from mrcomm.experiment.api import load_results
+    res = load_results("results.duckdb")
+    res.runs.groupby("label").execution_phase_time.mean()
+    res.con.sql("SELECT label, avg(total_distance) FROM runs GROUP BY label").df()
+
+The database is opened read-only (several notebooks may read while no sweep writes).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import duckdb
+import pandas as pd
+
+from mrcomm.experiment.store import open_readonly
+from mrcomm.experiment.tables import RUN_TABLES
+
+_ORDER = {
+    "runs": "experiment, label, repetition",
+    "configs": "experiment, label",
+    "robot_metrics": "run_id, robot, metric",
+    "failed_tasks": "run_id, task_id",
+    "messages": "run_id, agent, topic",
+    "links": "run_id, src, dst",
+    "intervals": "run_id, robot, track, t_start",
+    "events": "run_id, robot, t",
+    "rssi": "run_id, t, src, dst",
+}
+
+
+@dataclass
+class Results:
+    """Every results table as a DataFrame (tidy, long form), plus the connection."""
+
+    runs: pd.DataFrame
+    configs: pd.DataFrame
+    robot_metrics: pd.DataFrame
+    failed_tasks: pd.DataFrame
+    messages: pd.DataFrame
+    links: pd.DataFrame
+    intervals: pd.DataFrame
+    events: pd.DataFrame
+    rssi: pd.DataFrame
+    #: Read-only DuckDB connection for raw SQL.
+    con: duckdb.DuckDBPyConnection
+
+    @property
+    def ok_runs(self) -> pd.DataFrame:
+        """Runs that finished (status 'ok'; the mission itself may still have failed)."""
+        return self.runs[self.runs["status"] == "ok"]
+
+    def close(self) -> None:
+        self.con.close()
+
+
+def load_results(db_path: str | Path, experiment: str | None = None) -> Results:
+    """Load every table of the results database at ``db_path`` (optionally only the
+    runs of one experiment). Raises InputError for a missing or incompatible file."""
+    con = open_readonly(Path(db_path))
+    frames: dict[str, pd.DataFrame] = {}
+    for table in ("configs", *RUN_TABLES):
+        if experiment is None:
+            query, params = f"SELECT * FROM {table}", []
+        elif table in ("configs", "runs"):
+            query, params = f"SELECT * FROM {table} WHERE experiment = ?", [experiment]
+        else:
+            query = f"SELECT x.* FROM {table} x JOIN runs USING (run_id) WHERE runs.experiment = ?"
+            params = [experiment]
+        frames[table] = con.execute(f"{query} ORDER BY {_ORDER[table]}", params).df()
+    return Results(con=con, **frames)

@@ -1,0 +1,53 @@
+"""Export a results database to one CSV or Parquet file per table (``mrcomm export``).
+
+DuckDB writes the files itself (no pyarrow needed), from a read-only connection; each
+file is written under a temporary name and renamed, so an interrupted export never
+leaves a truncated table behind.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from mrcomm.errors import InputError, did_you_mean
+from mrcomm.experiment.store import open_readonly
+from mrcomm.experiment.tables import TABLES
+
+FORMATS = {"csv": "(FORMAT csv, HEADER)", "parquet": "(FORMAT parquet)"}
+
+
+def check_format(fmt: str) -> None:
+    if fmt not in FORMATS:
+        raise InputError(
+            f"unknown format {fmt!r}{did_you_mean(fmt, FORMATS)}; choose csv or parquet",
+            field="--format",
+        )
+
+
+def export_tables(db_path: Path, fmt: str, out_dir: Path) -> list[Path]:
+    """Write every table of ``db_path`` to ``out_dir/<table>.<fmt>``; return the paths."""
+    check_format(fmt)
+    con = open_readonly(db_path)  # refuses a missing or incompatible database first
+    try:
+        parent = out_dir.expanduser().resolve().parent
+        if not parent.is_dir():
+            raise InputError(f"directory {parent} does not exist", file=out_dir, field="--out")
+        if out_dir.exists() and not out_dir.is_dir():
+            raise InputError("exists and is not a directory", file=out_dir, field="--out")
+        out_dir.mkdir(exist_ok=True)
+        written = []
+        for table in TABLES:
+            target = out_dir / f"{table}.{fmt}"
+            tmp = out_dir / f".{table}.{fmt}.tmp"
+            quoted = str(tmp).replace("'", "''")
+            try:
+                con.execute(f"COPY (SELECT * FROM {table}) TO '{quoted}' {FORMATS[fmt]}")
+                os.replace(tmp, target)
+            finally:
+                if tmp.exists():
+                    tmp.unlink()
+            written.append(target)
+        return written
+    finally:
+        con.close()

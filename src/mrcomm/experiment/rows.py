@@ -1,0 +1,138 @@
+"""Turn one run's outcome into the rows of the results tables (tables.py).
+
+Runs in the worker process, so that only small, plain tuples travel back to the
+parent (never the MissionResult with its scenario and map). Column orders are those of
+:mod:`mrcomm.experiment.tables`; ``finished_at`` is left to the parent, which stamps
+it when it writes the run.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Any
+
+from mrcomm.experiment.schema import RunSpec
+from mrcomm.experiment.tables import RUN_AON_COLUMNS, RUN_METRIC_COLUMNS, RUN_TABLES
+from mrcomm.sim.mission import MissionResult
+
+#: table name -> rows (tuples in the table's column order).
+Rows = dict[str, list[tuple[Any, ...]]]
+
+
+def _config_part(spec: RunSpec, status: str, error: str | None) -> tuple[Any, ...]:
+    c = spec.config
+    return (
+        spec.run_id,
+        spec.config_id,
+        spec.experiment,
+        spec.label,
+        spec.scenario_name,
+        c.network.value,
+        float(c.spl),
+        c.threshold,
+        c.behaviour,
+        spec.repetition,
+        spec.seed,
+        "sim",
+        status,
+        error,
+    )
+
+
+def _number(value: Any) -> float | None:
+    """Metric value as a float (NULL for missing or non-finite values)."""
+    if isinstance(value, bool):
+        return float(value)
+    if isinstance(value, int | float) and math.isfinite(value):
+        return float(value)
+    return None
+
+
+def failure_rows(spec: RunSpec, status: str, error: str, wall_time_s: float | None) -> Rows:
+    """Rows of a run that crashed or ran out of time: a runs row, nothing else."""
+    n_rest = len(RUN_METRIC_COLUMNS) + len(RUN_AON_COLUMNS) + 1  # + finished_at
+    runs = (*_config_part(spec, status, error), None, wall_time_s, *([None] * n_rest))
+    return {"runs": [runs]}
+
+
+def result_rows(spec: RunSpec, result: MissionResult, wall_time_s: float) -> Rows:
+    """Every table's rows for a finished mission."""
+    rid = spec.run_id
+    mission = result.mission
+    metrics: list[Any] = []
+    for _, _, key in RUN_METRIC_COLUMNS:
+        value = mission.get(key)
+        metrics.append(len(value or ()) if key == "failed_tasks" else value)
+    total = result.aon.get("total", {})
+    aon = [total.get(key) if total else None for _, _, key in RUN_AON_COLUMNS]
+    runs = (
+        *_config_part(spec, "ok", None),
+        result.sim_time_s,
+        wall_time_s,
+        *metrics,
+        *aon,
+        None,  # finished_at: stamped by the parent
+    )
+    rows: Rows = {"runs": [runs]}
+    rows["robot_metrics"] = [
+        (rid, robot, metric, _number(value))
+        for robot, values in result.robots.items()
+        for metric, value in values.items()
+        if value is None or isinstance(value, int | float)
+    ]
+    rows["failed_tasks"] = [
+        (rid, str(task), robot)
+        for robot, values in result.robots.items()
+        for task in values.get("failed_tasks") or []
+    ]
+    rows["messages"] = [
+        (
+            rid,
+            agent,
+            topic,
+            c["sent"],
+            c["received"],
+            c["dropped_loss"],
+            c["dropped_range"],
+        )
+        for agent, topics in result.messages_by_agent.items()
+        for topic, c in topics.items()
+    ]
+    rows["links"] = []
+    for pair, s in result.links.items():
+        src, _, dst = pair.partition("->")
+        rows["links"].append(
+            (
+                rid,
+                src,
+                dst,
+                _number(s.get("min_distance")),
+                _number(s.get("max_distance")),
+                _number(s.get("min_rssi")),
+                _number(s.get("time_in_warning")),
+                s.get("warnings"),
+                _number(s.get("time_disconnected")),
+            )
+        )
+    rows["intervals"] = [
+        (rid, robot, i.track, i.label, i.start, i.end)
+        for robot, timeline in result.timelines.items()
+        for i in timeline.intervals
+    ]
+    rows["events"] = [
+        (rid, robot, e.time, e.label, json.dumps(e.data, sort_keys=True, default=str))
+        for robot, timeline in result.timelines.items()
+        for e in timeline.events
+    ]
+    rows["rssi"] = [(rid, t, src, dst, rssi) for t, src, dst, rssi in result.rssi_series]
+    return rows
+
+
+def check_rows(rows: Rows) -> None:
+    """Raise ValueError when a table is unknown or a row has the wrong width (a bug)."""
+    for table, table_rows in rows.items():
+        width = len(RUN_TABLES[table])
+        for row in table_rows:
+            if len(row) != width:
+                raise ValueError(f"{table}: row of {len(row)} values, expected {width}")

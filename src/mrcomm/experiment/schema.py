@@ -1,0 +1,343 @@
+"""Experiment schema files (SPEC §7): validated YAML that expands into configurations.
+
+An experiment is a scenario (or several), a full factorial over run options and a
+number of repetitions::
+
+    name: ah                          # experiment name (default: the file name)
+    scenario: ../scenarios/s1.yaml    # or a list; relative to this file
+    repetitions: 30
+    base_seed: 7                      # run seeds derive from it (see seeds.py)
+    factors:                          # option -> list of levels (a scalar = one level)
+      network: [ah]
+      spl: [0, 25, 50, 75]
+      threshold: [slt, ssd]
+      behaviour: [nb, lf]
+    options: {max_time: 1800}         # fixed options of every configuration
+    exclude:                          # optional: drop combinations matching all keys
+      - {network: wlan, threshold: ssd}
+
+Factors and options are any :class:`~mrcomm.sim.config.RunConfig` field except
+``scenario`` and ``seed``. Everything is checked here, before any database is opened:
+unknown keys (with "did you mean"), empty factors, and every value, by building the
+RunConfig of every configuration.
+"""
+
+from __future__ import annotations
+
+import itertools
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pydantic
+from pydantic import BaseModel, ConfigDict, Field
+
+from mrcomm.errors import InputError, did_you_mean
+from mrcomm.experiment.seeds import make_config_id, make_run_id, run_seed
+from mrcomm.sim.config import RunConfig, make_config
+from mrcomm.world.scenario import load_scenario
+from mrcomm.world.yamlfile import read_yaml, validation_error
+
+#: Factors that RunConfig.label() already spells out.
+LABEL_FACTORS = ("network", "spl", "threshold", "behaviour")
+#: RunConfig fields that hold file paths (resolved relative to the schema file).
+PATH_FIELDS = ("signal_model", "rssi_trace")
+_NOT_OPTIONS = {
+    "scenario": "give scenarios in the top-level 'scenario' key",
+    "seed": "run seeds derive from 'base_seed' (see docs/RESULTS.md)",
+}
+
+
+class ExperimentModel(BaseModel):
+    """The YAML file as written."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    name: str | None = Field(None, pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+    description: str = ""
+    scenario: str | list[str]
+    repetitions: int = Field(ge=1)
+    base_seed: int = Field(0, ge=0, lt=1 << 63)
+    factors: dict[str, Any] = Field(default_factory=dict)
+    options: dict[str, Any] = Field(default_factory=dict)
+    exclude: list[dict[str, Any]] = Field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run of a sweep: a configuration, a repetition and the seed they imply."""
+
+    run_id: str
+    config_id: str
+    experiment: str
+    label: str
+    scenario_name: str
+    repetition: int
+    seed: int
+    config: RunConfig
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """One point of the factorial."""
+
+    config_id: str
+    experiment: str
+    label: str
+    scenario_name: str
+    #: The run options, with seed 0 (each run gets its own).
+    config: RunConfig
+
+    def run(self, repetition: int, base_seed: int) -> RunSpec:
+        seed = run_seed(base_seed, self.config_id, repetition)
+        return RunSpec(
+            run_id=make_run_id(self.config_id, repetition),
+            config_id=self.config_id,
+            experiment=self.experiment,
+            label=self.label,
+            scenario_name=self.scenario_name,
+            repetition=repetition,
+            seed=seed,
+            config=self.config.model_copy(update={"seed": seed}),
+        )
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """A validated, expanded experiment schema."""
+
+    name: str
+    path: Path
+    yaml_text: str
+    description: str
+    repetitions: int
+    base_seed: int
+    configurations: tuple[Configuration, ...]
+
+    def runs(self, repetitions: int | None = None) -> list[RunSpec]:
+        """Every run, configuration-major, repetitions numbered from 1."""
+        reps = self.repetitions if repetitions is None else repetitions
+        return [c.run(r, self.base_seed) for c in self.configurations for r in range(1, reps + 1)]
+
+
+def load_experiment(path: str | Path) -> Experiment:
+    """Read, validate and expand an experiment schema file (InputError on bad input)."""
+    path = Path(path)
+    raw = read_yaml(path)
+    if not isinstance(raw, dict):
+        raise InputError("must be a mapping with scenario, factors, repetitions", file=path)
+    for key in raw:
+        # Before pydantic, whose first error would be the key then found missing.
+        if key not in ExperimentModel.model_fields:
+            hint = did_you_mean(str(key), ExperimentModel.model_fields)
+            raise InputError(f"unknown key '{key}'{hint}", file=path)
+    try:
+        model = ExperimentModel(**raw)
+    except pydantic.ValidationError as err:
+        raise validation_error(err, file=path, root=ExperimentModel) from None
+    return _expand(model, path, path.read_text(encoding="utf-8"))
+
+
+def _allowed_options() -> list[str]:
+    return [name for name in RunConfig.model_fields if name not in _NOT_OPTIONS]
+
+
+def _check_keys(keys: Sequence[str], section: str, path: Path) -> None:
+    allowed = _allowed_options()
+    for key in keys:
+        if key in _NOT_OPTIONS:
+            raise InputError(
+                f"'{key}' cannot be set here: {_NOT_OPTIONS[key]}", file=path, field=section
+            )
+        if key not in allowed:
+            kind = "factor" if section == "factors" else "option"
+            raise InputError(
+                f"unknown {kind} '{key}'{did_you_mean(key, allowed)}; "
+                f"choose from {', '.join(allowed)}",
+                file=path,
+                field=section,
+            )
+
+
+def _levels(model: ExperimentModel, path: Path) -> dict[str, list[Any]]:
+    _check_keys(list(model.factors), "factors", path)
+    _check_keys(list(model.options), "options", path)
+    both = sorted(set(model.factors) & set(model.options))
+    if both:
+        raise InputError(f"'{both[0]}' is both a factor and an option", file=path, field="options")
+    levels: dict[str, list[Any]] = {}
+    for name, value in model.factors.items():
+        values = list(value) if isinstance(value, list) else [value]
+        if not values:
+            raise InputError(
+                "empty factorial: the factor has no values", file=path, field=f"factors.{name}"
+            )
+        for v in values:
+            if isinstance(v, dict | list):
+                raise InputError(
+                    f"factor values must be scalars, got {v!r}", file=path, field=f"factors.{name}"
+                )
+        if len({repr(v) for v in values}) != len(values):
+            raise InputError("a value is given twice", file=path, field=f"factors.{name}")
+        levels[name] = values
+    return levels
+
+
+def _check_exclude(model: ExperimentModel, levels: dict[str, list[Any]], path: Path) -> None:
+    for i, rule in enumerate(model.exclude):
+        field = f"exclude[{i}]"
+        if not rule:
+            raise InputError("an exclude entry needs at least one factor", file=path, field=field)
+        for key, value in rule.items():
+            if key not in levels:
+                raise InputError(
+                    f"'{key}' is not a factor{did_you_mean(key, levels)}", file=path, field=field
+                )
+            if value not in levels[key]:
+                raise InputError(
+                    f"{value!r} is not a level of factor '{key}' ({levels[key]})",
+                    file=path,
+                    field=field,
+                )
+
+
+def _resolve_path(value: Any, base: Path, field: str, path: Path) -> Path:
+    resolved = (base / str(value)).resolve()
+    if not resolved.is_file():
+        raise InputError(f"file not found: {resolved}", file=path, field=field)
+    return resolved
+
+
+def _scenarios(model: ExperimentModel, path: Path) -> list[tuple[str, Path, str]]:
+    """(as written, resolved path, scenario name) of each scenario, loaded and checked."""
+    written = model.scenario if isinstance(model.scenario, list) else [model.scenario]
+    if not written:
+        raise InputError("empty factorial: no scenario given", file=path, field="scenario")
+    found: list[tuple[str, Path, str]] = []
+    for i, text in enumerate(written):
+        field = f"scenario[{i}]" if isinstance(model.scenario, list) else "scenario"
+        resolved = _resolve_path(text, path.parent, field, path)
+        try:
+            name = load_scenario(resolved).name
+        except InputError as err:
+            raise InputError(
+                f"scenario {resolved}: {err.message}", file=path, field=field
+            ) from None
+        found.append((text, resolved, name))
+    names = [n for _, _, n in found]
+    if len(set(names)) != len(names):
+        raise InputError("two scenarios have the same name", file=path, field="scenario")
+    return found
+
+
+def _label_part(name: str, value: Any) -> str:
+    if name in PATH_FIELDS:
+        text = Path(str(value)).stem
+    elif isinstance(value, float):
+        text = f"{value:g}"
+    else:
+        text = str(value)
+    return re.sub(r"[^A-Za-z0-9.+-]", "", f"{name.upper().replace('_', '')}{text}")
+
+
+def _build(values: dict[str, Any], levels: dict[str, list[Any]], path: Path) -> RunConfig:
+    try:
+        return make_config(str(path), **values)
+    except InputError as err:
+        field = err.field or ""
+        if field in levels:
+            got = repr(values[field])
+            message = err.message if got in err.message else f"{err.message}, got {got}"
+            raise InputError(message, file=path, field=f"factors.{field}") from None
+        if field and field in values and field != "scenario":
+            raise InputError(err.message, file=path, field=f"options.{field}") from None
+        combo = ", ".join(f"{k}: {values[k]}" for k in levels)
+        raise InputError(
+            f"combination {{{combo}}}: {err.message} (drop it with an 'exclude' entry)",
+            file=path,
+            field="factors",
+        ) from None
+
+
+def _expand(model: ExperimentModel, path: Path, yaml_text: str) -> Experiment:
+    name = model.name or path.stem
+    levels = _levels(model, path)
+    _check_exclude(model, levels, path)
+    scenarios = _scenarios(model, path)
+    base = path.parent
+    options = {
+        k: (_resolve_path(v, base, f"options.{k}", path) if k in PATH_FIELDS else v)
+        for k, v in model.options.items()
+    }
+    for key in PATH_FIELDS:
+        for v in levels.get(key, []):
+            _resolve_path(v, base, f"factors.{key}", path)
+    names = list(levels)
+    configurations: list[Configuration] = []
+    labels: dict[str, str] = {}
+    for _written, scenario_path, scenario_name in scenarios:
+        for combo in itertools.product(*(levels[n] for n in names)):
+            chosen = dict(zip(names, combo, strict=True))
+            if any(all(chosen[k] == v for k, v in rule.items()) for rule in model.exclude):
+                continue
+            given = {
+                **options,
+                **{
+                    k: (_resolve_path(v, base, f"factors.{k}", path) if k in PATH_FIELDS else v)
+                    for k, v in chosen.items()
+                },
+            }
+            config = _build({"scenario": scenario_path, **given, "seed": 0}, levels, path)
+            label = _make_label(config, chosen, levels, scenario_name, len(scenarios) > 1)
+            if label in labels:
+                raise InputError(
+                    f"two configurations share the label {label}", file=path, field="factors"
+                )
+            # The id covers what was *given* (not defaults), as normalised by RunConfig,
+            # with paths as written: stable when RunConfig gains a field, and the same
+            # on every machine.
+            dumped = config.model_dump(mode="json", include=set(given))
+            for k in PATH_FIELDS:
+                if k in given:
+                    dumped[k] = str(chosen.get(k, model.options.get(k)))
+            content = {
+                "experiment": name,
+                "base_seed": model.base_seed,
+                "scenario": scenario_name,
+                "options": dumped,
+            }
+            config_id = make_config_id(label, content)
+            labels[label] = config_id
+            configurations.append(Configuration(config_id, name, label, scenario_name, config))
+    if not configurations:
+        raise InputError(
+            "empty factorial: every combination is excluded", file=path, field="exclude"
+        )
+    return Experiment(
+        name=name,
+        path=path,
+        yaml_text=yaml_text,
+        description=model.description,
+        repetitions=model.repetitions,
+        base_seed=model.base_seed,
+        configurations=tuple(configurations),
+    )
+
+
+def _make_label(
+    config: RunConfig,
+    chosen: dict[str, Any],
+    levels: dict[str, list[Any]],
+    scenario_name: str,
+    many_scenarios: bool,
+) -> str:
+    parts = [re.sub(r"[^A-Za-z0-9.+-]", "", scenario_name)] if many_scenarios else []
+    parts.append(config.label())
+    parts += [
+        _label_part(k, v)
+        for k, v in chosen.items()
+        if k not in LABEL_FACTORS and len(levels[k]) > 1
+    ]
+    return "_".join(parts)

@@ -1,0 +1,176 @@
+"""The results database contract: table names, columns and SQL types (docs/RESULTS.md).
+
+Pure data, no database import: the worker processes use the column orders to build
+their rows, the parent (:mod:`mrcomm.experiment.store`) creates and fills the tables.
+Every per-run table is keyed by ``run_id = f"{config_id}-r{repetition:03d}"``.
+"""
+
+from __future__ import annotations
+
+#: Bumped whenever a table or column changes meaning; a database written with another
+#: version is refused before it is touched.
+SCHEMA_VERSION = "1"
+
+Columns = tuple[tuple[str, str], ...]
+
+META: Columns = (("key", "TEXT PRIMARY KEY"), ("value", "TEXT"))
+
+#: One row per experiment ever swept into the database (several may share one file).
+EXPERIMENTS: Columns = (
+    ("experiment", "TEXT PRIMARY KEY"),
+    ("base_seed", "BIGINT"),
+    ("schema_path", "TEXT"),
+    ("schema_yaml", "TEXT"),
+    ("updated", "TIMESTAMP"),
+)
+
+CONFIGS: Columns = (
+    ("config_id", "TEXT PRIMARY KEY"),
+    ("experiment", "TEXT"),
+    ("label", "TEXT"),
+    ("scenario", "TEXT"),
+    ("network", "TEXT"),
+    ("spl", "DOUBLE"),
+    ("threshold", "TEXT"),
+    ("behaviour", "TEXT"),
+    ("options", "JSON"),
+)
+
+#: Configuration columns repeated in ``runs`` so that one table answers most questions.
+RUN_CONFIG_COLUMNS: Columns = (
+    ("run_id", "TEXT PRIMARY KEY"),
+    ("config_id", "TEXT"),
+    ("experiment", "TEXT"),
+    ("label", "TEXT"),
+    ("scenario", "TEXT"),
+    ("network", "TEXT"),
+    ("spl", "DOUBLE"),
+    ("threshold", "TEXT"),
+    ("behaviour", "TEXT"),
+    ("repetition", "INTEGER"),
+    ("seed", "BIGINT"),
+    ("mode", "TEXT"),
+    ("status", "TEXT"),
+    ("error", "TEXT"),
+    ("sim_time_s", "DOUBLE"),
+    ("wall_time_s", "DOUBLE"),
+)
+
+#: Mission metrics of ``runs``: (column, SQL type, key in MissionResult.mission).
+RUN_METRIC_COLUMNS: tuple[tuple[str, str, str], ...] = (
+    ("successful", "BOOLEAN", "successful"),
+    ("n_failed_tasks", "INTEGER", "failed_tasks"),
+    ("tasks_completed", "INTEGER", "tasks_completed"),
+    ("execution_phase_time", "DOUBLE", "execution_phase_time"),
+    ("total_movement_time", "DOUBLE", "total_movement_time"),
+    ("total_distance", "DOUBLE", "total_distance"),
+    ("near_collisions", "INTEGER", "near_collisions"),
+    ("near_collisions_filtered", "INTEGER", "near_collisions_filtered"),
+    ("delay_time", "DOUBLE", "delay_time"),
+    ("idle_time", "DOUBLE", "idle_time"),
+    ("task_execution_time", "DOUBLE", "task_execution_time"),
+    ("min_separation", "DOUBLE", "min_separation"),
+    ("max_separation", "DOUBLE", "max_separation"),
+    ("timed_out", "BOOLEAN", "timed_out"),
+    # Leader-Follower totals: NULL for behaviours without roles.
+    ("na_movement_time", "DOUBLE", "na_movement_time"),
+    ("leader_movement_time", "DOUBLE", "leader_movement_time"),
+    ("follower_movement_time", "DOUBLE", "follower_movement_time"),
+    ("leader_disconnect_time", "DOUBLE", "leader_disconnect_time"),
+    ("follower_waiting_time", "DOUBLE", "follower_waiting_time"),
+    ("role_assignment_time", "DOUBLE", "role_assignment_time"),
+    ("switching_time", "DOUBLE", "switching_time"),
+)
+
+#: AON totals of ``runs`` (NULL when statuses go without AON): (column, type, key).
+RUN_AON_COLUMNS: tuple[tuple[str, str, str], ...] = (
+    ("aon_publications", "INTEGER", "publications"),
+    ("aon_resends", "INTEGER", "resend_publications"),
+    ("aon_max_finish_time", "DOUBLE", "max_finish_time"),
+)
+
+RUNS: Columns = (
+    *RUN_CONFIG_COLUMNS,
+    *((c, t) for c, t, _ in RUN_METRIC_COLUMNS),
+    *((c, t) for c, t, _ in RUN_AON_COLUMNS),
+    ("finished_at", "TIMESTAMP"),
+)
+
+ROBOT_METRICS: Columns = (
+    ("run_id", "TEXT"),
+    ("robot", "TEXT"),
+    ("metric", "TEXT"),
+    ("value", "DOUBLE"),
+)
+FAILED_TASKS: Columns = (("run_id", "TEXT"), ("task_id", "TEXT"), ("robot", "TEXT"))
+MESSAGES: Columns = (
+    ("run_id", "TEXT"),
+    ("agent", "TEXT"),
+    ("topic", "TEXT"),
+    ("sent", "INTEGER"),
+    ("received", "INTEGER"),
+    ("dropped_loss", "INTEGER"),
+    ("dropped_range", "INTEGER"),
+)
+LINKS: Columns = (
+    ("run_id", "TEXT"),
+    ("src", "TEXT"),
+    ("dst", "TEXT"),
+    ("min_distance", "DOUBLE"),
+    ("max_distance", "DOUBLE"),
+    ("min_rssi", "DOUBLE"),
+    ("time_in_warning", "DOUBLE"),
+    ("warnings", "INTEGER"),
+    ("time_disconnected", "DOUBLE"),
+)
+INTERVALS: Columns = (
+    ("run_id", "TEXT"),
+    ("robot", "TEXT"),
+    ("track", "TEXT"),
+    ("label", "TEXT"),
+    ("t_start", "DOUBLE"),
+    ("t_end", "DOUBLE"),
+)
+EVENTS: Columns = (
+    ("run_id", "TEXT"),
+    ("robot", "TEXT"),
+    ("t", "DOUBLE"),
+    ("label", "TEXT"),
+    ("data", "JSON"),
+)
+RSSI: Columns = (
+    ("run_id", "TEXT"),
+    ("t", "DOUBLE"),
+    ("src", "TEXT"),
+    ("dst", "TEXT"),
+    ("rssi", "DOUBLE"),
+)
+
+#: Tables written once per run, in one transaction (``runs`` first).
+RUN_TABLES: dict[str, Columns] = {
+    "runs": RUNS,
+    "robot_metrics": ROBOT_METRICS,
+    "failed_tasks": FAILED_TASKS,
+    "messages": MESSAGES,
+    "links": LINKS,
+    "intervals": INTERVALS,
+    "events": EVENTS,
+    "rssi": RSSI,
+}
+
+#: Every table, in creation order.
+TABLES: dict[str, Columns] = {
+    "meta": META,
+    "experiments": EXPERIMENTS,
+    "configs": CONFIGS,
+    **RUN_TABLES,
+}
+
+
+def column_names(table: str) -> tuple[str, ...]:
+    return tuple(name for name, _ in TABLES[table])
+
+
+def create_statement(table: str) -> str:
+    columns = ", ".join(f"{name} {sql_type}" for name, sql_type in TABLES[table])
+    return f"CREATE TABLE IF NOT EXISTS {table} ({columns})"

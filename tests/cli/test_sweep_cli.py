@@ -1,0 +1,144 @@
+"""`mrcomm sweep` and `mrcomm export` from the command line: the 12-run baseline and its
+no-op rerun, a SIGKILL mid-sweep then resume, failures, and bad input (exit 2, the
+database untouched)."""
+
+from __future__ import annotations
+
+import hashlib
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+from mrcomm.experiment.runner import execute_sweep, plan_sweep
+from mrcomm.experiment.schema import load_experiment
+from mrcomm.experiment.store import inspect_database
+from tests.conftest import ROOT
+from tests.experiment.helpers import MINI, write_schema
+
+MRCOMM = [sys.executable, "-c", "from mrcomm.cli.main import app; app()"]
+BASELINE = ROOT / "data" / "experiments" / "baseline.yaml"
+
+
+def mrcomm(*args: str | Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [*MRCOMM, *map(str, args)], capture_output=True, text=True, cwd=ROOT, timeout=600
+    )
+
+
+def mrcomm_here(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch, *args: str | Path
+) -> tuple[int, str, str]:
+    """The CLI in this process (no interpreter start-up): (exit status, stdout, stderr)."""
+    from mrcomm.cli.main import app
+
+    monkeypatch.setattr(sys, "argv", ["mrcomm", *map(str, args)])
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as info:
+        app()
+    out, err = capsys.readouterr()
+    code = info.value.code
+    return (code if isinstance(code, int) else 0), out, err
+
+
+def _fingerprint(path: Path) -> tuple[str, float]:
+    return hashlib.sha256(path.read_bytes()).hexdigest(), path.stat().st_mtime
+
+
+@pytest.mark.slow
+def test_baseline_with_3_repetitions_fills_12_runs_and_a_rerun_does_none(tmp_path: Path) -> None:
+    db = tmp_path / "results.duckdb"
+    first = mrcomm("sweep", BASELINE, "--reps", "3", "--jobs", "2", "--db", db)
+    assert first.returncode == 0, first.stderr
+    assert "baseline: 12 runs (4 configurations x 3 repetitions): 12 new ok, 0 failed" in (
+        first.stdout
+    )
+    runs = inspect_database(db).runs
+    assert len(runs) == 12 and set(runs.values()) == {"ok"}
+    second = mrcomm("sweep", BASELINE, "--reps", "3", "--jobs", "2", "--db", db)
+    assert second.returncode == 0, second.stderr
+    assert "0 new ok, 0 failed, 12 already done" in second.stdout
+    assert inspect_database(db).runs == runs
+
+
+def test_runs_over_their_time_limit_are_failures_exit_1(tmp_path: Path) -> None:
+    schema = write_schema(tmp_path)
+    db = tmp_path / "r.duckdb"
+    proc = mrcomm(
+        "sweep", schema, "--reps", "1", "--jobs", "1", "--db", db, "--run-timeout", "1e-6"
+    )
+    assert proc.returncode == 1, proc.stderr
+    assert "0 new ok, 4 failed" in proc.stdout and "timeout:" in proc.stdout
+    assert set(inspect_database(db).runs.values()) == {"timeout"}
+
+
+@pytest.mark.parametrize(
+    ("change", "args", "expected"),
+    [
+        (("spl: [0, 50]", "spll: [0, 50]"), (), "unknown factor 'spll' (did you mean 'spl'?)"),
+        (("spl: [0, 50]", "spl: []"), (), "empty factorial"),
+        (("spl: [0, 50]", "spl: [0, -5]"), (), "factors.spl"),
+        ((), ("--jobs", "0"), "--jobs: must be at least 1"),
+        ((), ("--reps", "0"), "--reps: must be at least 1"),
+        ((), ("--scheduler", "tcp://127.0.0.1:9", "--connect-timeout", "0.5"), "Dask scheduler"),
+    ],
+)
+def test_bad_input_exits_2_and_creates_no_database(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    change: tuple[str, ...],
+    args: tuple[str, ...],
+    expected: str,
+) -> None:
+    schema = write_schema(tmp_path, MINI.replace(*change) if change else MINI)
+    db = tmp_path / "r.duckdb"
+    code, _, err = mrcomm_here(capsys, monkeypatch, "sweep", schema, "--db", db, *args)
+    assert code == 2, err
+    assert expected in err and "Traceback" not in err and err.startswith("mrcomm: error: ")
+    assert err.count("\n") == 1
+    assert not db.exists() and not Path(f"{db}.wal").exists()
+
+
+def test_incompatible_database_exits_2_untouched(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import duckdb
+
+    db = tmp_path / "old.duckdb"
+    con = duckdb.connect(str(db))
+    con.execute("CREATE TABLE meta(key TEXT PRIMARY KEY, value TEXT)")
+    con.execute("INSERT INTO meta VALUES ('schema_version', '99')")
+    con.close()
+    before = _fingerprint(db)
+    for args in (
+        ("sweep", write_schema(tmp_path), "--db", db),
+        ("export", "--db", db, "--out", tmp_path / "x"),
+    ):
+        code, _, err = mrcomm_here(capsys, monkeypatch, *args)
+        assert code == 2 and "results schema version '99'" in err, err
+    assert _fingerprint(db) == before and not (tmp_path / "x").exists()
+
+
+def test_export_command_writes_csv(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    db = tmp_path / "r.duckdb"
+    with ThreadPoolExecutor(1) as pool:
+        exp = load_experiment(write_schema(tmp_path, MINI.replace("max_time: 30", "max_time: 5")))
+        execute_sweep(plan_sweep(exp, db, repetitions=1), pool, max_in_flight=1)
+    out = tmp_path / "csv"
+    code, stdout, err = mrcomm_here(
+        capsys, monkeypatch, "export", "--db", db, "--format", "csv", "--out", out
+    )
+    assert code == 0, err
+    assert stdout.startswith("wrote 11 tables")
+    header = (out / "runs.csv").read_text().splitlines()[0]
+    assert header.startswith("run_id,config_id,experiment,label,scenario,network,spl")
+    assert len((out / "runs.csv").read_text().splitlines()) == 5
+    code, _, err = mrcomm_here(
+        capsys, monkeypatch, "export", "--db", db, "--format", "xlsx", "--out", out
+    )
+    assert code == 2 and "choose csv or parquet" in err
