@@ -39,6 +39,7 @@ class TaskAssigner:
         *,
         incarnation: int = 1,
         use_aon: bool = False,
+        aon_lease: float | None = 60.0,
     ) -> None:
         self.bus = bus
         self.team = tuple(team)
@@ -59,6 +60,7 @@ class TaskAssigner:
                 bus.owner,
                 incarnation,
                 (*self.team, bus.owner),
+                lease=aon_lease,
                 on_deliver=lambda status, _id: self.record_status(status),
             )
         bus.subscribe(TOPIC_TASK_STATUS, self._on_status)
@@ -123,3 +125,5 @@ class TaskAssigner:
 
     def _on_pose(self, message: Message) -> None:
         self.received[TOPIC_POSE] += 1
+        if self.aon is not None:
+            self.aon.heard_from(message.sender, self._now)

@@ -130,7 +130,10 @@ class LfParams:
     refresh_period_near: float = 1.0  # follower goal refresh when the leader is near
     refresh_period_far: float = 0.4  # ... and when it is beyond the warning threshold
     lost_timeout: float = 60.0  # a follower silent this long no longer holds the leader
-    aon_lease: float | None = None  # AON: report members silent this long as left out
+    #: AON: a member silent this long (no pose, no AON traffic) is reported as left out
+    #: of pending messages by name instead of being waited for; it is brought up to date
+    #: when heard again. None waits forever.
+    aon_lease: float | None = 60.0
 
 
 @register_behaviour("lf")

@@ -57,20 +57,29 @@ class ModelSensor:
         return value is not None and value < self.warning_dbm
 
 
+#: A measured RSSI older than this (s) is stale: the pulse stopped reporting that peer.
+STALE_AFTER_S = 5.0
+
+
 class MeasuredSensor:
     """ESD: the latest RSSI per peer measured by the robot's pulse process (live) or
-    replayed from a recorded trace (simulation). Unknown peers never warn."""
+    replayed from a recorded trace (simulation). Unknown peers and stale readings never
+    warn."""
 
-    def __init__(self, warning_dbm: float) -> None:
+    def __init__(self, warning_dbm: float, stale_after: float = STALE_AFTER_S) -> None:
         self.warning_dbm = warning_dbm
-        self.latest: dict[str, float] = {}
+        self.stale_after = stale_after
+        self.latest: dict[str, tuple[float, float]] = {}  # peer -> (rssi, time)
 
-    def update(self, peer: str, rssi: float) -> None:
-        self.latest[peer] = rssi
+    def update(self, peer: str, rssi: float, now: float) -> None:
+        self.latest[peer] = (rssi, now)
 
     def rssi(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> float | None:
-        return self.latest.get(peer)
+        reading = self.latest.get(peer)
+        if reading is None or now - reading[1] > self.stale_after:
+            return None
+        return reading[0]
 
     def warning(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> bool:
-        value = self.latest.get(peer)
+        value = self.rssi(peer, own, peer_x, peer_y, now)
         return value is not None and value < self.warning_dbm

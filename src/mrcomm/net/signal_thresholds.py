@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from mrcomm.net.link_sensors import STALE_AFTER_S
 from mrcomm.net.signal.table import RssiTable
 from mrcomm.net.signal.trace import RssiTrace
 from mrcomm.net.thresholds import BoolArray, FloatArray, Threshold, register_threshold
@@ -59,7 +60,10 @@ class MeasuredThreshold(Threshold):
     def evaluate(
         self, distance: FloatArray, line_of_sight: BoolArray | None, now: float
     ) -> tuple[FloatArray | None, BoolArray]:
-        rssi = self.trace.matrix_at(now, self.ids)
+        if now > self.trace.t1 + STALE_AFTER_S:
+            rssi = np.full((len(self.ids), len(self.ids)), np.nan)  # recording ended
+        else:
+            rssi = self.trace.matrix_at(now, self.ids)
         with np.errstate(invalid="ignore"):
             return rssi, rssi < self.warning_dbm
 

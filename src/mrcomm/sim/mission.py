@@ -25,6 +25,7 @@ import numpy as np
 from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
 from mrcomm.agents.behaviours import behaviour_class
 from mrcomm.agents.executor import TaskExecutor
+from mrcomm.metrics import labels as L
 from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robot_metrics
 from mrcomm.metrics.timeline import Timeline
 from mrcomm.net.inprocess import InProcessNetwork
@@ -321,10 +322,17 @@ class Mission:
         finish = [r["max_finish_time"] for r in rows if r["max_finish_time"] is not None]
         total = {
             k: sum(r[k] for r in rows)
-            for k in ("publications", "resend_publications", "replies", "restarts", "pending")
+            for k in (
+                "publications",
+                "resend_publications",
+                "replies",
+                "restarts",
+                "pending",
+                "left_out_reports",
+            )
         }
         total["statuses_sent"] = sum(
-            1 for tl in self.timelines.values() for e in tl.events if e.label == "task_completed"
+            1 for tl in self.timelines.values() for e in tl.events if e.label == L.TASK_COMPLETED
         )
         total["max_finish_time"] = max(finish) if finish else None
         return {"total": total, "agents": per_agent}

@@ -58,6 +58,8 @@ class TracePulse:
         if now < self._next:
             return
         self._next = now + self.period
+        if now > self.trace.t1:
+            return  # the recording has ended: the pulse reports nothing more
         matrix = self.trace.matrix_at(now, self.robots)
         for i, robot in enumerate(self.robots):
             sensor = self.sensors.get(robot)
@@ -66,4 +68,4 @@ class TracePulse:
             for j, peer in enumerate(self.robots):
                 value = matrix[i, j]
                 if i != j and value == value:  # skip NaN: no reading yet
-                    sensor.update(peer, float(value))
+                    sensor.update(peer, float(value), now)
