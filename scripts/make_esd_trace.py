@@ -42,7 +42,7 @@ def main() -> None:
     result = run_mission(config)
     rng = np.random.default_rng(7)
     rows = [
-        (f"{t:.1f}", src, dst, int(round(rssi + rng.normal(0.0, 1.5))))
+        (f"{t:.1f}", src, dst, round(rssi + rng.normal(0.0, 1.5)))
         for t, src, dst, rssi in result.rssi_series
     ]
     write_csv(
@@ -53,7 +53,8 @@ def main() -> None:
             "SYNTHETIC RSSI trace for ESD replay in simulation (not a measurement).",
             "Made by scripts/make_esd_trace.py: S1, AH, SSD, LF, seed 1; the bundled SSD",
             "model's RSSI per robot pair at 2 Hz + Gaussian noise (sigma 1.5 dB, seed 7),",
-            "rounded to whole dBm. Columns: time (s), from (measuring robot), to (peer), rssi (dBm).",
+            "rounded to whole dBm.",
+            "Columns: time (s), from (measuring robot), to (peer), rssi (dBm).",
         ),
     )
     print(f"wrote {args.out}: {len(rows)} readings over {result.sim_time_s:.1f} s")
