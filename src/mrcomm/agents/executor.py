@@ -14,8 +14,10 @@ Communication-aware behaviours subclass this executor (LF encloses NB).
 
 from __future__ import annotations
 
+import logging
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -89,6 +91,20 @@ class ExecutorParams:
     make_way_timeout: float = 6.0
 
 
+@contextmanager
+def _quiet_rebinding() -> Iterator[None]:
+    """Nested sub-machines share trigger names (``conflict``, ``resume``...); the first
+    binding already dispatches on the current state, so transitions' warning that it
+    skips re-binding them is noise. Silence it while a machine is built, only."""
+    logger = logging.getLogger("transitions.core")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
+
+
 class _NeverWarns:
     """Link sensor of a run without a threshold."""
 
@@ -137,6 +153,7 @@ class TaskExecutor:
         self.known_done: set[str] = set()  # task ids any robot reported complete
         self.mates: dict[str, MateState] = {}
         self.mate_heard: dict[str, float] = {}
+        self.mate_roles: dict[str, str] = {}
         self.goal: TaskSpec | None = None
         self._now = 0.0
         self._t0: float | None = None  # assignment received: mission start for this robot
@@ -153,14 +170,15 @@ class TaskExecutor:
         self._clearing_goals: list[tuple[float, float]] = []
         self._execute_until = 0.0
         self._agenda_reported = False
-        self.machine = self.machine_class(
-            model=self,
-            states=self.states,
-            transitions=self.transitions,
-            initial=self.initial,
-            auto_transitions=False,
-            after_state_change="_after_state_change",
-        )
+        with _quiet_rebinding():
+            self.machine = self.machine_class(
+                model=self,
+                states=self.states,
+                transitions=self.transitions,
+                initial=self.initial,
+                auto_transitions=False,
+                after_state_change="_after_state_change",
+            )
         bus.subscribe(TOPIC_ASSIGNMENT, self._on_assignment)
         bus.subscribe(TOPIC_POSE, self._on_pose)
         bus.subscribe(TOPIC_TASK_STATUS, self._on_status)
@@ -238,7 +256,7 @@ class TaskExecutor:
     def _step_idle(self) -> None:
         for mate in self.mates.values():
             if self.in_way_of(mate):
-                self.make_way(mate)
+                self.step_aside(mate)
                 return
 
     # -- making way ------------------------------------------------------------------
@@ -254,7 +272,7 @@ class TaskExecutor:
         ahead = abs(wrap_angle(math.atan2(dy, dx) - mate.theta)) < math.radians(75)
         return ahead or mate.v < self.params.collision.moving_speed
 
-    def make_way(self, mate: MateState) -> None:
+    def step_aside(self, mate: MateState) -> None:
         """Step aside of the mate's heading (left, right, then straight away from it);
         the base snaps each candidate to free space and aborts unreachable ones."""
         pose = self.base.pose
@@ -405,8 +423,13 @@ class TaskExecutor:
                 theta=pose.theta,
                 v=self.base.speed,
                 goal_dist=self._goal_distance(),
+                role=self.current_role(),
             ),
         )
+
+    def current_role(self) -> str:
+        """Team role shared in pose messages (NB has none)."""
+        return ""
 
     def _goal_distance(self) -> float:
         target = self.navigation_target()
@@ -433,6 +456,7 @@ class TaskExecutor:
             message.sender, message.x, message.y, message.theta, message.v, message.goal_dist
         )
         self.mate_heard[message.sender] = self._now
+        self.mate_roles[message.sender] = message.role
 
     def _on_status(self, message: Message) -> None:
         assert isinstance(message, TaskStatus)

@@ -161,6 +161,8 @@ class LeaderFollowerExecutor(TaskExecutor):
         self._next_refresh = 0.0
         self._next_monitor = 0.0
         self._next_followers_check = 0.0
+        self._top_state = "na"
+        self._state_since_role = 0.0
         self._followers_were_out = False
         super().__init__(*args, **kwargs)
         self.bus.subscribe(TOPIC_UTILITY, self._on_utility)
@@ -448,12 +450,30 @@ class LeaderFollowerExecutor(TaskExecutor):
             self._follow_target = None
             self._next_refresh = self._now
 
+    def current_role(self) -> str:
+        return _ROLE_OF_TOP_STATE.get(self.state.split("_", 1)[0], "")
+
+    def _leader_gone(self) -> bool:
+        """The leader's own poses, sent since we follow it, say it no longer leads (its
+        completion may have reached us before we followed it)."""
+        leader = self.leader or ""
+        fresh = self.mate_heard.get(leader, -1.0) > self._state_since_role
+        return fresh and self.mate_roles.get(leader) not in (L.ROLE_LEADER, L.ROLE_ASSIGNING)
+
+    def before_follower_step(self) -> bool:
+        if self._leader_gone():
+            self._dissolve("leader no longer leads")
+            return True
+        return False
+
     def _step_follower_following(self) -> None:
+        if self.before_follower_step():
+            return
         target = self._leader_position()
         if target is None:
             return
         if self._in_leaders_way():
-            self.make_way(self.mates[self.leader or ""])
+            self.step_aside(self.mates[self.leader or ""])
             return
         pose = self.base.pose
         distance = math.hypot(target[0] - pose.x, target[1] - pose.y)
@@ -476,6 +496,8 @@ class LeaderFollowerExecutor(TaskExecutor):
         self._check_collisions()
 
     def _step_follower_waiting(self) -> None:
+        if self.before_follower_step():
+            return
         target = self._leader_position()
         if target is None:
             return
@@ -483,7 +505,7 @@ class LeaderFollowerExecutor(TaskExecutor):
         # (e.g. a follower stuck behind it on its way into the leader's sight).
         for mate in self.mates.values():
             if self.in_way_of(mate):
-                self.make_way(mate)
+                self.step_aside(mate)
                 return
         pose = self.base.pose
         far = self.link_sensor.warning(self.leader or "", pose, target[0], target[1], self._now)
@@ -516,6 +538,9 @@ class LeaderFollowerExecutor(TaskExecutor):
 
     def on_state_change(self) -> None:
         top = self.state.split("_", 1)[0]
+        if top != self._top_state:
+            self._top_state = top
+            self._state_since_role = self._now
         self.timeline.set_state(ROLE, _ROLE_OF_TOP_STATE.get(top), self._now)
         if top == "regrouping":
             self._follow_target = None
