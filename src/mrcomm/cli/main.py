@@ -8,9 +8,11 @@ import sys
 
 import typer
 
+from mrcomm.cli.analyze_cmd import analyze
 from mrcomm.cli.fsm_cmd import fsm
 from mrcomm.cli.pulse_cmd import pulse
 from mrcomm.cli.replay_cmd import replay
+from mrcomm.cli.report_cmd import report
 from mrcomm.cli.run_cmd import run
 from mrcomm.cli.signal_cmd import signal_app
 from mrcomm.cli.sweep_cmd import export, sweep
@@ -38,6 +40,8 @@ cli.command("export")(export)
 cli.command("replay")(replay)
 cli.add_typer(signal_app, name="signal")
 cli.command("pulse")(pulse)
+cli.command("analyze")(analyze)
+cli.command("report")(report)
 
 
 def app() -> None:

@@ -1,0 +1,127 @@
+"""Benchmark of ``mrcomm report``: seconds to build the whole report (every statistic,
+every figure as PNG and SVG, the HTML) of the AH reference set, 480 runs.
+
+With ``--db`` it times an existing database (e.g. a real ``mrcomm sweep
+data/experiments/ah.yaml``). Without it, it builds a *synthetic* 480-run database:
+the AH schema is swept for real with ``--reps`` repetitions (default 2: 32 missions),
+then every run is copied with a new repetition number until each configuration has 30
+runs (the copies repeat the rows, so the statistics see many ties; the amount of data
+the report handles is that of the real study). The median of ``--repeats`` builds is
+reported.
+
+    .venv/bin/python benchmarks/bench_report.py [--db PATH] [--repeats 3] [--jobs 2]
+        [--keep DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import duckdb
+
+from mrcomm.analysis.report import build_report, load_study
+from mrcomm.experiment.tables import RUN_TABLES
+
+ROOT = Path(__file__).resolve().parents[1]
+AH_SCHEMA = ROOT / "data" / "experiments" / "ah.yaml"
+TARGET_REPS = 30
+BUDGET_S = 60.0
+
+
+def synthetic_db(directory: Path, reps: int, jobs: int) -> Path:
+    """Sweep the AH set with ``reps`` repetitions, then copy runs up to 30 each."""
+    db = directory / "ah-synthetic.duckdb"
+    subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "from mrcomm.cli.main import app; app()",
+            "sweep",
+            str(AH_SCHEMA),
+            "--reps",
+            str(reps),
+            "--jobs",
+            str(jobs),
+            "--db",
+            str(db),
+        ],
+        check=True,
+        cwd=ROOT,
+    )
+    con = duckdb.connect(str(db))
+    try:
+        con.execute("BEGIN")
+        for rep in range(reps + 1, TARGET_REPS + 1):
+            source = (rep - 1) % reps + 1  # cycle through the real repetitions
+            new_id = f"config_id || '-r{rep:03d}'"
+            con.execute(
+                f"INSERT INTO runs SELECT * REPLACE ({new_id} AS run_id, {rep} AS repetition) "
+                f"FROM runs WHERE repetition = {source}"
+            )
+            for table in RUN_TABLES:
+                if table == "runs":
+                    continue
+                # Copy the child rows of the source repetition under the new run ids.
+                con.execute(
+                    f"INSERT INTO {table} SELECT t.* REPLACE (r.{new_id} AS run_id) "
+                    f"FROM {table} t JOIN runs r ON t.run_id = r.run_id "
+                    f"WHERE r.repetition = {source}"
+                )
+        con.execute("COMMIT")
+        n = con.execute("SELECT count(*) FROM runs").fetchone()
+    finally:
+        con.close()
+    print(
+        f"synthetic database: {n[0] if n else 0} runs ({reps} real repetitions copied to "
+        f"{TARGET_REPS})"
+    )
+    return db
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--db", type=Path, help="time this database (default: synthetic)")
+    parser.add_argument("--reps", type=int, default=2, help="real repetitions (synthetic DB)")
+    parser.add_argument("--jobs", type=int, default=2, help="sweep workers (synthetic DB)")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--keep", type=Path, help="keep the database and reports in this dir")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as scratch:
+        tmp = str(args.keep or scratch)
+        Path(tmp).mkdir(parents=True, exist_ok=True)
+        db = args.db or synthetic_db(Path(tmp), args.reps, args.jobs)
+        started = time.perf_counter()
+        data = load_study(db)
+        load_s = time.perf_counter() - started
+        builds, figures = [], 0
+        for i in range(args.repeats):
+            started = time.perf_counter()
+            report = build_report(load_study(db), Path(tmp) / f"report-{i}", db_path=db)
+            builds.append(time.perf_counter() - started)
+            figures = len(report.figures)
+        median = statistics.median(builds)
+        print(
+            f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+            f"Python {platform.python_version()}"
+        )
+        print("| database | runs | figures | load s | report s (median) | min..max | budget |")
+        print("|---|---|---|---|---|---|---|")
+        print(
+            f"| {'given' if args.db else 'synthetic AH'} | {len(data.runs)} | {figures} | "
+            f"{load_s:.2f} | **{median:.1f}** | {min(builds):.1f}..{max(builds):.1f} | "
+            f"{BUDGET_S:.0f} s |"
+        )
+        if median > BUDGET_S:
+            sys.exit(f"report took {median:.1f} s > {BUDGET_S:.0f} s")
+
+
+if __name__ == "__main__":
+    main()

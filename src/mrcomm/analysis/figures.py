@@ -1,0 +1,314 @@
+"""Figures of a study, per configuration, grouped like the original thesis: one panel per
+network + threshold (WLAN+SLT, AH+SLT, AH+SSD, AH+ESD, ...), SPL on the x axis, NB and
+LF side by side. Here: mean ± standard deviation of a metric, successful-mission
+percentages, minimum/maximum separation and failed tasks per robot; the time
+breakdowns, timelines and RSSI are in :mod:`figures_time`, Q–Q plots in
+:mod:`figures_qq`.
+
+Every function takes the DataFrames of the results database contract and returns a
+matplotlib Figure (backend Agg); :func:`render` turns one into PNG/SVG bytes.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")  # figures are files; never open a window
+import numpy as np
+import pandas as pd
+from matplotlib.artist import Artist
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+
+from mrcomm.analysis.stats import METRICS, usable_runs
+
+NETWORK_ORDER = {"wlan": 0, "ah": 1}
+THRESHOLD_ORDER = {"none": 0, "slt": 1, "ssd": 2, "esd": 3}
+BEHAVIOUR_ORDER = {"nb": 0, "lf": 1}
+BEHAVIOUR_COLOURS = {"nb": "#4C72B0", "lf": "#DD8452"}
+#: SLT warning and the AH range (m), drawn on separation figures for reference.
+SLT_WARNING_M = 4.0
+AH_LIMIT_M = 8.0
+
+PanelKey = tuple[str, str, str]  # (scenario, network, threshold)
+
+
+def _order(mapping: dict[str, int], value: str) -> tuple[int, str]:
+    return (mapping.get(str(value).lower(), len(mapping)), str(value))
+
+
+def panel_keys(runs: pd.DataFrame) -> list[PanelKey]:
+    """The (scenario, network, threshold) panels present, in the original's order."""
+    keys = {
+        (str(s), str(n), str(t))
+        for s, n, t in runs[["scenario", "network", "threshold"]].itertuples(index=False)
+    }
+    return sorted(
+        keys, key=lambda k: (k[0], _order(NETWORK_ORDER, k[1]), _order(THRESHOLD_ORDER, k[2]))
+    )
+
+
+def panel_title(key: PanelKey, with_scenario: bool) -> str:
+    scenario, network, threshold = key
+    text = network.upper() if threshold == "none" else f"{network.upper()} + {threshold.upper()}"
+    return f"{scenario} · {text}" if with_scenario else text
+
+
+def behaviours(runs: pd.DataFrame) -> list[str]:
+    return sorted(
+        {str(b) for b in runs["behaviour"].dropna()}, key=lambda b: _order(BEHAVIOUR_ORDER, b)
+    )
+
+
+def spl_levels(runs: pd.DataFrame) -> list[float]:
+    return sorted(float(s) for s in runs["spl"].dropna().unique())
+
+
+def behaviour_colour(behaviour: str) -> str:
+    return BEHAVIOUR_COLOURS.get(behaviour.lower(), "#55A868")
+
+
+def panel_grid(
+    n: int, width: float = 4.2, height: float = 3.4, rows: int = 1, ncols: int | None = None
+) -> tuple[Figure, np.ndarray]:
+    """A figure with ``rows`` × ``n`` axes (at most 4 panels to a row)."""
+    cols = ncols or max(1, min(n, 4))
+    rows_total = rows * math.ceil(n / cols)
+    # At least 7 in wide so that titles and legends fit above/below a single panel.
+    fig = Figure(figsize=(max(7.0, width * cols), height * rows_total), layout="constrained")
+    axes = fig.subplots(rows_total, cols, squeeze=False)
+    return fig, axes
+
+
+def render(fig: Figure, fmt: str = "png", dpi: int = 110) -> bytes:
+    """The figure encoded as PNG or SVG bytes."""
+    buf = io.BytesIO()
+    # SVG: text stays text (smaller, searchable); metadata date omitted for reproducibility.
+    meta = {"Date": None} if fmt == "svg" else {}
+    fig.savefig(buf, format=fmt, dpi=dpi, metadata=meta)
+    return buf.getvalue()
+
+
+def _hide_unused(axes: np.ndarray, used: int) -> None:
+    for ax in axes.flat[used:]:
+        ax.set_visible(False)
+
+
+def _spl_axis(ax: Axes, levels: Sequence[float]) -> None:
+    ax.set_xticks(range(len(levels)), [f"{s:g}" for s in levels])
+    ax.set_xlabel("SPL (%)")
+    ax.grid(axis="y", alpha=0.3)
+
+
+def _bar_offsets(count: int, width: float = 0.8) -> tuple[np.ndarray, float]:
+    bar = width / max(count, 1)
+    return (np.arange(count) - (count - 1) / 2.0) * bar, bar
+
+
+def _per_panel(
+    runs: pd.DataFrame,
+    draw: Callable[[Axes, pd.DataFrame, list[float], list[str]], None],
+    title: str,
+    ylabel: str,
+    extra_handles: Sequence[Artist] = (),
+) -> Figure:
+    runs = usable_runs(runs)
+    keys = panel_keys(runs)
+    multi = len({k[0] for k in keys}) > 1
+    levels = spl_levels(runs)
+    behs = behaviours(runs)
+    fig, axes = panel_grid(len(keys))
+    for ax, key in zip(axes.flat, keys, strict=False):
+        frame = runs[
+            (runs["scenario"] == key[0])
+            & (runs["network"] == key[1])
+            & (runs["threshold"] == key[2])
+        ]
+        draw(ax, frame, levels, behs)
+        ax.set_title(panel_title(key, multi))
+        _spl_axis(ax, levels)
+        ax.set_ylabel(ylabel)
+    _hide_unused(axes, len(keys))
+    handles: list[Artist] = [Patch(color=behaviour_colour(b), label=b.upper()) for b in behs]
+    handles += list(extra_handles)
+    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles))
+    fig.suptitle(title)
+    return fig
+
+
+def metric_bars(runs: pd.DataFrame, metric: str) -> Figure:
+    """Mean ± standard deviation (ddof=1) of ``metric`` per configuration."""
+    info = METRICS[metric]
+
+    def draw(ax: Axes, frame: pd.DataFrame, levels: list[float], behs: list[str]) -> None:
+        offsets, width = _bar_offsets(len(behs))
+        for off, beh in zip(offsets, behs, strict=True):
+            means, sds = [], []
+            for spl in levels:
+                vals = pd.to_numeric(
+                    frame.loc[(frame["behaviour"] == beh) & (frame["spl"] == spl), metric],
+                    errors="coerce",
+                ).dropna()
+                means.append(vals.mean() if len(vals) else np.nan)
+                sds.append(vals.std(ddof=1) if len(vals) > 1 else np.nan)
+            ax.bar(
+                np.arange(len(levels)) + off,
+                np.nan_to_num(means),
+                width * 0.95,
+                yerr=np.nan_to_num(sds),
+                capsize=3,
+                color=behaviour_colour(beh),
+                error_kw={"elinewidth": 1},
+            )
+
+    return _per_panel(runs, draw, f"{info.label} (mean ± SD)", f"{info.label} ({info.unit})")
+
+
+def success_figure(runs: pd.DataFrame) -> Figure:
+    """Percentage of successful missions per configuration, labelled k/n."""
+
+    def draw(ax: Axes, frame: pd.DataFrame, levels: list[float], behs: list[str]) -> None:
+        offsets, width = _bar_offsets(len(behs))
+        for off, beh in zip(offsets, behs, strict=True):
+            for i, spl in enumerate(levels):
+                ok = frame.loc[(frame["behaviour"] == beh) & (frame["spl"] == spl), "successful"]
+                ok = ok.dropna().astype(bool)
+                if not len(ok):
+                    continue
+                pct = 100.0 * float(ok.mean())
+                ax.bar(i + off, pct, width * 0.95, color=behaviour_colour(beh))
+                ax.annotate(
+                    f"{int(ok.sum())}/{len(ok)}",
+                    (i + off, pct),
+                    xytext=(0, 2),
+                    textcoords="offset points",
+                    ha="center",
+                    fontsize=7,
+                )
+        ax.set_ylim(0, 112)
+
+    return _per_panel(runs, draw, "Successful missions", "successful missions (%)")
+
+
+def separation_figure(runs: pd.DataFrame) -> Figure:
+    """Minimum (▼) and maximum (▲) separation, mean ± SD, with the 4 m SLT warning and
+    the 8 m AH limit for reference."""
+
+    def draw(ax: Axes, frame: pd.DataFrame, levels: list[float], behs: list[str]) -> None:
+        offsets, _ = _bar_offsets(len(behs), 0.5)
+        for off, beh in zip(offsets, behs, strict=True):
+            for column, marker in (("min_separation", "v"), ("max_separation", "^")):
+                means, sds = [], []
+                for spl in levels:
+                    vals = pd.to_numeric(
+                        frame.loc[(frame["behaviour"] == beh) & (frame["spl"] == spl), column],
+                        errors="coerce",
+                    ).dropna()
+                    means.append(vals.mean() if len(vals) else np.nan)
+                    sds.append(vals.std(ddof=1) if len(vals) > 1 else 0.0)
+                ax.errorbar(
+                    np.arange(len(levels)) + off,
+                    means,
+                    yerr=sds,
+                    fmt=marker,
+                    color=behaviour_colour(beh),
+                    capsize=3,
+                    ms=6,
+                )
+        # Reference lines only where they apply: SLT's warning, the AH range.
+        if set(frame["threshold"]) == {"slt"}:
+            ax.axhline(SLT_WARNING_M, **_SLT_LINE)
+        if set(frame["network"]) == {"ah"}:
+            ax.axhline(AH_LIMIT_M, **_AH_LINE)
+        ax.set_ylim(bottom=0)
+
+    refs = [
+        Line2D([], [], label="4 m SLT warning", **_SLT_LINE),
+        Line2D([], [], label="8 m AH limit", **_AH_LINE),
+    ]
+    return _per_panel(
+        runs, draw, "Minimum ▼ and maximum ▲ separation (mean ± SD)", "m", extra_handles=refs
+    )
+
+
+_SLT_LINE: dict[str, Any] = {"color": "grey", "ls": "--", "lw": 0.8}
+_AH_LINE: dict[str, Any] = {"color": "firebrick", "ls": ":", "lw": 0.8}
+
+
+def failed_per_robot(
+    runs: pd.DataFrame, failed_tasks: pd.DataFrame, robots: Sequence[str] | None = None
+) -> pd.DataFrame:
+    """Mean failed tasks per run, per (configuration, robot); runs without failures count
+    as zero."""
+    runs = usable_runs(runs)
+    if robots is None:
+        robots = sorted(set(failed_tasks["robot"].dropna().astype(str)))
+    counts = (
+        failed_tasks[failed_tasks["run_id"].isin(runs["run_id"])]
+        .groupby(["run_id", "robot"])
+        .size()
+        .rename("failed")
+    )
+    index = pd.MultiIndex.from_product([runs["run_id"], list(robots)], names=["run_id", "robot"])
+    full = counts.reindex(index, fill_value=0).reset_index()
+    keys = ["scenario", "network", "threshold", "behaviour", "spl"]
+    full = full.merge(runs[["run_id", *keys]], on="run_id")
+    return full.groupby([*keys, "robot"], as_index=False)["failed"].mean()
+
+
+def failed_tasks_figure(
+    runs: pd.DataFrame, failed_tasks: pd.DataFrame, robots: Sequence[str] | None = None
+) -> Figure:
+    """Mean failed tasks per run for each robot: one row of panels per behaviour."""
+    runs = usable_runs(runs)
+    table = failed_per_robot(runs, failed_tasks, robots)
+    robot_ids = list(robots) if robots is not None else sorted(set(table["robot"]))
+    keys = panel_keys(runs)
+    multi = len({k[0] for k in keys}) > 1
+    behs = behaviours(runs)
+    levels = spl_levels(runs)
+    fig = Figure(figsize=(max(7.0, 4.2 * len(keys)), 3.0 * len(behs)), layout="constrained")
+    axes = fig.subplots(len(behs), len(keys), squeeze=False, sharey=True)
+    cmap = matplotlib.colormaps["Set2"]
+    offsets, width = _bar_offsets(max(len(robot_ids), 1))
+    for row, beh in enumerate(behs):
+        for col, key in enumerate(keys):
+            ax = axes[row, col]
+            sub = table[
+                (table["scenario"] == key[0])
+                & (table["network"] == key[1])
+                & (table["threshold"] == key[2])
+                & (table["behaviour"] == beh)
+            ]
+            for k, (off, robot) in enumerate(zip(offsets, robot_ids, strict=True)):
+                heights = [
+                    float(sub.loc[(sub["spl"] == s) & (sub["robot"] == robot), "failed"].sum())
+                    for s in levels
+                ]
+                ax.bar(
+                    np.arange(len(levels)) + off,
+                    heights,
+                    width * 0.95,
+                    color=cmap(k % 8),
+                    label=robot,
+                )
+            if not sub.empty and float(sub["failed"].sum()) == 0.0:
+                ax.text(
+                    0.5, 0.5, "no failed tasks", transform=ax.transAxes, ha="center", color="grey"
+                )
+            ax.set_title(f"{panel_title(key, multi)} · {beh.upper()}")
+            _spl_axis(ax, levels)
+            if col == 0:
+                ax.set_ylabel("failed tasks per run")
+    if robot_ids:
+        handles, labels = axes[0, 0].get_legend_handles_labels()
+        fig.legend(handles, labels, loc="outside lower center", ncols=len(robot_ids))
+    fig.suptitle("Failed tasks per robot (mean per run)")
+    return fig

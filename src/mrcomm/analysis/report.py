@@ -1,0 +1,340 @@
+"""The report of a study: from a results database to a self-contained HTML page
+(figures embedded as base64 PNG, tables, configuration, software versions, date), plus
+every figure as PNG and SVG and every table as CSV. Also the human formatting of the
+statistics tables, shared with ``mrcomm analyze`` (terminal, LaTeX).
+
+Nothing is written until everything has been computed, and each file is written
+atomically: a failure leaves no half-written report behind.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import math
+import os
+import platform
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+from typing import Any
+
+import jinja2
+import pandas as pd
+
+import mrcomm
+from mrcomm.analysis import stats as st
+from mrcomm.analysis.figures_report import (
+    build_figures,
+    frame_of,
+    metrics_with_data,
+    pick_timeline_runs,
+)
+from mrcomm.errors import InputError
+
+TABLE_TITLES = {
+    "comparisons": "Mann-Whitney U, SPL0 vs SPLX (one-sided)",
+    "normality": "Shapiro-Wilk normality per sample",
+    "descriptive": "Descriptive statistics per configuration",
+    "success_counts": "Successful missions (contingency tables)",
+    "success_tests": "Chi-squared tests of mission success",
+}
+
+
+# ---- human formatting of the tables ------------------------------------------------------
+
+
+def fmt_p(p: Any) -> str:
+    if p is None or not math.isfinite(float(p)):
+        return "–"
+    return "<0.0001" if float(p) < 1e-4 else f"{float(p):.4f}"
+
+
+def fmt_num(x: Any, digits: int = 2) -> str:
+    if x is None or not math.isfinite(float(x)):
+        return "–"
+    return f"{float(x):.{digits}f}"
+
+
+def _mean_sd(mean: Any, sd: Any) -> str:
+    if mean is None or not math.isfinite(float(mean)):
+        return "–"
+    return f"{float(mean):.2f}" + ("" if not math.isfinite(float(sd)) else f" ± {float(sd):.2f}")
+
+
+def _config(r: pd.Series, multi: bool) -> str:
+    parts = [str(r["network"]).upper()]
+    if str(r["threshold"]) != "none":
+        parts.append(str(r["threshold"]).upper())
+    parts.append(str(r["behaviour"]).upper())
+    return (f"{r['scenario']} " if multi else "") + "+".join(parts)
+
+
+def _method(m: Any) -> str:
+    text = str(m)
+    return "exact perm." if text.startswith("exact perm") else text.split(" ")[0]
+
+
+Column = tuple[str, Callable[[pd.Series, bool], str]]
+_CFG: Column = ("configuration", _config)
+_SPL: Column = ("SPL", lambda r, _: f"{float(r['spl']):g}")
+_COLUMNS: dict[str, list[Column]] = {
+    "comparisons": [
+        ("metric", lambda r, _: str(r["metric"])),
+        _CFG,
+        ("H_A", lambda r, _: str(r["hypothesis"])),
+        ("m", lambda r, _: str(r["m"])),
+        ("n", lambda r, _: str(r["n"])),
+        ("SPL0 mean ± SD", lambda r, _: _mean_sd(r["mean0"], r["sd0"])),
+        ("SPLX mean ± SD", lambda r, _: _mean_sd(r["mean_x"], r["sd_x"])),
+        ("U (SPL0)", lambda r, _: fmt_num(r["u"], 1)),
+        ("p", lambda r, _: fmt_p(r["p"])),
+        ("Z", lambda r, _: fmt_num(r["z"], 3)),
+        ("r=Z/√n", lambda r, _: fmt_num(r["r"], 3)),
+        ("r=Z/√(m+n)", lambda r, _: fmt_num(r["r_conv"], 3)),
+        ("effect", lambda r, _: str(r["effect"])),
+        ("accepted", lambda r, _: str(r["accepted"])),
+        ("method", lambda r, _: _method(r["method"])),
+    ],
+    "normality": [
+        ("metric", lambda r, _: str(r["metric"])),
+        _CFG,
+        _SPL,
+        ("n", lambda r, _: str(r["n"])),
+        ("W", lambda r, _: fmt_num(r["w"], 4)),
+        ("p", lambda r, _: fmt_p(r["p"])),
+        ("normal (p ≥ α)", lambda r, _: str(r["normal"])),
+    ],
+    "descriptive": [
+        ("metric", lambda r, _: str(r["metric"])),
+        _CFG,
+        _SPL,
+        ("n", lambda r, _: str(r["n"])),
+        *(
+            (k, (lambda key: lambda r, _: fmt_num(r[key]))(k.lower()))
+            for k in ("mean", "SD", "min", "median", "max")
+        ),
+    ],
+    "success_counts": [
+        _CFG,
+        _SPL,
+        *((k, (lambda key: lambda r, _: str(r[key]))(k)) for k in ("runs", "successful", "failed")),
+        ("successful %", lambda r, _: fmt_num(r["percent"], 1)),
+    ],
+    "success_tests": [
+        _CFG,
+        ("comparison", lambda r, _: str(r["comparison"])),
+        ("χ²", lambda r, _: fmt_num(r["chi2"], 3)),
+        ("dof", lambda r, _: str(r["dof"])),
+        ("p", lambda r, _: fmt_p(r["p"])),
+        ("Fisher p", lambda r, _: fmt_p(r["fisher_p"])),
+        ("min expected", lambda r, _: fmt_num(r["min_expected"], 2)),
+        ("note", lambda r, _: str(r["note"])),
+    ],
+}
+
+
+def display_frame(name: str, frame: pd.DataFrame) -> pd.DataFrame:
+    """Table ``name`` as rounded strings under readable headers."""
+    columns = _COLUMNS[name]
+    multi = "scenario" in frame.columns and frame["scenario"].nunique() > 1
+    rows = [[fn(row, multi) for _, fn in columns] for _, row in frame.iterrows()]
+    return pd.DataFrame(rows, columns=[h for h, _ in columns])
+
+
+#: Symbols of the displayed tables in LaTeX (applied after escaping; needs booktabs).
+_LATEX = (
+    ("r=Z/√(m+n)", r"$r=Z/\sqrt{m+n}$"),
+    ("r=Z/√n", r"$r=Z/\sqrt{n}$"),
+    ("±", r"$\pm$"),
+    ("χ²", r"$\chi^2$"),
+    ("≥", r"$\geq$"),
+    ("α", r"$\alpha$"),
+    ("–", "--"),
+    ("<", "$<$"),
+    (">", "$>$"),
+)
+
+
+def to_latex(name: str, frame: pd.DataFrame) -> str:
+    """A LaTeX table (booktabs) of the displayed table, captioned with its title; plain
+    ASCII apart from the caption, so pdflatex takes it."""
+    text = display_frame(name, frame).to_latex(
+        index=False, escape=True, caption=TABLE_TITLES[name], label=f"tab:{name}"
+    )
+    for symbol, latex in _LATEX:
+        text = text.replace(symbol, latex)
+    return text
+
+
+# ---- loading ------------------------------------------------------------------------------
+
+
+def load_study(db_path: Path, experiment: str | None = None) -> Any:
+    """The results database at ``db_path`` (``mrcomm.experiment.api.load_results``),
+    optionally only one experiment's runs."""
+    if not db_path.is_file():
+        raise InputError("no such results database", file=db_path, field="--db")
+    from mrcomm.experiment.api import load_results
+
+    try:
+        return load_results(db_path, experiment)
+    except InputError:
+        raise
+    except Exception as err:  # duckdb raises its own types for a file that is not a DB
+        raise InputError(f"not a results database ({err})", file=db_path, field="--db") from err
+
+
+def check_runs(runs: pd.DataFrame, db_path: Path | None) -> None:
+    """A study needs at least one finished run."""
+    if runs.empty:
+        raise InputError("the database has no runs", file=db_path, field="runs")
+    if st.usable_runs(runs).empty:
+        raise InputError(
+            f"none of the {len(runs)} runs finished (status ok)", file=db_path, field="runs"
+        )
+
+
+# ---- the report ----------------------------------------------------------------------------
+
+
+@dataclass
+class Report:
+    """What :func:`build_report` wrote."""
+
+    out_dir: Path
+    html: Path
+    figures: list[str] = field(default_factory=list)
+    tables: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+
+
+def _meta(data: Any) -> dict[str, str]:
+    meta = getattr(data, "meta", None)
+    if isinstance(meta, dict):
+        return {str(k): str(v) for k, v in meta.items()}
+    con = getattr(data, "con", None)
+    if con is None:
+        return {}
+    try:
+        return {str(k): str(v) for k, v in con.execute("SELECT key, value FROM meta").fetchall()}
+    except Exception:  # an old or partial database without meta: report without it
+        return {}
+
+
+def _package_versions() -> dict[str, str]:
+    out = {"mrcomm": mrcomm.__version__, "python": platform.python_version()}
+    for pkg in ("numpy", "scipy", "pandas", "matplotlib", "duckdb"):
+        try:
+            out[pkg] = version(pkg)
+        except PackageNotFoundError:
+            out[pkg] = "not installed"
+    return out
+
+
+def _failed_runs(runs: pd.DataFrame) -> list[list[str]]:
+    bad = runs[runs["status"] != "ok"] if "status" in runs else runs.iloc[0:0]
+    return bad.reindex(columns=["run_id", "status", "error"]).fillna("").astype(str).values.tolist()
+
+
+def _is_number(text: str) -> bool:
+    """Numbers are right-aligned in the HTML tables, words left-aligned."""
+    try:
+        float(text.split(" ")[0].lstrip("<"))
+    except ValueError:
+        return text == "–"
+    return True
+
+
+def _html_table(name: str, frame: pd.DataFrame) -> dict[str, Any]:
+    shown = display_frame(name, frame)
+    accepted = frame["accepted"].tolist() if name == "comparisons" else [""] * len(frame)
+    rows = [
+        {"cells": [(c, _is_number(c)) for c in cells], "cls": "sig" if flag == "HA" else ""}
+        for cells, flag in zip(shown.values.tolist(), accepted, strict=True)
+    ]
+    return {"columns": list(shown.columns), "rows": rows}
+
+
+def build_report(
+    data: Any,
+    out_dir: Path,
+    *,
+    db_path: Path | None = None,
+    metrics: Sequence[str] | None = None,
+    timeline_runs: Sequence[str] | None = None,
+    svg: bool = True,
+    alpha: float = st.ALPHA,
+) -> Report:
+    """Compute tables and figures of ``data`` (a ``load_results`` Results) and write the
+    report into ``out_dir`` (created if missing): report.html, figures/, tables/."""
+    started = time.perf_counter()
+    runs = frame_of(data, "runs")
+    check_runs(runs, db_path)
+    chosen = metrics_with_data(runs, metrics)
+    tables = st.study_tables(runs, chosen, alpha)
+    figures = build_figures(data, chosen, pick_timeline_runs(runs, timeline_runs), svg)
+    status = runs["status"].value_counts().to_dict() if "status" in runs else {}
+    meta = _meta(data)
+    context = {
+        "title": f"MRComm study report: {meta.get('experiment', '') or db_path or ''}".strip(),
+        "generated": dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M:%S UTC"),
+        "db_path": str(db_path) if db_path else "",
+        "meta": {k: v for k, v in meta.items() if k != "schema_yaml"},
+        "schema_yaml": meta.get("schema_yaml", ""),
+        "versions": _package_versions(),
+        "alpha": alpha,
+        "n_runs": len(runs),
+        "status": status,
+        "errors": _failed_runs(runs),
+        "configs": frame_of(data, "configs")
+        .drop(columns=["options"], errors="ignore")
+        .astype(str)
+        .values.tolist(),
+        "config_columns": [c for c in frame_of(data, "configs").columns if c != "options"],
+        "tables": {name: _html_table(name, tables.get(name)) for name in st.TABLE_NAMES},
+        "table_titles": TABLE_TITLES,
+        "figures": figures,
+    }
+    html = _environment().get_template("report.html.j2").render(**context)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "figures").mkdir(exist_ok=True)
+    (out_dir / "tables").mkdir(exist_ok=True)
+    report = Report(out_dir=out_dir, html=out_dir / "report.html")
+    for section in figures.values():
+        for f in section:
+            _write(out_dir / "figures" / f"{f.id}.png", f.png)
+            if f.svg is not None:
+                _write(out_dir / "figures" / f"{f.id}.svg", f.svg)
+            report.figures.append(f.id)
+    for name in st.TABLE_NAMES:
+        _write(out_dir / "tables" / f"{name}.csv", tables.get(name).to_csv(index=False).encode())
+        report.tables.append(name)
+    _write(report.html, html.encode("utf-8"))
+    report.seconds = time.perf_counter() - started
+    return report
+
+
+def _write(path: Path, payload: bytes) -> None:
+    """Write via a temporary file and a rename, so no reader sees a partial file."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=path.suffix, dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(payload)
+        os.chmod(tmp, 0o644)  # mkstemp makes 0600; a report is meant to be shared
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def _environment() -> jinja2.Environment:
+    return jinja2.Environment(
+        loader=jinja2.FileSystemLoader(Path(__file__).parent / "templates"),
+        autoescape=True,
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+    )

@@ -1,0 +1,479 @@
+"""Statistics of a study (SPEC §10): every SPLX compared with the ideal case SPL0.
+
+Per metric and per configuration group (scenario, network, threshold, behaviour):
+
+* Mann–Whitney U, one-sided (H_A "SPL0 < SPLX"; "SPL0 > SPLX" for near collisions),
+  with U reported for the SPL0 sample, p, Z, the original's effect size r = Z/√n and the
+  conventional r = Z/√(m+n), Cohen's label and the hypothesis accepted at α;
+* Shapiro–Wilk W and p per sample;
+* successful-mission contingency tables with chi-squared (and Fisher's exact test for
+  the 2×2 SPL0-vs-SPLX tables).
+
+Choice of p-value method (:func:`mann_whitney`): the exact null distribution of U when a
+sample has at most 8 observations and there are no ties; the exact *permutation*
+distribution (every split of the pooled sample enumerated, so ties are handled
+exactly) when there are ties and at most ``EXACT_PERMUTATIONS`` splits exist (n = 5
+per group: 252); otherwise the normal approximation with tie and continuity correction.
+
+Z (for the effect sizes) is ``(U − mn/2) / σ_U`` without continuity correction, with the
+tie-corrected σ_U = √(mn/12 · ((N+1) − Σ(t³−t)/(N(N−1)))), N = m+n, t the size of each
+group of tied values; without ties this is the SPEC's √(mn(m+n+1)/12).
+
+Everything works on the ``runs`` DataFrame of the results database contract.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, fields
+from typing import Literal
+
+import numpy as np
+import pandas as pd
+from numpy.typing import ArrayLike
+from scipy import stats as sps
+
+from mrcomm.errors import InputError, did_you_mean
+
+ALPHA = 0.05
+#: Group keys of a configuration without its packet-loss level.
+GROUP = ("scenario", "network", "threshold", "behaviour")
+#: Largest number of distinct splits enumerated for an exact test with ties.
+EXACT_PERMUTATIONS = 200_000
+Alternative = Literal["less", "greater"]
+
+
+@dataclass(frozen=True)
+class Metric:
+    """A per-run metric (a column of ``runs``) and the direction of its test."""
+
+    name: str
+    label: str
+    unit: str
+    #: H_A of SPL0 against SPLX: "less" = SPL0 observations are less than SPLX ones.
+    alternative: Alternative = "less"
+    #: Only defined for Leader-Follower runs.
+    lf_only: bool = False
+
+
+_M = Metric
+METRICS: dict[str, Metric] = {
+    m.name: m
+    for m in (
+        _M("execution_phase_time", "Execution phase time", "s"),
+        _M("total_movement_time", "Total movement time", "s"),
+        _M("total_distance", "Total distance travelled", "m"),
+        _M("near_collisions", "Near collisions", "count", "greater"),
+        _M("near_collisions_filtered", "Near collisions (filtered)", "count", "greater"),
+        _M("delay_time", "Delay time", "s"),
+        _M("idle_time", "Idle time", "s"),
+        _M("task_execution_time", "Task execution time", "s"),
+        _M("n_failed_tasks", "Failed tasks", "count"),
+        _M("min_separation", "Minimum separation", "m"),
+        _M("max_separation", "Maximum separation", "m"),
+        _M("na_movement_time", "NA movement time", "s", lf_only=True),
+        _M("leader_movement_time", "Leader movement time", "s", lf_only=True),
+        _M("follower_movement_time", "Follower movement time", "s", lf_only=True),
+        _M("leader_disconnect_time", "Leader disconnect time", "s", lf_only=True),
+        _M("follower_waiting_time", "Follower waiting time", "s", lf_only=True),
+        _M("role_assignment_time", "Role assignment time", "s", lf_only=True),
+        _M("switching_time", "Switching time", "s", lf_only=True),
+        _M("aon_publications", "AON publications", "count", lf_only=True),
+        _M("aon_resends", "AON re-sends", "count", lf_only=True),
+    )
+}
+#: The SPEC §8 core metrics: the default selection of figures and Q–Q plots.
+CORE_METRICS = (
+    "execution_phase_time",
+    "total_movement_time",
+    "total_distance",
+    "near_collisions",
+    "delay_time",
+    "idle_time",
+)
+
+
+def resolve_metrics(names: Sequence[str] | None, field: str = "--metric") -> list[Metric]:
+    """The metrics named (all when ``names`` is empty); unknown names are input errors."""
+    if not names:
+        return list(METRICS.values())
+    out = []
+    for name in names:
+        if name not in METRICS:
+            hint = did_you_mean(name, METRICS)
+            raise InputError(
+                f"unknown metric {name!r}{hint}; known: {', '.join(METRICS)}", field=field
+            )
+        out.append(METRICS[name])
+    return out
+
+
+def effect_label(r: float) -> str:
+    """Cohen's label of |r|: < 0.1 negligible, [0.1, 0.3) weak, [0.3, 0.5] medium,
+    > 0.5 strong (SPEC §10)."""
+    if not math.isfinite(r):
+        return "n/a"
+    a = abs(r)
+    if a < 0.1:
+        return "negligible"
+    if a < 0.3:
+        return "weak"
+    if a <= 0.5:
+        return "medium"
+    return "strong"
+
+
+def sigma_u(x: ArrayLike, y: ArrayLike) -> float:
+    """Tie-corrected standard deviation of U under H0 (see the module docstring)."""
+    a, b = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    m, n = len(a), len(b)
+    big_n = m + n
+    if m == 0 or n == 0:
+        return math.nan
+    _, counts = np.unique(np.concatenate([a, b]), return_counts=True)
+    ties = float(np.sum(counts.astype(float) ** 3 - counts))
+    var = m * n / 12.0 * ((big_n + 1) - ties / (big_n * (big_n - 1)))
+    return math.sqrt(max(var, 0.0))
+
+
+@dataclass(frozen=True)
+class MannWhitney:
+    """One SPL0-vs-SPLX comparison."""
+
+    m: int  # size of the SPL0 sample
+    n: int  # size of the SPLX sample
+    alternative: str
+    u: float  # U of the SPL0 sample (number of pairs with SPL0 > SPLX, ties count 1/2)
+    p: float
+    z: float  # (U − mn/2) / σ_U, tie-corrected, no continuity correction
+    r: float  # the original's effect size Z / √n (n: per-group sample size)
+    r_conv: float  # the conventional Z / √(m+n)
+    effect: str  # Cohen's label of |r|
+    accepted: str  # "HA" or "H0" at α
+    method: str  # how p was computed
+
+
+def mann_whitney(
+    spl0: ArrayLike,
+    splx: ArrayLike,
+    alternative: Alternative = "less",
+    alpha: float = ALPHA,
+) -> MannWhitney:
+    """One-sided Mann–Whitney U of SPL0 against SPLX (NaNs dropped).
+
+    The per-group sample size of the original's r = Z/√n is the size of the smaller
+    sample (the groups are equal in a balanced design; they differ only when a metric is
+    undefined in some runs).
+    """
+    x = np.asarray(spl0, dtype=float)
+    y = np.asarray(splx, dtype=float)
+    x, y = x[np.isfinite(x)], y[np.isfinite(y)]
+    m, n = len(x), len(y)
+    if m < 2 or n < 2:
+        nan = math.nan
+        return MannWhitney(m, n, alternative, nan, nan, nan, nan, nan, "n/a", "n/a", "too few")
+    sigma = sigma_u(x, y)
+    if sigma == 0.0:
+        # Every observation equal: no evidence either way, U sits at its mean.
+        u = m * n / 2.0
+        return MannWhitney(
+            m, n, alternative, u, 1.0, 0.0, 0.0, 0.0, "negligible", "H0", "degenerate (all equal)"
+        )
+    has_ties = len(np.unique(np.concatenate([x, y]))) < m + n
+    method: str | sps.PermutationMethod
+    if not has_ties and min(m, n) <= 8:
+        method, label = "exact", "exact"
+    elif has_ties and math.comb(m + n, m) <= EXACT_PERMUTATIONS:
+        # n_resamples >= the number of distinct splits makes permutation_test enumerate
+        # them all: an exact test conditional on the ties. The generator is unused then.
+        method = sps.PermutationMethod(n_resamples=EXACT_PERMUTATIONS, rng=np.random.default_rng(0))
+        label = "exact permutation (ties)"
+    else:
+        method, label = "asymptotic", "normal approx. (tie + continuity corr.)"
+    res = sps.mannwhitneyu(x, y, alternative=alternative, method=method)
+    u = float(res.statistic)  # scipy's statistic is U of the first sample (SPL0)
+    z = (u - m * n / 2.0) / sigma
+    r = z / math.sqrt(min(m, n))
+    p = float(res.pvalue)
+    return MannWhitney(
+        m=m,
+        n=n,
+        alternative=alternative,
+        u=u,
+        p=p,
+        z=z,
+        r=r,
+        r_conv=z / math.sqrt(m + n),
+        effect=effect_label(r),
+        accepted="HA" if p < alpha else "H0",
+        method=label,
+    )
+
+
+def shapiro_wilk(sample: ArrayLike) -> tuple[float, float]:
+    """Shapiro–Wilk (W, p); NaN when undefined (fewer than 3 values, or all equal)."""
+    x = np.asarray(sample, dtype=float)
+    x = x[np.isfinite(x)]
+    if len(x) < 3 or np.ptp(x) == 0.0:
+        return math.nan, math.nan
+    res = sps.shapiro(x)
+    return float(res.statistic), float(res.pvalue)
+
+
+def usable_runs(runs: pd.DataFrame) -> pd.DataFrame:
+    """Runs that finished (status 'ok'): the ones every statistic is computed over."""
+    if "status" not in runs.columns:
+        return runs
+    return runs[runs["status"] == "ok"]
+
+
+def _groups(runs: pd.DataFrame) -> list[tuple[tuple[str, ...], pd.DataFrame]]:
+    keys = [k for k in GROUP if k in runs.columns]
+    out = []
+    for key, frame in runs.groupby(keys, sort=True, dropna=False):
+        out.append((tuple(str(k) for k in key), frame))
+    return out
+
+
+def _sample(frame: pd.DataFrame, spl: float, column: str) -> np.ndarray:
+    values = pd.to_numeric(frame.loc[frame["spl"] == spl, column], errors="coerce")
+    arr = values.to_numpy(dtype=float, na_value=np.nan)
+    return arr[np.isfinite(arr)]
+
+
+def _spl_name(spl: float) -> str:
+    return f"SPL{spl:g}"
+
+
+def comparison_table(
+    runs: pd.DataFrame, metrics: Sequence[str] | None = None, alpha: float = ALPHA
+) -> pd.DataFrame:
+    """Mann–Whitney SPL0 vs each SPLX, one row per (metric, group, SPLX)."""
+    rows = []
+    runs = usable_runs(runs)
+    for metric in resolve_metrics(metrics):
+        if metric.name not in runs.columns:
+            continue
+        for key, frame in _groups(runs):
+            levels = sorted(frame["spl"].dropna().unique())
+            if 0.0 not in levels:
+                continue
+            x = _sample(frame, 0.0, metric.name)
+            for spl in levels:
+                if spl == 0.0:
+                    continue
+                y = _sample(frame, spl, metric.name)
+                if len(x) == 0 and len(y) == 0:
+                    continue  # metric undefined for this group (LF metric of NB runs)
+                res = mann_whitney(x, y, metric.alternative, alpha)
+                op = "<" if metric.alternative == "less" else ">"
+                rows.append(
+                    {
+                        "metric": metric.name,
+                        **dict(zip(GROUP, key, strict=False)),
+                        "spl_x": float(spl),
+                        "hypothesis": f"SPL0 {op} {_spl_name(spl)}",
+                        "mean0": _mean(x),
+                        "sd0": _sd(x),
+                        "mean_x": _mean(y),
+                        "sd_x": _sd(y),
+                        **asdict(res),
+                    }
+                )
+    return pd.DataFrame(rows, columns=_COMPARISON_COLUMNS)
+
+
+_COMPARISON_COLUMNS = [
+    "metric",
+    *GROUP,
+    *("spl_x", "hypothesis", "mean0", "sd0", "mean_x", "sd_x"),
+    *(f.name for f in fields(MannWhitney)),
+]
+
+
+def _mean(a: np.ndarray) -> float:
+    return float(np.mean(a)) if len(a) else math.nan
+
+
+def _sd(a: np.ndarray) -> float:
+    # Sample standard deviation (ddof=1), as the error bars of the figures.
+    return float(np.std(a, ddof=1)) if len(a) > 1 else math.nan
+
+
+def normality_table(
+    runs: pd.DataFrame, metrics: Sequence[str] | None = None, alpha: float = ALPHA
+) -> pd.DataFrame:
+    """Shapiro–Wilk per sample: one row per (metric, group, SPL level)."""
+    rows = []
+    runs = usable_runs(runs)
+    for metric in resolve_metrics(metrics):
+        if metric.name not in runs.columns:
+            continue
+        for key, frame in _groups(runs):
+            for spl in sorted(frame["spl"].dropna().unique()):
+                x = _sample(frame, spl, metric.name)
+                if len(x) == 0:
+                    continue
+                w, p = shapiro_wilk(x)
+                normal = "n/a" if not math.isfinite(p) else ("yes" if p >= alpha else "no")
+                rows.append(
+                    {
+                        "metric": metric.name,
+                        **dict(zip(GROUP, key, strict=False)),
+                        "spl": float(spl),
+                        "n": len(x),
+                        "w": w,
+                        "p": p,
+                        "normal": normal,
+                    }
+                )
+    return pd.DataFrame(rows, columns=["metric", *GROUP, "spl", "n", "w", "p", "normal"])
+
+
+def describe_table(runs: pd.DataFrame, metrics: Sequence[str] | None = None) -> pd.DataFrame:
+    """Mean, standard deviation, min, max and n per (metric, group, SPL level)."""
+    rows = []
+    runs = usable_runs(runs)
+    for metric in resolve_metrics(metrics):
+        if metric.name not in runs.columns:
+            continue
+        for key, frame in _groups(runs):
+            for spl in sorted(frame["spl"].dropna().unique()):
+                x = _sample(frame, spl, metric.name)
+                if len(x) == 0:
+                    continue
+                rows.append(
+                    {
+                        "metric": metric.name,
+                        **dict(zip(GROUP, key, strict=False)),
+                        "spl": float(spl),
+                        "n": len(x),
+                        "mean": _mean(x),
+                        "sd": _sd(x),
+                        "min": float(np.min(x)),
+                        "median": float(np.median(x)),
+                        "max": float(np.max(x)),
+                    }
+                )
+    cols = ["metric", *GROUP, "spl", "n", "mean", "sd", "min", "median", "max"]
+    return pd.DataFrame(rows, columns=cols)
+
+
+def success_counts(runs: pd.DataFrame) -> pd.DataFrame:
+    """Successful and failed missions per group and SPL level (the contingency tables)."""
+    runs = usable_runs(runs)
+    rows = []
+    for key, frame in _groups(runs):
+        for spl in sorted(frame["spl"].dropna().unique()):
+            ok = frame.loc[frame["spl"] == spl, "successful"].dropna().astype(bool)
+            rows.append(
+                {
+                    **dict(zip(GROUP, key, strict=False)),
+                    "spl": float(spl),
+                    "runs": len(ok),
+                    "successful": int(ok.sum()),
+                    "failed": int((~ok).sum()),
+                    "percent": 100.0 * float(ok.mean()) if len(ok) else math.nan,
+                }
+            )
+    return pd.DataFrame(rows, columns=[*GROUP, "spl", "runs", "successful", "failed", "percent"])
+
+
+def chi_squared(table: np.ndarray) -> dict[str, float | int | str]:
+    """Chi-squared test of a k×2 (successful, failed) table; Fisher's exact p for 2×2.
+
+    Yates' continuity correction applies to 2×2 tables (scipy's default). A table with
+    an empty column (every mission successful, or every one failed) has no test: p is
+    NaN and the note says why.
+    """
+    table = np.asarray(table, dtype=float)
+    out: dict[str, float | int | str] = {
+        "chi2": math.nan,
+        "dof": 0,
+        "p": math.nan,
+        "fisher_p": math.nan,
+        "min_expected": math.nan,
+        "note": "",
+    }
+    if table.shape[0] < 2:
+        out["note"] = "one SPL level"
+        return out
+    cols = table.sum(axis=0)
+    if np.any(cols == 0):
+        out["note"] = "all successful" if cols[1] == 0 else "all failed"
+        return out
+    res = sps.chi2_contingency(table)
+    out.update(
+        chi2=float(res.statistic),
+        dof=int(res.dof),
+        p=float(res.pvalue),
+        min_expected=float(np.min(res.expected_freq)),
+    )
+    if table.shape == (2, 2):
+        out["fisher_p"] = float(sps.fisher_exact(table).pvalue)
+    if float(out["min_expected"]) < 5:
+        out["note"] = (
+            "expected count < 5: prefer Fisher's exact p"
+            if table.shape
+            == (
+                2,
+                2,
+            )
+            else "expected count < 5: chi-squared approximate"
+        )
+    return out
+
+
+def success_tests(runs: pd.DataFrame) -> pd.DataFrame:
+    """Per group: chi-squared across all SPL levels, then SPL0 vs each SPLX (2×2)."""
+    counts = success_counts(runs)
+    rows = []
+    if counts.empty:
+        return pd.DataFrame(
+            columns=[*GROUP, "comparison", "chi2", "dof", "p", "fisher_p", "min_expected", "note"]
+        )
+    for key, frame in counts.groupby(list(GROUP), sort=True):
+        frame = frame.sort_values("spl")
+        table = frame[["successful", "failed"]].to_numpy()
+        base = dict(zip(GROUP, key, strict=False))
+        rows.append({**base, "comparison": "all SPL levels", **chi_squared(table)})
+        if 0.0 in set(frame["spl"]):
+            first = frame[frame["spl"] == 0.0][["successful", "failed"]].to_numpy()
+            for _, row in frame[frame["spl"] != 0.0].iterrows():
+                pair = np.vstack([first, [[row["successful"], row["failed"]]]])
+                rows.append(
+                    {**base, "comparison": f"SPL0 vs {_spl_name(row['spl'])}", **chi_squared(pair)}
+                )
+    return pd.DataFrame(rows)
+
+
+#: Table names of a study, in the order they are printed and written.
+TABLE_NAMES = ("comparisons", "normality", "descriptive", "success_counts", "success_tests")
+
+
+@dataclass(frozen=True)
+class StudyTables:
+    """Every statistics table of a study (the CSVs of the report)."""
+
+    comparisons: pd.DataFrame
+    normality: pd.DataFrame
+    descriptive: pd.DataFrame
+    success_counts: pd.DataFrame
+    success_tests: pd.DataFrame
+
+    def get(self, name: str) -> pd.DataFrame:
+        frame: pd.DataFrame = getattr(self, name)
+        return frame
+
+
+def study_tables(
+    runs: pd.DataFrame, metrics: Sequence[str] | None = None, alpha: float = ALPHA
+) -> StudyTables:
+    return StudyTables(
+        comparisons=comparison_table(runs, metrics, alpha),
+        normality=normality_table(runs, metrics, alpha),
+        descriptive=describe_table(runs, metrics),
+        success_counts=success_counts(runs),
+        success_tests=success_tests(runs),
+    )

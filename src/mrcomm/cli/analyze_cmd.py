@@ -1,0 +1,102 @@
+"""``mrcomm analyze``: the statistics tables of a study (SPEC §10), printed as a
+terminal table, CSV or LaTeX."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from mrcomm.errors import InputError, did_you_mean
+
+FORMATS = ("table", "csv", "latex")
+
+
+def analyze(
+    db: Annotated[Path, typer.Option(help="Results database (DuckDB) written by mrcomm sweep.")],
+    metric: Annotated[
+        list[str] | None,
+        typer.Option(help="Metric to test (repeatable; default: every metric with data)."),
+    ] = None,
+    fmt: Annotated[str, typer.Option("--format", help="Output: table | csv | latex.")] = "table",
+    table: Annotated[
+        list[str] | None,
+        typer.Option(
+            help="Table to print (repeatable): comparisons, normality, descriptive, "
+            "success_counts, success_tests (default: all)."
+        ),
+    ] = None,
+    experiment: Annotated[
+        str | None, typer.Option(help="Only the runs of this experiment.")
+    ] = None,
+    alpha: Annotated[float, typer.Option(help="Significance level.")] = 0.05,
+) -> None:
+    """Print the statistics of a study: Mann–Whitney SPL0 vs SPLX, Shapiro–Wilk,
+    descriptive statistics and mission-success contingency tables."""
+    # Imported here: scipy, pandas and DuckDB are not needed by the other commands.
+    from mrcomm.analysis import report as rp
+    from mrcomm.analysis import stats as st
+    from mrcomm.analysis.figures_report import metrics_with_data
+
+    if fmt not in FORMATS:
+        raise InputError(
+            f"unknown format {fmt!r}{did_you_mean(fmt, FORMATS)}; choose table, csv or latex",
+            field="--format",
+        )
+    if not 0 < alpha < 1:
+        raise InputError(f"must be between 0 and 1, got {alpha:g}", field="--alpha")
+    names = _tables(table)
+    st.resolve_metrics(metric)  # unknown metric: fail before loading anything
+    data = rp.load_study(db, experiment)
+    runs = data.runs
+    rp.check_runs(runs, db)
+    tables = st.study_tables(runs, metrics_with_data(runs, metric), alpha)
+    console = Console(width=250) if fmt == "table" else None
+    for i, name in enumerate(names):
+        frame = tables.get(name)
+        if fmt == "csv":
+            # Full precision, one block per table, separated by a comment line.
+            typer.echo(f"# {name}")
+            typer.echo(frame.to_csv(index=False), nl=False)
+        elif fmt == "latex":
+            typer.echo(rp.to_latex(name, frame), nl=False)
+        else:
+            assert console is not None
+            console.print(_rich_table(rp.TABLE_TITLES[name], rp.display_frame(name, frame)))
+        if i < len(names) - 1 and fmt != "table":
+            typer.echo("")
+
+
+def _tables(names: list[str] | None) -> list[str]:
+    from mrcomm.analysis.stats import TABLE_NAMES
+
+    if not names:
+        return list(TABLE_NAMES)
+    for name in names:
+        if name not in TABLE_NAMES:
+            hint = did_you_mean(name, TABLE_NAMES)
+            raise InputError(
+                f"unknown table {name!r}{hint}; known: {', '.join(TABLE_NAMES)}", field="--table"
+            )
+    return names
+
+
+def _rich_table(title: str, frame: object) -> Table:
+    import pandas as pd
+
+    assert isinstance(frame, pd.DataFrame)
+    out = Table(title=title, title_justify="left")
+    for column in frame.columns:
+        out.add_column(str(column), justify="left" if column in _TEXT else "right")
+    for row in frame.itertuples(index=False):
+        style = "green" if "accepted" in frame.columns and row[-2] == "HA" else None
+        out.add_row(*(str(c) for c in row), style=style)
+    if frame.empty:
+        out.caption = "no rows"
+    return out
+
+
+_TEXT = {"metric", "configuration", "H_A", "effect", "accepted", "method", "comparison", "note"}

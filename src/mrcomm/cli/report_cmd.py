@@ -1,0 +1,54 @@
+"""``mrcomm report``: a self-contained HTML report of a study (figures embedded,
+tables, configuration, software version, date) plus every figure as PNG/SVG and every
+table as CSV."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from mrcomm.errors import InputError
+
+
+def report(
+    db: Annotated[Path, typer.Option(help="Results database (DuckDB) written by mrcomm sweep.")],
+    out: Annotated[Path, typer.Option(help="Output directory (created if missing).")],
+    metric: Annotated[
+        list[str] | None,
+        typer.Option(help="Metric to include (repeatable; default: every metric with data)."),
+    ] = None,
+    timeline: Annotated[
+        list[str] | None,
+        typer.Option(
+            help="Run id whose timeline to draw (repeatable; default: one per behaviour)."
+        ),
+    ] = None,
+    experiment: Annotated[
+        str | None, typer.Option(help="Only the runs of this experiment.")
+    ] = None,
+    svg: Annotated[bool, typer.Option(help="Also write every figure as SVG.")] = True,
+    alpha: Annotated[float, typer.Option(help="Significance level.")] = 0.05,
+) -> None:
+    """Write report.html, figures/*.png|svg and tables/*.csv into OUT."""
+    # Imported here: matplotlib, scipy and DuckDB are not needed by the other commands.
+    from mrcomm.analysis import report as rp
+    from mrcomm.analysis import stats as st
+
+    if not 0 < alpha < 1:
+        raise InputError(f"must be between 0 and 1, got {alpha:g}", field="--alpha")
+    if out.exists() and not out.is_dir():
+        raise InputError("exists and is not a directory", file=out, field="--out")
+    parent = out.expanduser().resolve().parent
+    if not parent.is_dir():
+        raise InputError(f"directory {parent} does not exist", file=out, field="--out")
+    st.resolve_metrics(metric)  # unknown metric: fail before loading anything
+    data = rp.load_study(db, experiment)
+    result = rp.build_report(
+        data, out, db_path=db, metrics=metric, timeline_runs=timeline, svg=svg, alpha=alpha
+    )
+    typer.echo(
+        f"report: {result.html} ({len(result.figures)} figures, {len(result.tables)} tables, "
+        f"{result.seconds:.1f} s)"
+    )
