@@ -25,6 +25,8 @@ def test_lf_missions_succeed(s1_world, network: str, threshold: str, spl: int) -
     assert m["failed_tasks"] == [] and m["tasks_completed"] == 7
     assert not m["timed_out"]
     assert result.aon["total"]["pending"] == 0  # every status finished at every member
+    # Poses keep every member alive for the lease: nobody may be given up on.
+    assert result.aon["total"]["left_out_reports"] == 0
     assert m["max_separation"] < 8.0  # the team never broke the ad-hoc range
     roles = sum(r["roles_assigned"] for r in result.robots.values())
     assert roles > 0 and m["leader_movement_time"] > 0 and m["follower_movement_time"] > 0

@@ -15,9 +15,11 @@ from mrcomm.agents.assignment import round_robin
 from mrcomm.messaging.aon import AonEndpoint
 from mrcomm.messaging.messages import (
     TOPIC_ASSIGNMENT,
+    TOPIC_HEARTBEAT,
     TOPIC_POSE,
     TOPIC_TASK_STATUS,
     Assignment,
+    Heartbeat,
     Message,
     TaskSpec,
     TaskState,
@@ -26,6 +28,7 @@ from mrcomm.messaging.messages import (
 from mrcomm.ports import Bus
 
 ASSIGNER_ID = "assigner"
+HEARTBEAT_PERIOD = 1.0  # s
 
 
 class TaskAssigner:
@@ -53,6 +56,7 @@ class TaskAssigner:
         self.status_log: list[tuple[float, TaskStatus]] = []
         self._seq = 0
         self._now = 0.0
+        self._next_heartbeat = 0.0
         self.aon: AonEndpoint | None = None
         if use_aon:
             self.aon = AonEndpoint(
@@ -75,10 +79,25 @@ class TaskAssigner:
         """No acknowledged message still in flight at the assigner."""
         return self.aon is None or not self.aon.pending_ids()
 
+    def set_time(self, now: float) -> None:
+        """The time of the coming delivery and step (see TaskExecutor.set_time)."""
+        self._now = now
+
     def step(self, now: float) -> None:
         self._now = now
         if self.aon is not None:
             self.aon.step(now)
+            if now >= self._next_heartbeat:
+                # Robots prove they are alive with their poses; the assigner has none,
+                # and without this AON's lease would give up on it between statuses.
+                self._next_heartbeat = now + HEARTBEAT_PERIOD
+                self._seq += 1
+                self.bus.publish(
+                    TOPIC_HEARTBEAT,
+                    Heartbeat(
+                        sender=self.agent_id, incarnation=self.incarnation, seq=self._seq, stamp=now
+                    ),
+                )
         if not self.assigned:
             for robot in self.team:
                 self._seq += 1

@@ -193,6 +193,11 @@ class TaskExecutor:
         """Innermost state name (``na_navigating`` -> ``navigating``)."""
         return self.state.rsplit("_", 1)[-1]
 
+    def set_time(self, now: float) -> None:
+        """The time of the coming delivery and step: messages handled before ``step``
+        are stamped with it (the runtime calls this first)."""
+        self._now = now
+
     def step(self, now: float) -> None:
         self._now = now
         if self._t0 is None:

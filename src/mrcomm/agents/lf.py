@@ -37,6 +37,7 @@ from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS, TaskExecutor
 from mrcomm.agents.utility import UtilityInputs, utility_function
 from mrcomm.messaging.aon import AonEndpoint, MessageId
 from mrcomm.messaging.messages import (
+    TOPIC_HEARTBEAT,
     TOPIC_ROLE,
     TOPIC_TASK_STATUS,
     TOPIC_UTILITY,
@@ -166,6 +167,7 @@ class LeaderFollowerExecutor(TaskExecutor):
         self._followers_were_out = False
         super().__init__(*args, **kwargs)
         self.bus.subscribe(TOPIC_UTILITY, self._on_utility)
+        self.bus.subscribe(TOPIC_HEARTBEAT, self._on_heartbeat)
         self.bus.subscribe(TOPIC_ROLE, self._on_role)
 
     # -- completion and communication ----------------------------------------------------
@@ -194,6 +196,15 @@ class LeaderFollowerExecutor(TaskExecutor):
         ):
             self._dissolve("leader completed its task")
 
+    def _on_pose(self, message: Message) -> None:
+        super()._on_pose(message)
+        if self.aon is not None:
+            self.aon.heard_from(message.sender, self._now)  # liveliness for the lease
+
+    def _on_heartbeat(self, message: Message) -> None:
+        if self.aon is not None:
+            self.aon.heard_from(message.sender, self._now)
+
     def _on_assignment(self, message: Message) -> None:
         first = self._t0 is None
         super()._on_assignment(message)
@@ -211,9 +222,6 @@ class LeaderFollowerExecutor(TaskExecutor):
     # -- every step ----------------------------------------------------------------------
     def before_state_step(self) -> None:
         if self.aon is not None:
-            for mate, heard in self.mate_heard.items():
-                if heard == self._now:
-                    self.aon.heard_from(mate, self._now)
             self.aon.step(self._now)
         # Idle robots join rounds but never open one; links are judged at the pose rate.
         if (

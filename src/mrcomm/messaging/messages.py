@@ -19,6 +19,9 @@ TOPIC_UTILITY = "utility"
 TOPIC_ROLE = "role"
 TOPIC_RSSI = "rssi"
 TOPIC_AON = "aon"
+#: Presence of agents that publish no pose (the task assigner), like a Zenoh liveliness
+#: token: not subject to simulated packet loss, but cut by range like everything else.
+TOPIC_HEARTBEAT = "heartbeat"
 
 #: Topics that simulated packet loss (SPL) applies to (SPEC §3). AON carries task
 #: status, so it is perturbed too.
@@ -120,6 +123,10 @@ class RoleMsg(Message, frozen=True, tag="role"):
     leader: str
 
 
+class Heartbeat(Message, frozen=True, tag="heartbeat"):
+    """I am alive (1 Hz)."""
+
+
 class RssiMsg(Message, frozen=True, tag="rssi"):
     """Pulse -> its robot: measured RSSI (dBm) of one peer."""
 
@@ -128,7 +135,7 @@ class RssiMsg(Message, frozen=True, tag="rssi"):
     rssi: float
 
 
-AnyMessage = Assignment | PoseMsg | TaskStatus | UtilityMsg | RoleMsg | RssiMsg | AonMsg
+AnyMessage = Assignment | PoseMsg | TaskStatus | UtilityMsg | RoleMsg | RssiMsg | AonMsg | Heartbeat
 
 _encoder = msgspec.msgpack.Encoder()
 _decoder = msgspec.msgpack.Decoder(AnyMessage)

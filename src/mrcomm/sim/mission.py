@@ -172,6 +172,9 @@ class Mission:
         links = self.links.update(positions, now)
         self.last_links = links
         self.network.set_connected(links.connected.tolist())
+        self.assigner.set_time(now)
+        for executor in self.executors.values():
+            executor.set_time(now)
         self.network.deliver(now)
         if self.pulse is not None:
             self.pulse.step(now)
