@@ -12,19 +12,32 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
-# graphviz renders the state-machine diagrams (mrcomm fsm); without it the diagram
-# falls back to Mermaid text and the SVG test is skipped with its reason.
+# System packages some features need: graphviz renders the state-machine diagrams
+# (mrcomm fsm; without it: Mermaid text), chromium renders the HTML report in the browser
+# test. Installed as root with apt-get when missing; otherwise the tests that need them
+# are skipped with their reason.
+SYSTEM_PACKAGES := graphviz:dot chromium:chromium
 system-deps:
-	@command -v dot >/dev/null 2>&1 || { \
+	@for entry in $(SYSTEM_PACKAGES); do \
+	  pkg=$${entry%%:*}; cmd=$${entry##*:}; \
+	  command -v $$cmd >/dev/null 2>&1 && continue; \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
-	    (DEBIAN_FRONTEND=noninteractive apt-get install -y -qq graphviz >/dev/null 2>&1 || \
+	    echo "installing $$pkg (apt-get)"; \
+	    (DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$pkg >/dev/null 2>&1 || \
 	     (apt-get update -qq >/dev/null 2>&1 && \
-	      DEBIAN_FRONTEND=noninteractive apt-get install -y -qq graphviz >/dev/null 2>&1)) || \
-	    echo "note: could not install graphviz; diagram rendering tests will be skipped"; \
-	  else echo "note: graphviz (dot) not installed; diagram rendering tests will be skipped"; fi; }
+	      DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$pkg >/dev/null 2>&1)) || \
+	    echo "note: could not install $$pkg; the tests that need it will be skipped"; \
+	  else echo "note: $$pkg not installed; the tests that need it will be skipped"; fi; \
+	done
 
+# The main job on the embedded defaults: one mission with its figure, then a small real
+# study (12 missions) swept into DuckDB, its statistics, and its HTML report.
 demo: $(STAMP) system-deps
-	$(BIN)/mrcomm run data/scenarios/s1.yaml --network wlan --spl 0 --behaviour nb --seed 1 --plot demo-s1.png
+	$(BIN)/mrcomm run data/scenarios/s1.yaml --network ah --threshold slt --behaviour lf --spl 25 --seed 1 --plot demo-s1.png
+	$(BIN)/mrcomm sweep data/experiments/demo.yaml --db demo.duckdb --jobs 2
+	$(BIN)/mrcomm analyze --db demo.duckdb --metric execution_phase_time --metric total_movement_time --metric near_collisions
+	$(BIN)/mrcomm report --db demo.duckdb --out demo-report
+	@echo "demo: figure demo-s1.png, results demo.duckdb, report demo-report/report.html"
 
 test: $(STAMP) system-deps
 	MPLBACKEND=Agg $(BIN)/pytest -q -n 2
