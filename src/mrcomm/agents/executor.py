@@ -37,8 +37,9 @@ from mrcomm.messaging.messages import (
 )
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ACTIVITY, Timeline
+from mrcomm.net.link_sensors import NoSensor
 from mrcomm.ports import Base, Bus, LinkSensor, NavStatus
-from mrcomm.world.geometry import Pose, wrap_angle
+from mrcomm.world.geometry import wrap_angle
 
 NB_STATES = [
     "unassigned",
@@ -105,16 +106,6 @@ def _quiet_rebinding() -> Iterator[None]:
         logger.setLevel(level)
 
 
-class _NeverWarns:
-    """Link sensor of a run without a threshold."""
-
-    def warning(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> bool:
-        return False
-
-    def rssi(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> float | None:
-        return None
-
-
 class TaskExecutor:
     """NB task executor: a stepped state machine acting through the Bus and Base ports."""
 
@@ -143,7 +134,7 @@ class TaskExecutor:
         self.base = base
         self.timeline = timeline
         self.params = params or ExecutorParams()
-        self.link_sensor: LinkSensor = link_sensor or _NeverWarns()
+        self.link_sensor: LinkSensor = link_sensor or NoSensor()
         self.incarnation = incarnation
         self._rank = tie_break_rank
         self.robot_id = bus.owner

@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from mrcomm.errors import InputError, did_you_mean
+from mrcomm.registry import Registry
 
 
 @dataclass(frozen=True)
@@ -23,32 +23,19 @@ class UtilityInputs:
 
 
 UtilityFunction = Callable[[UtilityInputs], float]
-_REGISTRY: dict[str, UtilityFunction] = {}
+UTILITIES: Registry[UtilityFunction] = Registry("utility", "utility")
 
 
 def register_utility(name: str) -> Callable[[UtilityFunction], UtilityFunction]:
-    def decorate(fn: UtilityFunction) -> UtilityFunction:
-        if name in _REGISTRY:
-            raise ValueError(f"utility {name!r} registered twice")
-        _REGISTRY[name] = fn
-        return fn
-
-    return decorate
+    return UTILITIES.register(name)
 
 
 def utility_function(name: str) -> UtilityFunction:
-    try:
-        return _REGISTRY[name]
-    except KeyError:
-        raise InputError(
-            f"unknown utility {name!r}{did_you_mean(name, _REGISTRY)}; "
-            f"choose from {', '.join(sorted(_REGISTRY))}",
-            field="utility",
-        ) from None
+    return UTILITIES.get(name)
 
 
 def utility_names() -> list[str]:
-    return sorted(_REGISTRY)
+    return UTILITIES.names()
 
 
 @register_utility("original")

@@ -11,9 +11,7 @@ from __future__ import annotations
 
 import datetime as dt
 import math
-import os
 import platform
-import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -33,6 +31,7 @@ from mrcomm.analysis.figures_report import (
     pick_timeline_runs,
 )
 from mrcomm.errors import InputError
+from mrcomm.fileio import atomic_write_bytes
 
 TABLE_TITLES = {
     "comparisons": "Mann-Whitney U, SPL0 vs SPLX (one-sided)",
@@ -319,15 +318,7 @@ def build_report(
 
 def _write(path: Path, payload: bytes) -> None:
     """Write via a temporary file and a rename, so no reader sees a partial file."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=path.suffix, dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as handle:
-            handle.write(payload)
-        os.chmod(tmp, 0o644)  # mkstemp makes 0600; a report is meant to be shared
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    atomic_write_bytes(path, payload)
 
 
 def _environment() -> jinja2.Environment:

@@ -3,12 +3,11 @@ write atomically so that nothing is ever half-written."""
 
 from __future__ import annotations
 
-import os
-import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
 from mrcomm.errors import InputError
+from mrcomm.fileio import atomic_write
 
 
 def check_writable(path: Path, option: str) -> None:
@@ -18,16 +17,6 @@ def check_writable(path: Path, option: str) -> None:
         raise InputError(f"directory {parent} does not exist", file=path, field=option)
 
 
-def write_atomically(path: Path, write: Callable[[Path], None]) -> None:
-    """Call ``write(tmp)`` on a temporary file next to ``path``, then rename it into
-    place; the temporary file is removed on any error."""
-    path = path.expanduser()
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    tmp = Path(tmp_name)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+def write_atomically(path: Path, write: Callable[[Path], object]) -> None:
+    """Write an output file all at once or not at all (see :mod:`mrcomm.fileio`)."""
+    atomic_write(path.expanduser(), write)

@@ -7,12 +7,12 @@ leaves a truncated table behind.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 from mrcomm.errors import InputError, did_you_mean
 from mrcomm.experiment.store import open_readonly
 from mrcomm.experiment.tables import TABLES
+from mrcomm.fileio import atomic_write
 
 FORMATS = {"csv": "(FORMAT csv, HEADER)", "parquet": "(FORMAT parquet)"}
 
@@ -39,14 +39,12 @@ def export_tables(db_path: Path, fmt: str, out_dir: Path) -> list[Path]:
         written = []
         for table in TABLES:
             target = out_dir / f"{table}.{fmt}"
-            tmp = out_dir / f".{table}.{fmt}.tmp"
-            quoted = str(tmp).replace("'", "''")
-            try:
+
+            def copy(tmp: Path, table: str = table) -> None:
+                quoted = str(tmp).replace("'", "''")
                 con.execute(f"COPY (SELECT * FROM {table}) TO '{quoted}' {FORMATS[fmt]}")
-                os.replace(tmp, target)
-            finally:
-                if tmp.exists():
-                    tmp.unlink()
+
+            atomic_write(target, copy)
             written.append(target)
         return written
     finally:

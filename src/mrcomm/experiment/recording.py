@@ -28,8 +28,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import os
-import tempfile
 import time
 from collections import Counter
 from pathlib import Path
@@ -48,6 +46,7 @@ from mrcomm.experiment.recording_schemas import (
     pose_in_frame_schema,
     scene_update_schema,
 )
+from mrcomm.fileio import atomic_write
 from mrcomm.messaging.messages import Message
 from mrcomm.metrics.timeline import ROLE
 from mrcomm.sim.config import RunConfig
@@ -305,10 +304,10 @@ def run_and_record(
     if not scene_period > 0.0:
         raise InputError("must be positive", field="scene_period")
     mission = Mission(config, world)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=".mcap.tmp", dir=path.parent)
-    tmp = Path(tmp_name)
-    try:
-        with os.fdopen(fd, "wb") as stream:
+    results: list[MissionResult] = []
+
+    def record(tmp: Path) -> None:
+        with tmp.open("wb") as stream:
             out = JsonMcapWriter(stream)
             recorder = MissionRecorder(mission, out, scene_period)
             start = time.perf_counter()
@@ -318,8 +317,7 @@ def run_and_record(
             result = dataclasses.replace(mission.result(), wall_time_s=wall)
             recorder.finish(result)
             out.finish()
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-    return result
+            results.append(result)
+
+    atomic_write(path, record)
+    return results[0]

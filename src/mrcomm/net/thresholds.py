@@ -19,12 +19,10 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from mrcomm.errors import InputError, did_you_mean
+from mrcomm.registry import Registry
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
-
-_REGISTRY: dict[str, type[Threshold]] = {}
 
 
 class Threshold:
@@ -46,37 +44,28 @@ class Threshold:
         return {"threshold": self.name}
 
 
+def _load_builtin() -> None:
+    # Signal-model thresholds import their lookup tables' modules; load them on demand.
+    from mrcomm.net import signal_thresholds  # noqa: F401
+
+
+THRESHOLDS: Registry[type[Threshold]] = Registry("threshold", "threshold", _load_builtin)
+
+
 def register_threshold(name: str) -> Callable[[type[Threshold]], type[Threshold]]:
     def decorate(cls: type[Threshold]) -> type[Threshold]:
-        if name in _REGISTRY:
-            raise ValueError(f"threshold {name!r} registered twice")
         cls.name = name
-        _REGISTRY[name] = cls
-        return cls
+        return THRESHOLDS.register(name)(cls)
 
     return decorate
 
 
 def threshold_names() -> list[str]:
-    _load_builtin()
-    return sorted(_REGISTRY)
+    return THRESHOLDS.names()
 
 
 def threshold_class(name: str) -> type[Threshold]:
-    _load_builtin()
-    try:
-        return _REGISTRY[name]
-    except KeyError:
-        raise InputError(
-            f"unknown threshold {name!r}{did_you_mean(name, _REGISTRY)}; "
-            f"choose from {', '.join(sorted(_REGISTRY))}",
-            field="threshold",
-        ) from None
-
-
-def _load_builtin() -> None:
-    # Signal-model thresholds import scikit-learn-backed tables; load them on demand.
-    from mrcomm.net import signal_thresholds  # noqa: F401
+    return THRESHOLDS.get(name)
 
 
 @register_threshold("none")

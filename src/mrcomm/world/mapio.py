@@ -19,9 +19,6 @@ Image row 0 is the top of the map; the grid's row 0 is the bottom, so rows are f
 from __future__ import annotations
 
 import math
-import os
-import tempfile
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +27,7 @@ from numpy.typing import NDArray
 from PIL import Image, UnidentifiedImageError
 
 from mrcomm.errors import InputError, did_you_mean
+from mrcomm.fileio import commit, stage
 from mrcomm.world.occupancy import OccupancyGrid
 from mrcomm.world.yamlfile import read_yaml
 
@@ -168,24 +166,6 @@ def load_map(yaml_path: str | Path) -> OccupancyGrid:
     return OccupancyGrid(occupied, resolution, (float(origin[0]), float(origin[1])))
 
 
-def _atomic_write(target: Path, write: Callable[[Path], None]) -> Path:
-    """Write to a temporary file next to ``target``; returns the temporary path (the
-    caller renames it into place once everything is written)."""
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-    os.close(fd)
-    tmp = Path(tmp_name)
-    try:
-        write(tmp)
-        # mkstemp creates 0600 files; a map is ordinary data (keep an existing mode).
-        os.chmod(tmp, target.stat().st_mode & 0o777 if target.exists() else 0o644)
-        with open(tmp, "rb+") as handle:
-            os.fsync(handle.fileno())
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return tmp
-
-
 def save_map(
     grid: OccupancyGrid,
     yaml_path: str | Path,
@@ -227,15 +207,15 @@ def save_map(
     def write_yaml(tmp: Path) -> None:
         tmp.write_text(text, encoding="utf-8")
 
-    tmp_image = _atomic_write(image_file, write_image)
+    tmp_image = stage(image_file, write_image)
     try:
-        tmp_yaml = _atomic_write(yaml_file, write_yaml)
+        tmp_yaml = stage(yaml_file, write_yaml)
     except BaseException:
         tmp_image.unlink(missing_ok=True)
         raise
     # The image goes first so the YAML never points at a missing or partial image.
-    os.replace(tmp_image, image_file)
-    os.replace(tmp_yaml, yaml_file)
+    commit(tmp_image, image_file)
+    commit(tmp_yaml, yaml_file)
 
 
 __all__ = ["MAP_KEYS", "MODES", "load_map", "save_map"]

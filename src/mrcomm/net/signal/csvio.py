@@ -9,13 +9,12 @@ physical line number so errors can say exactly where a file is wrong. Writes are
 from __future__ import annotations
 
 import csv
-import os
-import tempfile
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from mrcomm.errors import InputError, did_you_mean
+from mrcomm.fileio import atomic_write
 
 
 @dataclass(frozen=True)
@@ -106,26 +105,5 @@ def write_csv(
             writer.writerow(columns)
             writer.writerows(rows)
 
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
     atomic_write(path, write)
-
-
-def atomic_write(path: str | Path, write: Callable[[Path], object]) -> None:
-    """Call ``write(tmp)`` on a temporary file next to ``path``, then rename it over
-    ``path``; on any error the temporary file is removed and ``path`` is untouched."""
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(
-        prefix=f".{target.stem}.", suffix=target.suffix or ".tmp", dir=target.parent
-    )
-    os.close(fd)
-    tmp = Path(name)
-    # mkstemp makes the file private (0600); give the result the usual permissions.
-    umask = os.umask(0)
-    os.umask(umask)
-    try:
-        os.chmod(tmp, 0o666 & ~umask)
-        write(tmp)
-        os.replace(tmp, target)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise

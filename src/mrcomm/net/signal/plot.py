@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from mrcomm.errors import InputError
+from mrcomm.fileio import atomic_write
 from mrcomm.net.signal.calibration import Calibration
-from mrcomm.net.signal.csvio import atomic_write
 from mrcomm.net.signal.svr import SignalModel
 from mrcomm.net.signal.table import RssiTable
 

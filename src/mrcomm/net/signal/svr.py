@@ -28,8 +28,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from mrcomm.errors import InputError, did_you_mean
+from mrcomm.fileio import atomic_write_text
 from mrcomm.net.signal.calibration import Calibration, load_calibration
-from mrcomm.net.signal.csvio import atomic_write
 
 FORMAT = "mrcomm-signal-model"
 VERSION = 1
@@ -173,9 +173,11 @@ def _library_versions() -> str:
 
 
 def save_model(model: SignalModel, path: str | Path) -> None:
-    """Write the model as JSON, atomically (nothing is half-written on error)."""
+    """Write the model as JSON, atomically (nothing is half-written on error), creating
+    its directory if needed."""
     text = json.dumps(model.to_json(), indent=1) + "\n"
-    atomic_write(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(path, text)
 
 
 def load_model(path: str | Path) -> SignalModel:

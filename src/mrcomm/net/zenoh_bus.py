@@ -1,0 +1,518 @@
+"""The Bus port over Eclipse Zenoh (live mode, DESIGN ``live``; issue 7 §1).
+
+:class:`ZenohNode` is one process's Zenoh *peer* session. It owns:
+
+* the key space ``mrcomm/<team>/<agent>/<topic>`` (each agent publishes under its own
+  id; subscribers use ``mrcomm/<team>/*/<topic>``);
+* three quality-of-service lanes. Task status and AON go reliable with *blocking*
+  congestion control on their own priority (interactive-high); other agent control
+  traffic (assignment, role assignment, base commands) reliable and blocking on
+  data-high; pose and the world's clock best effort on data priority, *dropping* under
+  congestion. Blocking puts run on one worker thread per blocking lane, so a blocked
+  status message never stalls pose traffic, control traffic or the agent itself;
+* an inbox: Zenoh calls back on its own threads, so every sample is decoded there and
+  queued; the owning process drains the queue on its one agent thread (AON and the
+  agents are single-threaded);
+* liveliness tokens ``mrcomm/<team>/<agent>/alive/<incarnation>`` for team discovery:
+  members appear and disappear as their sessions come and go.
+
+:class:`ZenohBus` applies the receiver-side perturbations exactly as the in-process
+bus does (``net.inprocess``), on the agent thread, and counts every decision:
+
+1. range (AH): the receiver's own position (from its base) against the sender's last
+   position, known from the pose messages seen on the wire — *all* of them, also those
+   the emulated network then cut, as a radio would still hear a robot come back into
+   range. A node without a position (virtual assigner) is always in range;
+2. simulated packet loss SPL X %, drawn from the receiver's own seeded stream.
+
+Each :class:`ZenohEndpoint` is one agent's endpoint (the Bus port); a process may host
+several (a robot and the task assigner it hosts).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import queue
+import struct
+import threading
+import time
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any
+
+import msgspec
+import numpy as np
+
+from mrcomm.errors import InputError
+from mrcomm.messaging.messages import (
+    LOSSY_TOPICS,
+    TOPIC_AON,
+    TOPIC_ASSIGNMENT,
+    TOPIC_POSE,
+    TOPIC_RSSI,
+    TOPIC_TASK_STATUS,
+    Message,
+    PoseMsg,
+    decode,
+    encode,
+)
+from mrcomm.net.inprocess import DeliveryObserver, TopicCounts
+from mrcomm.net.network import AH_RANGE_M, NetworkType
+from mrcomm.net.zenoh_config import ZenohOptions, build_config
+from mrcomm.ports import Handler
+
+Point = tuple[float, float]
+_STAMP = struct.Struct("<q")  # wall-clock send time (ns) carried as a Zenoh attachment
+
+
+class Lane(Enum):
+    """Quality of service of a publication."""
+
+    BEST_EFFORT = "best_effort"  # pose, clock: newest wins, dropped under congestion
+    STATUS = "status"  # task status, AON: reliable, blocking, own priority
+    CONTROL = "control"  # assignment, roles, base commands: reliable, blocking
+
+
+def lane_of(topic: str) -> Lane:
+    if topic in (TOPIC_POSE, TOPIC_RSSI):
+        return Lane.BEST_EFFORT
+    if topic in (TOPIC_TASK_STATUS, TOPIC_AON):
+        return Lane.STATUS
+    return Lane.CONTROL
+
+
+@dataclass(frozen=True, slots=True)
+class Incoming:
+    """One sample taken from Zenoh, decoded on the Zenoh thread."""
+
+    channel: str  # "bus", "presence" or a live-protocol channel name
+    key: str
+    value: Any
+    sent_wall: float | None  # sender's wall clock at put (s), when it sent one
+    recv_wall: float
+
+
+@dataclass(frozen=True, slots=True)
+class Presence:
+    """A liveliness token appeared (``alive``) or disappeared."""
+
+    agent: str
+    incarnation: int
+    alive: bool
+
+
+class _BlockingWorker:
+    """Runs blocking puts of one lane in order on its own thread."""
+
+    def __init__(self, name: str) -> None:
+        self._queue: queue.SimpleQueue[tuple[Any, bytes, bytes] | None] = queue.SimpleQueue()
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self._thread.start()
+
+    def submit(self, publisher: Any, data: bytes, attachment: bytes) -> None:
+        self._queue.put((publisher, data, attachment))
+
+    def _run(self) -> None:
+        import zenoh
+
+        while True:
+            item = self._queue.get()
+            if item is None:
+                return
+            publisher, data, attachment = item
+            with contextlib.suppress(zenoh.ZError):  # session closing: nobody to deliver to
+                publisher.put(data, attachment=attachment)
+
+    def stop(self, timeout: float) -> None:
+        self._queue.put(None)
+        self._thread.join(timeout)
+
+
+class ZenohNode:
+    """One process's peer session, its publishers, inbox and liveliness tokens."""
+
+    def __init__(self, options: ZenohOptions) -> None:
+        import zenoh
+
+        self.options = options
+        self.prefix = options.prefix()
+        config = build_config(options)
+        try:
+            self.session = zenoh.open(config)
+        except zenoh.ZError as err:
+            message = _open_error(err)
+            tls = options.tls is not None and ("TLS" in message or "cert" in message)
+            raise InputError(message, field="--tls-cert" if tls else "--listen") from None
+        self._zenoh = zenoh
+        self._inbox: queue.SimpleQueue[Incoming] = queue.SimpleQueue()
+        self._publishers: dict[tuple[str, Lane], Any] = {}
+        self._subscribers: list[Any] = []
+        self._tokens: dict[str, Any] = {}
+        self._workers = {
+            Lane.STATUS: _BlockingWorker("mrcomm-status"),
+            Lane.CONTROL: _BlockingWorker("mrcomm-control"),
+        }
+        self._closed = False
+
+    # -- keys ------------------------------------------------------------------------
+    def key(self, agent: str, topic: str) -> str:
+        return f"{self.prefix}/{agent}/{topic}"
+
+    def sender_of(self, key: str) -> str:
+        """The agent id in ``mrcomm/<team>/<agent>/...``."""
+        return key[len(self.prefix) + 1 :].split("/", 1)[0]
+
+    # -- publishing ------------------------------------------------------------------
+    def put(self, key: str, data: bytes, lane: Lane) -> None:
+        """Publish without ever blocking the caller (blocking lanes use a worker)."""
+        if self._closed:
+            return
+        publisher = self._publisher(key, lane)
+        attachment = _STAMP.pack(time.time_ns())
+        if lane is Lane.BEST_EFFORT:
+            with contextlib.suppress(self._zenoh.ZError):
+                publisher.put(data, attachment=attachment)
+        else:
+            self._workers[lane].submit(publisher, data, attachment)
+
+    def _publisher(self, key: str, lane: Lane) -> Any:
+        publisher = self._publishers.get((key, lane))
+        if publisher is None:
+            z = self._zenoh
+            if lane is Lane.BEST_EFFORT:
+                publisher = self.session.declare_publisher(
+                    key,
+                    congestion_control=z.CongestionControl.DROP,
+                    priority=z.Priority.DATA,
+                    # Reliable on the link (so only our injected loss loses a pose on
+                    # a healthy network), but never waits: congestion drops it.
+                    reliability=z.Reliability.RELIABLE,
+                    express=True,
+                )
+            else:
+                high = lane is Lane.STATUS
+                priority = z.Priority.INTERACTIVE_HIGH if high else z.Priority.DATA_HIGH
+                publisher = self.session.declare_publisher(
+                    key,
+                    congestion_control=z.CongestionControl.BLOCK,
+                    priority=priority,
+                    reliability=z.Reliability.RELIABLE,
+                )
+            self._publishers[(key, lane)] = publisher
+        return publisher
+
+    # -- receiving -------------------------------------------------------------------
+    def listen(self, key_expr: str, channel: str, decoder: Callable[[bytes], Any]) -> None:
+        """Queue every sample on ``key_expr``, decoded by ``decoder``; samples that do
+        not decode are dropped (and never reach the agent thread)."""
+        inbox = self._inbox
+
+        def on_sample(sample: Any) -> None:
+            recv = time.time()
+            try:
+                value = decoder(sample.payload.to_bytes())
+            except (msgspec.DecodeError, msgspec.ValidationError, ValueError):
+                return
+            sent: float | None = None
+            attachment = sample.attachment
+            if attachment is not None:
+                raw = attachment.to_bytes()
+                if len(raw) == _STAMP.size:
+                    sent = _STAMP.unpack(raw)[0] / 1e9
+            inbox.put(Incoming(channel, str(sample.key_expr), value, sent, recv))
+
+        self._subscribers.append(self.session.declare_subscriber(key_expr, on_sample))
+
+    def poll(self, timeout: float | None) -> Incoming | None:
+        """Next queued sample, waiting at most ``timeout`` seconds (None: no wait)."""
+        try:
+            if timeout is None:
+                return self._inbox.get_nowait()
+            return self._inbox.get(timeout=max(timeout, 0.0))
+        except queue.Empty:
+            return None
+
+    # -- liveliness --------------------------------------------------------------------
+    def alive_key(self, agent: str, incarnation: int) -> str:
+        return f"{self.prefix}/{agent}/alive/{incarnation}"
+
+    def declare_alive(self, agent: str, incarnation: int) -> None:
+        key = self.alive_key(agent, incarnation)
+        self._tokens[key] = self.session.liveliness().declare_token(key)
+
+    def watch_presence(self) -> None:
+        """Queue a :class:`Presence` whenever a team member appears or disappears
+        (including those already present when the watch starts)."""
+        inbox = self._inbox
+        z = self._zenoh
+
+        def on_token(sample: Any) -> None:
+            parsed = self._parse_alive(str(sample.key_expr))
+            if parsed is None:
+                return
+            alive = sample.kind == z.SampleKind.PUT
+            inbox.put(
+                Incoming(
+                    "presence",
+                    str(sample.key_expr),
+                    Presence(parsed[0], parsed[1], alive),
+                    None,
+                    time.time(),
+                )
+            )
+
+        self._subscribers.append(
+            self.session.liveliness().declare_subscriber(
+                f"{self.prefix}/*/alive/*", on_token, history=True
+            )
+        )
+
+    def present(self, agent: str, timeout: float = 1.0) -> list[int]:
+        """Incarnations of ``agent`` whose tokens are alive now (a liveliness query)."""
+        found: list[int] = []
+        replies = self.session.liveliness().get(f"{self.prefix}/{agent}/alive/*", timeout=timeout)
+        for reply in replies:
+            ok = reply.ok
+            if ok is None:
+                continue
+            parsed = self._parse_alive(str(ok.key_expr))
+            if parsed is not None:
+                found.append(parsed[1])
+        return found
+
+    def _parse_alive(self, key: str) -> tuple[str, int] | None:
+        parts = key[len(self.prefix) + 1 :].split("/")
+        if len(parts) != 3 or parts[1] != "alive":
+            return None
+        try:
+            return parts[0], int(parts[2])
+        except ValueError:
+            return None
+
+    def peers(self) -> int:
+        """Number of peers this session is connected to right now."""
+        return len(list(self.session.info.peers_zid()))
+
+    def close(self) -> None:
+        """Flush the blocking lanes (briefly) and close the session."""
+        if self._closed:
+            return
+        self._closed = True
+        for worker in self._workers.values():
+            worker.stop(timeout=2.0)
+        with contextlib.suppress(self._zenoh.ZError):
+            self.session.close()
+
+
+def _open_error(err: BaseException) -> str:
+    text = str(err).strip().splitlines()
+    first = text[0] if text else type(err).__name__
+    # Zenoh appends source locations after " at "; the cause is what matters.
+    return "cannot open the Zenoh session: " + first.split(" at /", 1)[0]
+
+
+# ----------------------------------------------------------------------------- the bus
+
+
+@dataclass(frozen=True)
+class LinkRules:
+    """The receiver-side network model of a run (as in simulation)."""
+
+    network: NetworkType = NetworkType.WLAN
+    loss_percent: float = 0.0
+    ah_range: float = AH_RANGE_M
+    lossy_topics: frozenset[str] = LOSSY_TOPICS
+    exempt_topics: frozenset[str] = frozenset({TOPIC_ASSIGNMENT})
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.loss_percent <= 100.0:
+            raise ValueError("loss_percent must be within 0-100")
+
+
+@dataclass
+class PositionBook:
+    """Where every agent is believed to be, for the range cut.
+
+    ``aliases`` maps an agent to the robot whose position it shares (an assigner
+    hosted on a robot); ``fixed`` holds fixed positions (a base-station assigner);
+    ``own`` gives the live pose of agents hosted in this process (from their base);
+    everything else comes from the last pose message heard from it. ``None`` means
+    no position (virtual, or never heard): always in range.
+    """
+
+    aliases: dict[str, str] = field(default_factory=dict)
+    fixed: dict[str, Point] = field(default_factory=dict)
+    own: dict[str, Callable[[], Point]] = field(default_factory=dict)
+    heard: dict[str, Point] = field(default_factory=dict)
+
+    def position(self, agent: str) -> Point | None:
+        agent = self.aliases.get(agent, agent)
+        fixed = self.fixed.get(agent)
+        if fixed is not None:
+            return fixed
+        own = self.own.get(agent)
+        if own is not None:
+            return own()
+        return self.heard.get(agent)
+
+
+class _LossStream:
+    """A receiver's uniform draws, one per lossy message, in batches."""
+
+    def __init__(self, rng: np.random.Generator) -> None:
+        self._rng = rng
+        self._buffer: list[float] = []
+        self._next = 0
+
+    def draw(self) -> float:
+        if self._next >= len(self._buffer):
+            self._buffer = self._rng.random(1024).tolist()
+            self._next = 0
+        value = self._buffer[self._next]
+        self._next += 1
+        return value
+
+
+class ZenohEndpoint:
+    """One agent's endpoint on the Zenoh bus (implements the Bus port)."""
+
+    def __init__(self, bus: ZenohBus, owner: str, rng: np.random.Generator) -> None:
+        self._bus = bus
+        self._owner = owner
+        self._loss = _LossStream(rng)
+        self._handlers: dict[str, list[Handler]] = {}
+        self.counts: dict[str, TopicCounts] = {}
+        #: Hook between perturbation and handlers: return the message to deliver (or a
+        #: replacement), or None to hold it back (used to resynchronise a restart).
+        self.gate: Callable[[str, Message], Message | None] | None = None
+
+    @property
+    def owner(self) -> str:
+        return self._owner
+
+    def publish(self, topic: str, message: Message) -> None:
+        self._count(topic).sent += 1
+        node = self._bus.node
+        node.put(node.key(self._owner, topic), encode(message), lane_of(topic))
+
+    def subscribe(self, topic: str, handler: Handler) -> None:
+        self._handlers.setdefault(topic, []).append(handler)
+        self._bus._want(topic)
+
+    def inject(self, topic: str, message: Message) -> None:
+        """Hand a message to this agent's handlers directly (not counted as traffic)."""
+        for handler in self._handlers.get(topic, ()):
+            handler(message)
+
+    def _receive(self, topic: str, sender: str, message: Message) -> None:
+        handlers = self._handlers.get(topic)
+        if not handlers or sender == self._owner:
+            return
+        outcome = self._bus._decide(self, topic, sender)
+        counts = self._count(topic)
+        if outcome == "received":
+            counts.received += 1
+        elif outcome == "dropped_loss":
+            counts.dropped_loss += 1
+        else:
+            counts.dropped_range += 1
+        observer = self._bus.observer
+        if observer is not None:
+            observer(self._bus.now, topic, sender, self._owner, message, outcome)
+        if outcome != "received":
+            return
+        if self.gate is not None:
+            gated = self.gate(topic, message)
+            if gated is None:
+                return
+            message = gated
+        for handler in handlers:
+            handler(message)
+
+    def _count(self, topic: str) -> TopicCounts:
+        counts = self.counts.get(topic)
+        if counts is None:
+            counts = self.counts[topic] = TopicCounts()
+        return counts
+
+    def counts_dict(self) -> dict[str, dict[str, int]]:
+        return {topic: c.as_dict() for topic, c in sorted(self.counts.items())}
+
+
+class ZenohBus:
+    """The agents of one process on the team's Zenoh network, with the receiver-side
+    network model. Drive it from the agent thread: feed every :class:`Incoming` of
+    channel ``"bus"`` to :meth:`handle`."""
+
+    def __init__(self, node: ZenohNode, rules: LinkRules, positions: PositionBook) -> None:
+        self.node = node
+        self.rules = rules
+        self.positions = positions
+        self.endpoints: dict[str, ZenohEndpoint] = {}
+        self._topics: set[str] = set()
+        self.observer: DeliveryObserver | None = None
+        self.now = 0.0
+        #: Transport latency (s) of every pose sample that reached this process.
+        self.pose_latency: list[float] = []
+
+    def endpoint(self, owner: str, rng: np.random.Generator) -> ZenohEndpoint:
+        if owner in self.endpoints:
+            raise ValueError(f"agent {owner!r} already has an endpoint here")
+        endpoint = ZenohEndpoint(self, owner, rng)
+        self.endpoints[owner] = endpoint
+        return endpoint
+
+    def handle(self, item: Incoming) -> None:
+        """Deliver one sample to every local endpoint subscribed to its topic."""
+        key = item.key
+        topic = key.rsplit("/", 1)[-1]
+        sender = self.node.sender_of(key)
+        message = item.value
+        if isinstance(message, PoseMsg):
+            if sender not in self.positions.own:
+                self.positions.heard[sender] = (message.x, message.y)
+            if item.sent_wall is not None:
+                self.pose_latency.append(item.recv_wall - item.sent_wall)
+        for endpoint in self.endpoints.values():
+            endpoint._receive(topic, sender, message)
+
+    def _want(self, topic: str) -> None:
+        if topic not in self._topics:
+            self._topics.add(topic)
+            self.node.listen(f"{self.node.prefix}/*/{topic}", "bus", decode)
+
+    def _decide(self, receiver: ZenohEndpoint, topic: str, sender: str) -> str:
+        rules = self.rules
+        if topic in rules.exempt_topics:
+            return "received"
+        if rules.network is NetworkType.AH and not self._in_range(sender, receiver.owner):
+            return "dropped_range"
+        lossy = rules.loss_percent > 0.0 and topic in rules.lossy_topics
+        if lossy and receiver._loss.draw() < rules.loss_percent / 100.0:
+            return "dropped_loss"
+        return "received"
+
+    def _in_range(self, sender: str, receiver: str) -> bool:
+        a = self.positions.position(sender)
+        b = self.positions.position(receiver)
+        if a is None or b is None:
+            return True
+        return math.hypot(a[0] - b[0], a[1] - b[1]) <= self.rules.ah_range
+
+    def counts_by_agent(self) -> dict[str, dict[str, dict[str, int]]]:
+        return {owner: ep.counts_dict() for owner, ep in self.endpoints.items()}
+
+
+def sum_counts(per_agent: Iterable[Mapping[str, Mapping[str, int]]]) -> dict[str, dict[str, int]]:
+    """Totals per topic over several agents' counts."""
+    totals: dict[str, dict[str, int]] = {}
+    for counts in per_agent:
+        for topic, c in counts.items():
+            t = totals.setdefault(
+                topic, {"sent": 0, "received": 0, "dropped_loss": 0, "dropped_range": 0}
+            )
+            for k in t:
+                t[k] += int(c.get(k, 0))
+    return dict(sorted(totals.items()))
