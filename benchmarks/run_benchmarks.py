@@ -29,6 +29,8 @@ CASES: dict[str, dict[str, object]] = {
     "S1-AH-SPL50-NB-SLT": {"network": "ah", "spl": 50, "behaviour": "nb", "threshold": "slt"},
     "S1-AH-SPL0-NB-SSD": {"network": "ah", "spl": 0, "behaviour": "nb", "threshold": "ssd"},
     "S1-AH-SPL50-NB-SSD": {"network": "ah", "spl": 50, "behaviour": "nb", "threshold": "ssd"},
+    "S1-AH-SPL50-LF-SLT": {"network": "ah", "spl": 50, "behaviour": "lf", "threshold": "slt"},
+    "S1-AH-SPL50-LF-SSD": {"network": "ah", "spl": 50, "behaviour": "lf", "threshold": "ssd"},
 }
 
 
@@ -49,21 +51,30 @@ def main() -> None:
     print()
     print("| case | sim s (median) | wall s (median) | real-time factor (median) | min..max |")
     print("|---|---|---|---|---|")
-    for name, options in CASES.items():
-        if args.only and name not in args.only:
-            continue
-        factors, walls, sims = [], [], []
-        for seed in range(1, args.repeats + 1):
-            config = make_config(None, scenario=S1, seed=seed, **options)
+    cases = {n: o for n, o in CASES.items() if not args.only or n in args.only}
+    factors: dict[str, list[float]] = {n: [] for n in cases}
+    walls: dict[str, list[float]] = {n: [] for n in cases}
+    sims: dict[str, list[float]] = {n: [] for n in cases}
+    # Interleaved: repeat k runs every case once (seed k), so background load falls on
+    # all cases alike and their ratios stay meaningful.
+    for seed in range(1, args.repeats + 1):
+        for name, options in cases.items():
+            config = make_config(None, scenario=S1, seed=seed, **options)  # type: ignore[arg-type]
             result = run_mission(config, world)
-            factors.append(result.sim_time_s / result.wall_time_s)
-            walls.append(result.wall_time_s)
-            sims.append(result.sim_time_s)
+            factors[name].append(result.sim_time_s / result.wall_time_s)
+            walls[name].append(result.wall_time_s)
+            sims[name].append(result.sim_time_s)
+    for name in cases:
         print(
-            f"| {name} | {statistics.median(sims):.1f} | {statistics.median(walls):.3f} | "
-            f"**{statistics.median(factors):.0f}x** | {min(factors):.0f}..{max(factors):.0f} |",
+            f"| {name} | {statistics.median(sims[name]):.1f} | "
+            f"{statistics.median(walls[name]):.3f} | **{statistics.median(factors[name]):.0f}x** | "
+            f"{min(factors[name]):.0f}..{max(factors[name]):.0f} |",
             flush=True,
         )
+    if "S1-AH-SPL0-NB" in cases and "S1-AH-SPL0-NB-SSD" in cases:
+        base = statistics.median(factors["S1-AH-SPL0-NB"])
+        ssd = statistics.median(factors["S1-AH-SPL0-NB-SSD"])
+        print(f"\nSSD costs {100 * (1 - ssd / base):.1f} % of the no-threshold real-time factor")
 
 
 if __name__ == "__main__":

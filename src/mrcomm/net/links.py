@@ -4,10 +4,18 @@ For each pair: distance, line of sight (ray cast on the map, only when the thres
 needs it), RSSI (from the active threshold's signal model, where it has one),
 ``warning`` (threshold crossed) and ``connected`` (within the network type's limit).
 A node without a position (a virtual assigner) is always connected and never warns.
+
+Distance, RSSI, warning and connection are evaluated for every pair at every step.
+Line of sight — which of the two signal models applies — only changes when a robot
+passes the edge of a wall, so a pair's ray is cast again only once one of its ends has
+moved ``los_refresh`` (0.25 m) since the last cast, never while both stand still; the
+RSSI of a pair crossing a door frame switches model within that distance.
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -16,7 +24,7 @@ from numpy.typing import NDArray
 
 from mrcomm.net.network import AH_RANGE_M, NetworkType
 from mrcomm.net.thresholds import BoolArray, FloatArray, Threshold
-from mrcomm.world.occupancy import LineOfSightCache, OccupancyGrid
+from mrcomm.world.occupancy import OccupancyGrid
 
 
 @dataclass(frozen=True)
@@ -43,20 +51,38 @@ class LinkModel:
         threshold: Threshold,
         *,
         ah_range: float = AH_RANGE_M,
+        los_refresh: float = 0.25,
+        aliases: Mapping[str, str] | None = None,
     ) -> None:
+        """``aliases``: node -> node whose position it always shares (a task assigner
+        hosted on a robot). Links are evaluated between distinct positions only and
+        the alias copies its host's row and column; the threshold sees
+        :attr:`evaluated_ids`."""
         self.ids = ids
+        self.los_refresh = los_refresh
         self.grid = grid
         self.network = network
         self.threshold = threshold
         self.ah_range = ah_range
-        n = len(ids)
+        aliases = dict(aliases or {})
+        self.evaluated_ids = tuple(node for node in ids if node not in aliases)
+        self._evaluated = np.array([ids.index(node) for node in self.evaluated_ids])
+        expand = [self.evaluated_ids.index(aliases.get(node, node)) for node in ids]
+        self._expand = np.ix_(expand, expand) if aliases else None
+        n = len(self.evaluated_ids)
         iu = np.triu_indices(n, k=1)
         self._pairs_i, self._pairs_j = iu
         self._eye = np.eye(n, dtype=np.bool_)
-        self.sight = LineOfSightCache(grid)
+        self._pairs = list(zip(self._pairs_i.tolist(), self._pairs_j.tolist(), strict=True))
+        # Per pair: its ends at the last ray cast, and what that cast found.
+        self._cast_from: list[tuple[float, float, float, float] | None] = [None] * len(self._pairs)
+        self._cast_value = [True] * len(self._pairs)
+        self.casts = 0
 
     def update(self, positions: NDArray[np.float64], now: float) -> LinkState:
         """``positions``: (n, 2), NaN rows for nodes without a position."""
+        if self._expand is not None:
+            positions = positions[self._evaluated]
         diff = positions[:, None, :] - positions[None, :, :]
         distance = np.sqrt((diff**2).sum(axis=2))
         line_of_sight: BoolArray | None = None
@@ -64,31 +90,48 @@ class LinkModel:
             line_of_sight = self._line_of_sight(positions, distance)
         rssi, warning = self.threshold.evaluate(distance, line_of_sight, now)
         if self.network is NetworkType.AH:
-            with np.errstate(invalid="ignore"):
-                connected = ~(distance > self.ah_range)  # NaN (virtual) stays connected
+            connected = ~(distance > self.ah_range)  # NaN (virtual) stays connected
         else:
             connected = np.ones(distance.shape, dtype=np.bool_)
         warning = warning & ~self._eye
+        if self._expand is not None:
+            e = self._expand
+            distance, warning, connected = distance[e], warning[e], connected[e]
+            line_of_sight = None if line_of_sight is None else line_of_sight[e]
+            rssi = None if rssi is None else rssi[e]
         return LinkState(self.ids, distance, line_of_sight, rssi, warning, connected)
 
     def _line_of_sight(self, positions: FloatArray, distance: FloatArray) -> BoolArray:
         # Only pairs within the network's reach matter for signal (beyond the AH limit
-        # nothing is delivered anyway), which keeps the ray casts short.
-        n = len(self.ids)
-        los = np.ones((n, n), dtype=np.bool_)
-        i, j = self._pairs_i, self._pairs_j
-        d = distance[i, j]
-        reach = self.ah_range if self.network is NetworkType.AH else np.inf
-        cast = np.isfinite(d) & (d > 0.0) & (d <= reach)
-        if cast.any():
-            ci, cj = i[cast], j[cast]
-            visible = self.sight.line_of_sight_many(positions[ci], positions[cj])
-            los[ci, cj] = visible
-            los[cj, ci] = visible
-        far = np.isfinite(d) & (d > reach)
-        los[i[far], j[far]] = False
-        los[j[far], i[far]] = False
-        return los
+        # nothing is delivered anyway). Plain Python: a team has a handful of pairs, and
+        # for those it is cheaper than a chain of small numpy operations.
+        n = len(positions)
+        los = [[True] * n for _ in range(n)]
+        reach = self.ah_range if self.network is NetworkType.AH else math.inf
+        xy = positions.tolist()
+        d = distance.tolist()
+        refresh = self.los_refresh
+        done: dict[tuple[float, float, float, float], bool] = {}  # hosted assigner = host
+        for k, (a, b) in enumerate(self._pairs):
+            dist = d[a][b]
+            if not (0.0 < dist <= reach):  # also False for NaN (virtual node)
+                if dist > reach:
+                    los[a][b] = los[b][a] = False
+                continue
+            ends = (xy[a][0], xy[a][1], xy[b][0], xy[b][1])
+            last = self._cast_from[k]
+            if (
+                last is None
+                or math.hypot(ends[0] - last[0], ends[1] - last[1]) >= refresh
+                or math.hypot(ends[2] - last[2], ends[3] - last[3]) >= refresh
+            ):
+                if ends not in done:
+                    done[ends] = self.grid.line_of_sight(*ends)
+                    self.casts += 1
+                self._cast_value[k] = done[ends]
+                self._cast_from[k] = ends
+            los[a][b] = los[b][a] = self._cast_value[k]
+        return np.array(los, dtype=np.bool_)
 
 
 class LinkRecorder:

@@ -12,6 +12,7 @@ registry of :mod:`mrcomm.net.thresholds`.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -33,16 +34,31 @@ class ModelThreshold(Threshold):
     def __init__(self, table: RssiTable, warning_dbm: float = -42.0) -> None:
         self.table = table
         self.warning_dbm = warning_dbm
+        # Beyond these distances the curves are flat (saturated): no lookup needed.
+        self._flat = {los: (table.flat_from(los), table.rssi_at(1e9, los)) for los in (False, True)}
 
     def evaluate(
         self, distance: FloatArray, line_of_sight: BoolArray | None, now: float
     ) -> tuple[FloatArray | None, BoolArray]:
         assert line_of_sight is not None
-        finite = np.isfinite(distance)
-        rssi = self.table.rssi(np.where(finite, distance, 0.0), line_of_sight)
-        rssi = np.where(finite, rssi, np.nan)
-        with np.errstate(invalid="ignore"):
-            return rssi, rssi < self.warning_dbm  # NaN (virtual node) never warns
+        # Plain Python over the pairs (RSSI is symmetric: same distance, same model):
+        # a team has a handful of pairs, too few for numpy to pay off.
+        n = len(distance)
+        d = distance.tolist()
+        visible = line_of_sight.tolist()
+        rssi_at = self.table.rssi_at
+        flat = self._flat
+        rows = [[math.nan] * n for _ in range(n)]
+        for a in range(n):
+            for b in range(a + 1, n):
+                dist = d[a][b]
+                if dist != dist:
+                    continue  # NaN: a virtual node has no RSSI
+                sight = visible[a][b]
+                start, value = flat[sight]
+                rows[a][b] = rows[b][a] = value if dist >= start else rssi_at(dist, sight)
+        rssi = np.array(rows)
+        return rssi, rssi < self.warning_dbm  # NaN never warns
 
     def describe(self) -> dict[str, Any]:
         return {"threshold": self.name, "warning_dbm": self.warning_dbm}
@@ -64,8 +80,7 @@ class MeasuredThreshold(Threshold):
             rssi = np.full((len(self.ids), len(self.ids)), np.nan)  # recording ended
         else:
             rssi = self.trace.matrix_at(now, self.ids)
-        with np.errstate(invalid="ignore"):
-            return rssi, rssi < self.warning_dbm
+        return rssi, rssi < self.warning_dbm
 
     def describe(self) -> dict[str, Any]:
         return {"threshold": self.name, "warning_dbm": self.warning_dbm}

@@ -89,8 +89,7 @@ class DistanceThreshold(Threshold):
     def evaluate(
         self, distance: FloatArray, line_of_sight: BoolArray | None, now: float
     ) -> tuple[FloatArray | None, BoolArray]:
-        with np.errstate(invalid="ignore"):
-            return None, distance > self.warning_m  # NaN (virtual node) never warns
+        return None, distance > self.warning_m  # NaN (virtual node) never warns
 
     def describe(self) -> dict[str, Any]:
         return {"threshold": self.name, "warning_m": self.warning_m}

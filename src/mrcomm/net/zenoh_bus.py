@@ -196,7 +196,7 @@ class ZenohNode:
                 priority = z.Priority.INTERACTIVE_HIGH if high else z.Priority.DATA_HIGH
                 publisher = self.session.declare_publisher(
                     key,
-                    congestion_control=z.CongestionControl.BLOCK,
+                    congestion_control=z.CongestionControl.DROP,
                     priority=priority,
                     reliability=z.Reliability.RELIABLE,
                 )

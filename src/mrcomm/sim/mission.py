@@ -90,14 +90,18 @@ class Mission:
             loss_percent=config.spl,
             loss_rngs={a: stream(seed, "loss", a) for a in self.node_ids},
         )
+        host = scenario.assigner.host
+        # A hosted assigner shares its robot's position: links are evaluated once.
+        aliases = {ASSIGNER_ID: host} if host else {}
+        evaluated = tuple(n for n in self.node_ids if n not in aliases)
         self.links = LinkModel(
             self.node_ids,
             scenario.grid,
             config.network,
-            build_threshold(config, self.world, self.node_ids),
+            build_threshold(config, self.world, evaluated),
             ah_range=config.ah_range,
+            aliases=aliases,
         )
-        host = scenario.assigner.host
         skip = {(ASSIGNER_ID, host), (host, ASSIGNER_ID)} if host else set()
         self.link_recorder = LinkRecorder(self.node_ids, skip)
         self.bases = {
@@ -228,18 +232,13 @@ class Mission:
     def _sample_rssi(self, now: float, links: LinkState) -> None:
         assert links.rssi is not None
         n = len(self.robot_ids)
+        rows = links.rssi[:n, :n].tolist()
+        ids = self.robot_ids
         for i in range(n):
             for j in range(n):
-                value = links.rssi[i, j]
-                if i != j and math.isfinite(value):
-                    self.rssi_series.append(
-                        (
-                            round(now, 3),
-                            self.robot_ids[i],
-                            self.robot_ids[j],
-                            round(float(value), 3),
-                        )
-                    )
+                value = rows[i][j]
+                if i != j and value == value:  # NaN: no RSSI for this pair
+                    self.rssi_series.append((now, ids[i], ids[j], value))
 
     def _sample_trajectories(self, now: float) -> None:
         for rid, base in self.bases.items():
@@ -294,7 +293,7 @@ class Mission:
             timelines=self.timelines,
             trajectories=self.trajectories,
             scenario=self.world.scenario,
-            rssi_series=self.rssi_series,
+            rssi_series=[(round(t, 3), a, b, round(v, 3)) for t, a, b, v in self.rssi_series],
         )
 
     def _aon_summary(self) -> dict[str, Any]:

@@ -97,6 +97,15 @@ class RssiTable:
         low = row[i]
         return low + (row[i + 1] - low) * (x - i)
 
+    def flat_from(self, line_of_sight: bool) -> float:
+        """Distance (m) from which the curve is constant to the end of the table (the
+        model's saturation beyond its trained range)."""
+        row = self._rows[1 if line_of_sight else 0]
+        k = len(row) - 1
+        while k > 0 and row[k - 1] == row[-1]:
+            k -= 1
+        return k * self.resolution
+
     def crossings(self, threshold: float | None = None) -> dict[str, list[tuple[float, Direction]]]:
         """Where each class's RSSI crosses ``threshold`` (default: the model's) as the
         distance grows: ``(distance, "below")`` when it falls below the threshold there,
