@@ -7,9 +7,11 @@ A node without a position (a virtual assigner) is always connected and never war
 
 Distance, RSSI, warning and connection are evaluated for every pair at every step.
 Line of sight — which of the two signal models applies — only changes when a robot
-passes the edge of a wall, so a pair's ray is cast again only once one of its ends has
-moved ``los_refresh`` (0.25 m) since the last cast, never while both stand still; the
-RSSI of a pair crossing a door frame switches model within that distance.
+passes the edge of a wall, so a pair's ray is cast again only when it may have changed:
+an unobstructed ray whose clearance to the nearest wall is c stays unobstructed while
+each end moves less than c (exact); an obstructed ray is cast again once an end has
+moved ``los_refresh`` (0.25 m), so a pair coming into sight through a door switches
+model within that distance. Nothing is cast while both ends stand still.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mrcomm.net.network import AH_RANGE_M, NetworkType
-from mrcomm.net.thresholds import BoolArray, FloatArray, Threshold
+from mrcomm.net.thresholds import BoolArray, FloatArray, PairGeometry, Threshold
 from mrcomm.world.occupancy import OccupancyGrid
 
 
@@ -74,9 +76,11 @@ class LinkModel:
         self._pairs_i, self._pairs_j = iu
         self._eye = np.eye(n, dtype=np.bool_)
         self._pairs = list(zip(self._pairs_i.tolist(), self._pairs_j.tolist(), strict=True))
-        # Per pair: its ends at the last ray cast, and what that cast found.
+        # Per pair: its ends at the last ray cast, what that cast found, and how far an
+        # end may move before the answer may change.
         self._cast_from: list[tuple[float, float, float, float] | None] = [None] * len(self._pairs)
         self._cast_value = [True] * len(self._pairs)
+        self._cast_slack = [0.0] * len(self._pairs)
         self.casts = 0
 
     def update(self, positions: NDArray[np.float64], now: float) -> LinkState:
@@ -87,8 +91,13 @@ class LinkModel:
         distance = np.sqrt((diff**2).sum(axis=2))
         line_of_sight: BoolArray | None = None
         if self.threshold.needs_line_of_sight:
-            line_of_sight = self._line_of_sight(positions, distance)
-        rssi, warning = self.threshold.evaluate(distance, line_of_sight, now)
+            rows = distance.tolist()
+            sight = self._line_of_sight(positions.tolist(), rows)
+            pairs = PairGeometry(distance, rows, sight)
+            line_of_sight = np.array(sight, dtype=np.bool_)
+        else:
+            pairs = PairGeometry(distance)
+        rssi, warning = self.threshold.evaluate(pairs, now)
         if self.network is NetworkType.AH:
             connected = ~(distance > self.ah_range)  # NaN (virtual) stays connected
         else:
@@ -101,17 +110,15 @@ class LinkModel:
             rssi = None if rssi is None else rssi[e]
         return LinkState(self.ids, distance, line_of_sight, rssi, warning, connected)
 
-    def _line_of_sight(self, positions: FloatArray, distance: FloatArray) -> BoolArray:
+    def _line_of_sight(self, xy: list[list[float]], d: list[list[float]]) -> list[list[bool]]:
         # Only pairs within the network's reach matter for signal (beyond the AH limit
         # nothing is delivered anyway). Plain Python: a team has a handful of pairs, and
         # for those it is cheaper than a chain of small numpy operations.
-        n = len(positions)
+        n = len(xy)
         los = [[True] * n for _ in range(n)]
         reach = self.ah_range if self.network is NetworkType.AH else math.inf
-        xy = positions.tolist()
-        d = distance.tolist()
         refresh = self.los_refresh
-        done: dict[tuple[float, float, float, float], bool] = {}  # hosted assigner = host
+        done: dict[tuple[float, float, float, float], float] = {}
         for k, (a, b) in enumerate(self._pairs):
             dist = d[a][b]
             if not (0.0 < dist <= reach):  # also False for NaN (virtual node)
@@ -120,18 +127,21 @@ class LinkModel:
                 continue
             ends = (xy[a][0], xy[a][1], xy[b][0], xy[b][1])
             last = self._cast_from[k]
+            slack = self._cast_slack[k]
             if (
                 last is None
-                or math.hypot(ends[0] - last[0], ends[1] - last[1]) >= refresh
-                or math.hypot(ends[2] - last[2], ends[3] - last[3]) >= refresh
+                or math.hypot(ends[0] - last[0], ends[1] - last[1]) >= slack
+                or math.hypot(ends[2] - last[2], ends[3] - last[3]) >= slack
             ):
                 if ends not in done:
-                    done[ends] = self.grid.line_of_sight(*ends)
+                    done[ends] = self.grid.ray_clearance(*ends)
                     self.casts += 1
-                self._cast_value[k] = done[ends]
+                clearance = done[ends]
+                self._cast_value[k] = clearance >= 0.0
+                self._cast_slack[k] = clearance if clearance >= 0.0 else refresh
                 self._cast_from[k] = ends
             los[a][b] = los[b][a] = self._cast_value[k]
-        return np.array(los, dtype=np.bool_)
+        return los
 
 
 class LinkRecorder:

@@ -21,7 +21,13 @@ import numpy as np
 from mrcomm.net.link_sensors import STALE_AFTER_S
 from mrcomm.net.signal.table import RssiTable
 from mrcomm.net.signal.trace import RssiTrace
-from mrcomm.net.thresholds import BoolArray, FloatArray, Threshold, register_threshold
+from mrcomm.net.thresholds import (
+    BoolArray,
+    FloatArray,
+    PairGeometry,
+    Threshold,
+    register_threshold,
+)
 
 
 @register_threshold("ssd")
@@ -37,15 +43,13 @@ class ModelThreshold(Threshold):
         # Beyond these distances the curves are flat (saturated): no lookup needed.
         self._flat = {los: (table.flat_from(los), table.rssi_at(1e9, los)) for los in (False, True)}
 
-    def evaluate(
-        self, distance: FloatArray, line_of_sight: BoolArray | None, now: float
-    ) -> tuple[FloatArray | None, BoolArray]:
-        assert line_of_sight is not None
+    def evaluate(self, pairs: PairGeometry, now: float) -> tuple[FloatArray | None, BoolArray]:
+        assert pairs.distance_rows is not None and pairs.sight_rows is not None
         # Plain Python over the pairs (RSSI is symmetric: same distance, same model):
         # a team has a handful of pairs, too few for numpy to pay off.
-        n = len(distance)
-        d = distance.tolist()
-        visible = line_of_sight.tolist()
+        d = pairs.distance_rows
+        visible = pairs.sight_rows
+        n = len(d)
         rssi_at = self.table.rssi_at
         flat = self._flat
         rows = [[math.nan] * n for _ in range(n)]
@@ -73,9 +77,7 @@ class MeasuredThreshold(Threshold):
         self.ids = tuple(ids)
         self.warning_dbm = warning_dbm
 
-    def evaluate(
-        self, distance: FloatArray, line_of_sight: BoolArray | None, now: float
-    ) -> tuple[FloatArray | None, BoolArray]:
+    def evaluate(self, pairs: PairGeometry, now: float) -> tuple[FloatArray | None, BoolArray]:
         if now > self.trace.t1 + STALE_AFTER_S:
             rssi = np.full((len(self.ids), len(self.ids)), np.nan)  # recording ended
         else:

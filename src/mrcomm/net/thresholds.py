@@ -14,6 +14,7 @@ Built in: ``none``, ``slt`` (distance stands in for signal strength); ``ssd`` an
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
@@ -25,6 +26,18 @@ FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 
+@dataclass(frozen=True)
+class PairGeometry:
+    """The geometry of every pair at one step, in the forms thresholds use: the
+    distance matrix (NaN for a node without a position), and — for thresholds that need
+    line of sight — the same distances and the line-of-sight flags as nested lists
+    (cheaper than numpy for a team's handful of pairs)."""
+
+    distance: FloatArray
+    distance_rows: list[list[float]] | None = None
+    sight_rows: list[list[bool]] | None = None
+
+
 class Threshold:
     """Base class: evaluates RSSI and warnings for all pairs at once."""
 
@@ -34,10 +47,8 @@ class Threshold:
     #: Network types this threshold may be combined with (None: any).
     network_types: ClassVar[frozenset[str] | None] = None
 
-    def evaluate(
-        self, distance: FloatArray, line_of_sight: BoolArray | None, now: float
-    ) -> tuple[FloatArray | None, BoolArray]:
-        """Return (rssi or None, warning) for the (n, n) distance matrix."""
+    def evaluate(self, pairs: PairGeometry, now: float) -> tuple[FloatArray | None, BoolArray]:
+        """Return (rssi or None, warning), both (n, n), for the pairs' geometry."""
         raise NotImplementedError
 
     def describe(self) -> dict[str, Any]:
@@ -72,10 +83,8 @@ def threshold_class(name: str) -> type[Threshold]:
 class NoThreshold(Threshold):
     """No threshold: links never warn."""
 
-    def evaluate(
-        self, distance: FloatArray, line_of_sight: BoolArray | None, now: float
-    ) -> tuple[FloatArray | None, BoolArray]:
-        return None, np.zeros(distance.shape, dtype=np.bool_)
+    def evaluate(self, pairs: PairGeometry, now: float) -> tuple[FloatArray | None, BoolArray]:
+        return None, np.zeros(pairs.distance.shape, dtype=np.bool_)
 
 
 @register_threshold("slt")
@@ -86,10 +95,8 @@ class DistanceThreshold(Threshold):
     def __init__(self, warning_m: float = 4.0) -> None:
         self.warning_m = warning_m
 
-    def evaluate(
-        self, distance: FloatArray, line_of_sight: BoolArray | None, now: float
-    ) -> tuple[FloatArray | None, BoolArray]:
-        return None, distance > self.warning_m  # NaN (virtual node) never warns
+    def evaluate(self, pairs: PairGeometry, now: float) -> tuple[FloatArray | None, BoolArray]:
+        return None, pairs.distance > self.warning_m  # NaN (virtual node) never warns
 
     def describe(self) -> dict[str, Any]:
         return {"threshold": self.name, "warning_m": self.warning_m}

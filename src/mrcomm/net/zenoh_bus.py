@@ -51,8 +51,10 @@ from mrcomm.messaging.messages import (
     TOPIC_AON,
     TOPIC_ASSIGNMENT,
     TOPIC_POSE,
+    TOPIC_ROLE,
     TOPIC_RSSI,
     TOPIC_TASK_STATUS,
+    TOPIC_UTILITY,
     Message,
     PoseMsg,
     decode,
@@ -65,6 +67,17 @@ from mrcomm.ports import Handler
 
 Point = tuple[float, float]
 _STAMP = struct.Struct("<q")  # wall-clock send time (ns) carried as a Zenoh attachment
+
+
+#: Every topic an agent may publish (their publishers are declared up front).
+ALL_TOPICS = (
+    TOPIC_ASSIGNMENT,
+    TOPIC_POSE,
+    TOPIC_TASK_STATUS,
+    TOPIC_AON,
+    TOPIC_UTILITY,
+    TOPIC_ROLE,
+)
 
 
 class Lane(Enum):
@@ -133,7 +146,11 @@ class _BlockingWorker:
 class ZenohNode:
     """One process's peer session, its publishers, inbox and liveliness tokens."""
 
-    def __init__(self, options: ZenohOptions) -> None:
+    def __init__(
+        self, options: ZenohOptions, inbox: queue.SimpleQueue[Incoming] | None = None
+    ) -> None:
+        """``inbox``: share one queue between several sessions of a process (the team's
+        and the world's), so one thread waits on both in arrival order."""
         import zenoh
 
         self.options = options
@@ -146,7 +163,9 @@ class ZenohNode:
             tls = options.tls is not None and ("TLS" in message or "cert" in message)
             raise InputError(message, field="--tls-cert" if tls else "--listen") from None
         self._zenoh = zenoh
-        self._inbox: queue.SimpleQueue[Incoming] = queue.SimpleQueue()
+        self._inbox: queue.SimpleQueue[Incoming] = (
+            inbox if inbox is not None else queue.SimpleQueue()
+        )
         self._publishers: dict[tuple[str, Lane], Any] = {}
         self._subscribers: list[Any] = []
         self._tokens: dict[str, Any] = {}
@@ -177,6 +196,12 @@ class ZenohNode:
         else:
             self._workers[lane].submit(publisher, data, attachment)
 
+    def prepare(self, key: str, lane: Lane) -> None:
+        """Declare the publisher of ``key`` now. Declaring can wait on a congested
+        link (without letting Zenoh's threads deliver anything meanwhile), so every
+        key a process will use is declared at start, never mid-mission."""
+        self._publisher(key, lane)
+
     def _publisher(self, key: str, lane: Lane) -> Any:
         publisher = self._publishers.get((key, lane))
         if publisher is None:
@@ -196,7 +221,7 @@ class ZenohNode:
                 priority = z.Priority.INTERACTIVE_HIGH if high else z.Priority.DATA_HIGH
                 publisher = self.session.declare_publisher(
                     key,
-                    congestion_control=z.CongestionControl.DROP,
+                    congestion_control=z.CongestionControl.BLOCK,
                     priority=priority,
                     reliability=z.Reliability.RELIABLE,
                 )
@@ -242,9 +267,13 @@ class ZenohNode:
         key = self.alive_key(agent, incarnation)
         self._tokens[key] = self.session.liveliness().declare_token(key)
 
-    def watch_presence(self) -> None:
-        """Queue a :class:`Presence` whenever a team member appears or disappears
-        (including those already present when the watch starts)."""
+    @property
+    def inbox(self) -> queue.SimpleQueue[Incoming]:
+        return self._inbox
+
+    def watch_presence(self, agent: str = "*") -> None:
+        """Queue a :class:`Presence` whenever a team member (or just ``agent``) appears
+        or disappears, including those already present when the watch starts."""
         inbox = self._inbox
         z = self._zenoh
 
@@ -265,7 +294,7 @@ class ZenohNode:
 
         self._subscribers.append(
             self.session.liveliness().declare_subscriber(
-                f"{self.prefix}/*/alive/*", on_token, history=True
+                f"{self.prefix}/{agent}/alive/*", on_token, history=True
             )
         )
 
@@ -387,6 +416,9 @@ class ZenohEndpoint:
         #: Hook between perturbation and handlers: return the message to deliver (or a
         #: replacement), or None to hold it back (used to resynchronise a restart).
         self.gate: Callable[[str, Message], Message | None] | None = None
+        node = bus.node
+        for topic in ALL_TOPICS:
+            node.prepare(node.key(owner, topic), lane_of(topic))
 
     @property
     def owner(self) -> str:
