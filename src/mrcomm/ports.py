@@ -76,6 +76,12 @@ class Base(Protocol):
         """Current forward speed (m/s)."""
         ...
 
+    def make_plan(self, x: float, y: float) -> tuple[tuple[float, float], ...] | None:
+        """The route the navigation would take to (x, y) from the current pose, as
+        waypoints (like move_base's ``make_plan`` service); None when there is none or
+        the base cannot tell."""
+        ...
+
 
 class LinkSensor(Protocol):
     """How an agent judges its link to a team mate (SLT distance, SSD predicted RSSI,

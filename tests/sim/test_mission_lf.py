@@ -78,3 +78,29 @@ def test_lf_is_deterministic(s1_world) -> None:  # type: ignore[no-untyped-def]
 
     assert run(5) == run(5)
     assert run(5) != run(6)
+
+
+def test_a_route_leaving_the_connection_area_is_detected(s1_world) -> None:  # type: ignore[no-untyped-def]
+    from mrcomm.agents.lf import LeaderFollowerExecutor
+    from mrcomm.sim.mission import Mission
+
+    mission = Mission(
+        make_config(None, scenario=S1_PATH, network="ah", threshold="slt", behaviour="lf"),
+        s1_world,
+    )
+    follower = mission.executors["robot_1"]
+    assert isinstance(follower, LeaderFollowerExecutor)
+    follower.leader = "robot_2"
+    leader = (20.0, 16.0)
+    # SLT warns beyond 4 m: a route that swings 5 m away from the leader leaves the area.
+    assert follower._route_leaves_connection(((17.0, 16.0), (20.0, 21.0), (19.0, 16.0)), leader)
+    assert not follower._route_leaves_connection(((17.0, 16.0), (18.5, 17.0), (19.0, 16.0)), leader)
+
+
+def test_ssd_followers_take_direct_routes_and_missions_succeed(s1_world) -> None:  # type: ignore[no-untyped-def]
+    result = _run(s1_world, network="ah", threshold="ssd", behaviour="lf", spl=25, seed=3)
+    assert result.mission["successful"]
+    direct = sum(
+        1 for tl in result.timelines.values() for e in tl.events if e.label == "direct_route"
+    )
+    assert direct > 0

@@ -26,6 +26,7 @@ A hierarchical state machine: ``na`` is NB plus a network trigger; ``leader`` an
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -51,6 +52,7 @@ from mrcomm.messaging.messages import (
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ROLE
 from mrcomm.ports import NavStatus
+from mrcomm.world.geometry import Pose
 
 _DRIVE = [
     {"trigger": "arrive", "source": "navigating", "dest": "executing"},
@@ -131,6 +133,8 @@ class LfParams:
     refresh_period_near: float = 1.0  # follower goal refresh when the leader is near
     refresh_period_far: float = 0.4  # ... and when it is beyond the warning threshold
     lost_timeout: float = 60.0  # a follower silent this long no longer holds the leader
+    route_check_step: float = 0.5  # m between the route points a follower checks
+    direct_hop: float = 1.5  # m per hop of a direct route to the leader
     #: AON: a member silent this long (no pose, no AON traffic) is reported as left out
     #: of pending messages by name instead of being waited for; it is brought up to date
     #: when heard again. None waits forever.
@@ -495,13 +499,50 @@ class LeaderFollowerExecutor(TaskExecutor):
             or math.hypot(target[0] - self._follow_target[0], target[1] - self._follow_target[1])
             > 0.5
         )
-        stalled = self.base.status in (NavStatus.ABORTED, NavStatus.IDLE)
+        stalled = self.base.status is not NavStatus.ACTIVE  # arrived at a hop, or gave up
         if (moved and self._now >= self._next_refresh) or stalled:
             self._follow_target = target
-            self.base.navigate_to(*target)
+            self._drive_towards_leader(target)
             period = self.lf.refresh_period_far if far else self.lf.refresh_period_near
             self._next_refresh = self._now + period
         self._check_collisions()
+
+    def _drive_towards_leader(self, target: tuple[float, float]) -> None:
+        """Navigate to the leader's last known position, unless the follower is in the
+        connection area and the planned route would take it out (some point of the
+        route in warning from the leader): then drive straight at the leader instead,
+        one short hop at a time, where the straight line is open (SPEC §4: the planner
+        must not route a follower out of range). Where it is not, the planned route is
+        the only way and is kept."""
+        pose = self.base.pose
+        leader = self.leader or ""
+        inside = not self.link_sensor.warning(leader, pose, *target, self._now)
+        route = self.base.make_plan(*target) if inside else None
+        if route is not None and self._route_leaves_connection(route, target):
+            dx, dy = target[0] - pose.x, target[1] - pose.y
+            distance = math.hypot(dx, dy)
+            scale = min(self.lf.direct_hop, distance) / max(distance, 1e-9)
+            hop = (pose.x + dx * scale, pose.y + dy * scale)
+            hop_route = self.base.make_plan(*hop)
+            straight = math.hypot(hop[0] - pose.x, hop[1] - pose.y)
+            if hop_route is not None and _length(hop_route) <= 1.25 * straight + 0.1:
+                self.timeline.event(L.DIRECT_ROUTE, self._now, leader=leader)
+                self.base.navigate_to(*hop)
+                return
+        self.base.navigate_to(*target)
+
+    def _route_leaves_connection(
+        self, route: tuple[tuple[float, float], ...], leader: tuple[float, float]
+    ) -> bool:
+        leader_id = self.leader or ""
+        step = self.lf.route_check_step
+        for (x0, y0), (x1, y1) in itertools.pairwise(route):
+            n = max(1, math.ceil(math.hypot(x1 - x0, y1 - y0) / step))
+            for k in range(1, n + 1):
+                x, y = x0 + (x1 - x0) * k / n, y0 + (y1 - y0) * k / n
+                if self.link_sensor.warning(leader_id, Pose(x, y), *leader, self._now):
+                    return True
+        return False
 
     def _step_follower_waiting(self) -> None:
         if self.before_follower_step():
@@ -552,3 +593,7 @@ class LeaderFollowerExecutor(TaskExecutor):
         self.timeline.set_state(ROLE, _ROLE_OF_TOP_STATE.get(top), self._now)
         if top == "regrouping":
             self._follow_target = None
+
+
+def _length(route: tuple[tuple[float, float], ...]) -> float:
+    return sum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in itertools.pairwise(route))

@@ -36,3 +36,4 @@ ROLE_REGROUPING = "regrouping"
 DISCONNECT_DETECTED = "disconnect_detected"
 ROLE_ASSIGNED = "role_assigned"
 ROLES_DISSOLVED = "roles_dissolved"
+DIRECT_ROUTE = "direct_route"  # a follower's route would leave the connection area

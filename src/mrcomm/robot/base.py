@@ -239,6 +239,12 @@ class SimBase:
         return False
 
     # --------------------------------------------------------- navigation
+    def make_plan(self, x: float, y: float) -> tuple[Point, ...] | None:
+        """Base port: the route to (x, y) from the localised pose, without moving."""
+        loc = self._loc
+        path = self.planner.plan((self._x + loc.ex, self._y + loc.ey), (float(x), float(y)))
+        return None if path is None else path.waypoints
+
     def _plan(self, obstacles: Sequence[Point]) -> PlannedPath | None:
         assert self._goal is not None
         loc = self._loc
