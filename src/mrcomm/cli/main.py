@@ -10,6 +10,7 @@ import typer
 
 from mrcomm.cli.analyze_cmd import analyze
 from mrcomm.cli.fsm_cmd import fsm
+from mrcomm.cli.live_cmd import agent, collect_cmd, live, world
 from mrcomm.cli.pulse_cmd import pulse
 from mrcomm.cli.replay_cmd import replay
 from mrcomm.cli.report_cmd import report
@@ -35,6 +36,10 @@ def _group() -> None:
 
 cli.command("run")(run)
 cli.command("fsm")(fsm)
+cli.command("world")(world)
+cli.command("agent")(agent)
+cli.command("live")(live)
+cli.command("collect")(collect_cmd)
 cli.command("sweep")(sweep)
 cli.command("export")(export)
 cli.command("replay")(replay)

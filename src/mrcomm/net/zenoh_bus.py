@@ -4,12 +4,10 @@
 
 * the key space ``mrcomm/<team>/<agent>/<topic>`` (each agent publishes under its own
   id; subscribers use ``mrcomm/<team>/*/<topic>``);
-* three quality-of-service lanes. Task status and AON go reliable with *blocking*
-  congestion control on their own priority (interactive-high); other agent control
-  traffic (assignment, role assignment, base commands) reliable and blocking on
-  data-high; pose and the world's clock best effort on data priority, *dropping* under
-  congestion. Blocking puts run on one worker thread per blocking lane, so a blocked
-  status message never stalls pose traffic, control traffic or the agent itself;
+* three quality-of-service lanes: task status and AON reliable with *blocking*
+  congestion control on their own priority; other control traffic reliable and
+  blocking on another; pose and the clock *dropping* under congestion. Blocking puts
+  run on one worker thread per lane: a blocked status never stalls pose or the agent;
 * an inbox: Zenoh calls back on its own threads, so every sample is decoded there and
   queued; the owning process drains the queue on its one agent thread (AON and the
   agents are single-threaded);
@@ -37,9 +35,8 @@ import queue
 import struct
 import threading
 import time
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from enum import Enum
 from typing import Any
 
 import msgspec
@@ -48,13 +45,7 @@ import numpy as np
 from mrcomm.errors import InputError
 from mrcomm.messaging.messages import (
     LOSSY_TOPICS,
-    TOPIC_AON,
     TOPIC_ASSIGNMENT,
-    TOPIC_POSE,
-    TOPIC_ROLE,
-    TOPIC_RSSI,
-    TOPIC_TASK_STATUS,
-    TOPIC_UTILITY,
     Message,
     PoseMsg,
     decode,
@@ -62,38 +53,11 @@ from mrcomm.messaging.messages import (
 )
 from mrcomm.net.inprocess import DeliveryObserver, TopicCounts
 from mrcomm.net.network import AH_RANGE_M, NetworkType
-from mrcomm.net.zenoh_config import ZenohOptions, build_config
+from mrcomm.net.zenoh_config import ALL_TOPICS, Lane, ZenohOptions, build_config, lane_of
 from mrcomm.ports import Handler
 
 Point = tuple[float, float]
 _STAMP = struct.Struct("<q")  # wall-clock send time (ns) carried as a Zenoh attachment
-
-
-#: Every topic an agent may publish (their publishers are declared up front).
-ALL_TOPICS = (
-    TOPIC_ASSIGNMENT,
-    TOPIC_POSE,
-    TOPIC_TASK_STATUS,
-    TOPIC_AON,
-    TOPIC_UTILITY,
-    TOPIC_ROLE,
-)
-
-
-class Lane(Enum):
-    """Quality of service of a publication."""
-
-    BEST_EFFORT = "best_effort"  # pose, clock: newest wins, dropped under congestion
-    STATUS = "status"  # task status, AON: reliable, blocking, own priority
-    CONTROL = "control"  # assignment, roles, base commands: reliable, blocking
-
-
-def lane_of(topic: str) -> Lane:
-    if topic in (TOPIC_POSE, TOPIC_RSSI):
-        return Lane.BEST_EFFORT
-    if topic in (TOPIC_TASK_STATUS, TOPIC_AON):
-        return Lane.STATUS
-    return Lane.CONTROL
 
 
 @dataclass(frozen=True, slots=True)
@@ -535,16 +499,3 @@ class ZenohBus:
 
     def counts_by_agent(self) -> dict[str, dict[str, dict[str, int]]]:
         return {owner: ep.counts_dict() for owner, ep in self.endpoints.items()}
-
-
-def sum_counts(per_agent: Iterable[Mapping[str, Mapping[str, int]]]) -> dict[str, dict[str, int]]:
-    """Totals per topic over several agents' counts."""
-    totals: dict[str, dict[str, int]] = {}
-    for counts in per_agent:
-        for topic, c in counts.items():
-            t = totals.setdefault(
-                topic, {"sent": 0, "received": 0, "dropped_loss": 0, "dropped_range": 0}
-            )
-            for k in t:
-                t[k] += int(c.get(k, 0))
-    return dict(sorted(totals.items()))

@@ -1,0 +1,281 @@
+"""``mrcomm world`` / ``agent`` / ``live`` / ``collect``: the live mode's commands.
+
+* ``mrcomm world SCENARIO`` — simulates every robot's base, publishes the clock;
+* ``mrcomm agent SCENARIO --robot ID`` — one agent process (hosts the task assigner
+  when the scenario puts it on this robot; ``--robot assigner`` runs a stand-alone one);
+* ``mrcomm live SCENARIO`` — world and every agent as processes on this host, then the
+  same tables / JSON as ``mrcomm run``;
+* ``mrcomm collect RECORD_DIR`` — merge the records of a live run.
+
+Every process takes the same run options as ``mrcomm run`` plus how to join the
+team's Zenoh network; bad input is a one-line error with exit status 2.
+"""
+
+from __future__ import annotations
+
+import json
+import tempfile
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+
+from mrcomm.cli.run_cmd import print_result
+from mrcomm.errors import InputError
+from mrcomm.net.network import NetworkType
+from mrcomm.net.zenoh_config import ZenohOptions, make_options
+from mrcomm.sim.config import RunConfig, make_config
+
+ScenarioArg = Annotated[Path, typer.Argument(help="Scenario YAML (e.g. data/scenarios/s1.yaml).")]
+NetworkOpt = Annotated[str, typer.Option(help="Network type: wlan | ah.")]
+SplOpt = Annotated[float, typer.Option(help="Simulated packet loss, percent (0-100).")]
+BehaviourOpt = Annotated[str, typer.Option(help="Team behaviour: nb | lf.")]
+ThresholdOpt = Annotated[str, typer.Option(help="Signal threshold: none | slt | ssd | esd.")]
+SeedOpt = Annotated[int, typer.Option(help="Random seed of the run.")]
+MaxTimeOpt = Annotated[float, typer.Option(help="Mission time limit, simulated s.")]
+DtOpt = Annotated[float, typer.Option(help="Clock tick, simulated s.")]
+TeamOpt = Annotated[str, typer.Option(help="Team name: the key space mrcomm/<team>/.")]
+ListenOpt = Annotated[
+    list[str] | None, typer.Option("--listen", help="Endpoint to listen on (repeatable).")
+]
+ConnectOpt = Annotated[
+    list[str] | None, typer.Option("--connect", help="Peer endpoint to connect to (repeatable).")
+]
+MulticastOpt = Annotated[
+    bool, typer.Option("--multicast/--no-multicast", help="Multicast scouting for peers.")
+]
+ProtocolOpt = Annotated[str, typer.Option(help="Transport: tcp | udp.")]
+TlsCaOpt = Annotated[Path | None, typer.Option(help="Team CA certificate (PEM): enables mTLS.")]
+TlsCertOpt = Annotated[Path | None, typer.Option(help="This node's certificate (PEM).")]
+TlsKeyOpt = Annotated[Path | None, typer.Option(help="This node's private key (PEM).")]
+AclOpt = Annotated[
+    str | None,
+    typer.Option(help="Comma-separated certificate names allowed on the team's keys (ACL)."),
+]
+ZenohConfigOpt = Annotated[Path | None, typer.Option(help="Zenoh JSON5 config file.")]
+LinkLeaseOpt = Annotated[float, typer.Option(help="Zenoh link lease, wall s.")]
+RecordDirOpt = Annotated[Path, typer.Option(help="Directory of this run's records.")]
+SpeedOpt = Annotated[float, typer.Option(help="Simulated seconds per wall-clock second.")]
+LeaseOpt = Annotated[
+    float | None, typer.Option(help="AON lease, simulated s: silent members are left out.")
+]
+
+
+def _run_config(**values: Any) -> RunConfig:
+    network = values["network"]
+    if network not in {n.value for n in NetworkType}:
+        raise InputError(f"unknown network {network!r}; choose wlan or ah", field="--network")
+    return make_config(None, **values)
+
+
+def _zenoh(
+    team: str,
+    listen: list[str] | None,
+    connect: list[str] | None,
+    multicast: bool,
+    protocol: str,
+    tls_ca: Path | None,
+    tls_cert: Path | None,
+    tls_key: Path | None,
+    acl: str | None,
+    zenoh_config: Path | None,
+    link_lease: float,
+) -> ZenohOptions:
+    members = [m.strip() for m in acl.split(",") if m.strip()] if acl is not None else None
+    return make_options(
+        team=team,
+        listen=listen or [],
+        connect=connect or [],
+        multicast=multicast,
+        protocol=protocol,
+        tls_ca=tls_ca,
+        tls_cert=tls_cert,
+        tls_key=tls_key,
+        acl_members=members,
+        config_file=zenoh_config,
+        link_lease=link_lease,
+    )
+
+
+def world(
+    scenario: ScenarioArg,
+    network: NetworkOpt = "wlan",
+    spl: SplOpt = 0.0,
+    behaviour: BehaviourOpt = "nb",
+    threshold: ThresholdOpt = "none",
+    seed: SeedOpt = 1,
+    max_time: MaxTimeOpt = 1800.0,
+    dt: DtOpt = 0.1,
+    speed: SpeedOpt = 1.0,
+    team: TeamOpt = "team",
+    listen: ListenOpt = None,
+    connect: ConnectOpt = None,
+    multicast: MulticastOpt = False,
+    protocol: ProtocolOpt = "tcp",
+    tls_ca: TlsCaOpt = None,
+    tls_cert: TlsCertOpt = None,
+    tls_key: TlsKeyOpt = None,
+    acl: AclOpt = None,
+    zenoh_config: ZenohConfigOpt = None,
+    link_lease: LinkLeaseOpt = 10.0,
+    record_dir: RecordDirOpt = Path("live-records"),
+    start_timeout: Annotated[
+        float, typer.Option(help="Wall s to wait for every agent to be ready.")
+    ] = 60.0,
+) -> None:
+    """Simulate every robot's base and publish the shared clock (live mode)."""
+    from mrcomm.live.settings import LiveSettings, check_record_dir
+    from mrcomm.live.world import run_world
+
+    run = _run_config(
+        scenario=scenario, network=network, spl=spl, behaviour=behaviour,
+        threshold=threshold, seed=seed, max_time=max_time, dt=dt,
+    )  # fmt: skip
+    zenoh = _zenoh(
+        team, listen, connect, multicast, protocol, tls_ca, tls_cert, tls_key, acl,
+        zenoh_config, link_lease,
+    )  # fmt: skip
+    settings = LiveSettings(
+        run, zenoh, check_record_dir(record_dir), speed=speed, start_timeout=start_timeout
+    )
+    raise typer.Exit(run_world(settings))
+
+
+def agent(
+    scenario: ScenarioArg,
+    robot: Annotated[str, typer.Option(help="Robot id of this agent (or 'assigner').")],
+    network: NetworkOpt = "wlan",
+    spl: SplOpt = 0.0,
+    behaviour: BehaviourOpt = "nb",
+    threshold: ThresholdOpt = "none",
+    seed: SeedOpt = 1,
+    max_time: MaxTimeOpt = 1800.0,
+    dt: DtOpt = 0.1,
+    team: TeamOpt = "team",
+    listen: ListenOpt = None,
+    connect: ConnectOpt = None,
+    multicast: MulticastOpt = False,
+    protocol: ProtocolOpt = "tcp",
+    tls_ca: TlsCaOpt = None,
+    tls_cert: TlsCertOpt = None,
+    tls_key: TlsKeyOpt = None,
+    acl: AclOpt = None,
+    zenoh_config: ZenohConfigOpt = None,
+    link_lease: LinkLeaseOpt = 10.0,
+    record_dir: RecordDirOpt = Path("live-records"),
+    lease: LeaseOpt = None,
+    world_connect: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--world-connect",
+            help="The world's endpoint, on a session of its own (repeatable; default: "
+            "the world is reached over the team's session).",
+        ),
+    ] = None,
+    join_timeout: Annotated[
+        float, typer.Option(help="Wall s to reach the team before giving up.")
+    ] = 20.0,
+) -> None:
+    """Run one robot's agent (task executor, and the assigner it hosts) over Zenoh."""
+    from mrcomm.live.agent import check_agent_id, run_agent
+    from mrcomm.live.settings import LiveSettings, check_record_dir
+    from mrcomm.world.scenario import load_scenario
+
+    run = _run_config(
+        scenario=scenario, network=network, spl=spl, behaviour=behaviour,
+        threshold=threshold, seed=seed, max_time=max_time, dt=dt,
+    )  # fmt: skip
+    check_agent_id(load_scenario(run.scenario), robot)
+    zenoh = _zenoh(
+        team, listen, connect, multicast, protocol, tls_ca, tls_cert, tls_key, acl,
+        zenoh_config, link_lease,
+    )  # fmt: skip
+    world_options = None
+    if world_connect:
+        world_options = _zenoh(
+            team, None, world_connect, False, protocol, tls_ca, tls_cert, tls_key, acl,
+            None, link_lease,
+        )  # fmt: skip
+    settings = LiveSettings(
+        run,
+        zenoh,
+        check_record_dir(record_dir),
+        world=world_options,
+        lease=lease,
+        join_timeout=join_timeout,
+    )
+    raise typer.Exit(run_agent(settings, robot))
+
+
+def live(
+    scenario: ScenarioArg,
+    network: NetworkOpt = "wlan",
+    spl: SplOpt = 0.0,
+    behaviour: BehaviourOpt = "nb",
+    threshold: ThresholdOpt = "none",
+    seed: SeedOpt = 1,
+    max_time: MaxTimeOpt = 1800.0,
+    dt: DtOpt = 0.1,
+    speed: SpeedOpt = 1.0,
+    team: TeamOpt = "team",
+    protocol: ProtocolOpt = "tcp",
+    tls_dir: Annotated[
+        Path | None,
+        typer.Option(help="Team certificates: ca.pem, <process>.pem / .key (enables mTLS)."),
+    ] = None,
+    acl: Annotated[bool, typer.Option("--acl", help="With --tls-dir: team-only ACL.")] = False,
+    lease: LeaseOpt = None,
+    record_dir: Annotated[
+        Path | None, typer.Option(help="Keep the records here (default: a temporary dir).")
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+) -> None:
+    """Run one mission live: world and every agent as separate processes over Zenoh."""
+    from mrcomm.live.collect import live_summary
+    from mrcomm.live.launcher import TlsLayout, run_live
+    from mrcomm.live.settings import LiveSettings, check_record_dir
+
+    run = _run_config(
+        scenario=scenario, network=network, spl=spl, behaviour=behaviour,
+        threshold=threshold, seed=seed, max_time=max_time, dt=dt,
+    )  # fmt: skip
+    if tls_dir is not None and not (tls_dir / "ca.pem").is_file():
+        raise InputError("no ca.pem in the TLS directory", file=tls_dir, field="--tls-dir")
+    if acl and tls_dir is None:
+        raise InputError("the ACL identifies members by certificate: add --tls-dir", field="--acl")
+    zenoh = make_options(team=team, protocol=protocol)
+    directory = (
+        check_record_dir(record_dir)
+        if record_dir is not None
+        else Path(tempfile.mkdtemp(prefix="mrcomm-live-"))
+    )
+    if tls_dir is not None:
+        zenoh = ZenohOptions(team=zenoh.team, protocol="tls")
+    settings = LiveSettings(run, zenoh, directory, speed=speed, lease=lease)
+    tls = TlsLayout(tls_dir, acl=acl) if tls_dir is not None else None
+    result, report = run_live(settings, tls=tls)
+    if as_json:
+        typer.echo(json.dumps(live_summary(result, report), indent=2))
+        return
+    console = Console()
+    print_result(result, console)
+    latency = report.get("pose_latency_ms", {})
+    console.print(
+        f"live: records in {directory}; pose latency p50 {latency.get('p50', '-')} ms, "
+        f"p99 {latency.get('p99', '-')} ms"
+    )
+
+
+def collect_cmd(
+    record_dir: Annotated[Path, typer.Argument(help="Record directory of a live run.")],
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+) -> None:
+    """Merge the records every process of a live run wrote into one result."""
+    from mrcomm.live.collect import collect, live_summary
+
+    result, report = collect(record_dir)
+    if as_json:
+        typer.echo(json.dumps(live_summary(result, report), indent=2))
+    else:
+        print_result(result, Console())

@@ -1,0 +1,463 @@
+"""The agent process of live mode (``mrcomm agent --robot ID``; issue 7 §2).
+
+One robot's task executor — the same class as in simulation — and, when the scenario
+hosts the task assigner on this robot, the assigner too (``--robot assigner`` runs a
+base-station or virtual assigner on its own). The process:
+
+1. opens its Zenoh peer session and subscribes (agent topics, the world's clock tick,
+   resynchronisation, liveliness);
+2. joins: waits until the world is reachable (else a one-line error, exit 2), refuses
+   an id another live process already holds, declares its liveliness tokens and
+   reports *ready* once it sees every team member;
+3. runs on the shared clock: Zenoh callbacks only queue; on this one thread, every
+   queued message is dispatched (receiver-side perturbations, then the agents'
+   handlers) and every clock tick updates the base state and steps the agents;
+4. records its own data as it goes (``live.journal``) and stops when the world
+   announces the end of the mission (or on SIGTERM / SIGINT).
+
+A robot that joins late (restart after a crash) resynchronises with the team first
+(``live.resync``). Losing every peer does not stop the process: Zenoh reconnects by
+itself and the agents carry on when the clock comes back.
+"""
+
+from __future__ import annotations
+
+import signal
+import time
+from dataclasses import replace
+from types import FrameType
+from typing import Any
+
+from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
+from mrcomm.agents.behaviours import behaviour_class
+from mrcomm.agents.executor import TaskExecutor
+from mrcomm.errors import InputError, did_you_mean
+from mrcomm.live.journal import Journal, TimelineTail, journal_path
+from mrcomm.live.protocol import (
+    CH_AGENT_STATE,
+    CH_BASE_CMD,
+    CH_SYNC_REPLY,
+    CH_SYNC_REQUEST,
+    CH_TICK,
+    WORLD_ID,
+    AgentState,
+    BaseCommand,
+    SyncReply,
+    SyncRequest,
+    Tick,
+    decoder_of,
+    encoder,
+)
+from mrcomm.live.recorder import AgentRecorder
+from mrcomm.live.remote_base import RemoteBase
+from mrcomm.live.resync import Resync, reply_for
+from mrcomm.live.settings import LiveSettings, config_crc
+from mrcomm.metrics import labels as L
+from mrcomm.metrics.timeline import Timeline
+from mrcomm.net.zenoh_bus import (
+    Incoming,
+    Lane,
+    LinkRules,
+    PositionBook,
+    Presence,
+    ZenohBus,
+    ZenohNode,
+)
+from mrcomm.net.zenoh_config import check_key_chunk
+from mrcomm.seeding import stream
+from mrcomm.sim.signals import build_link_sensor
+from mrcomm.sim.world import SimWorld
+from mrcomm.world.scenario import Scenario
+
+HEARTBEAT_PERIOD = 0.25  # wall s between heartbeats (and at once on a change)
+SNAPSHOT_PERIOD = 1.0  # simulated s between counts / clock snapshots in the journal
+ASSIGNMENT_WAIT = 3.0  # simulated s without an assignment before asking for it
+SYNC_WAIT = 2.0  # simulated s a (re)joining robot waits for the team's answers
+LATE_JOIN = 1.0  # a first tick later than this (simulated s) means a late join
+
+
+class _Stop(Exception):
+    """SIGTERM / SIGINT: finish cleanly."""
+
+
+def team_processes(scenario: Scenario) -> tuple[str, ...]:
+    """Agent ids that must be present for the team to be complete."""
+    return (*(r.id for r in scenario.robots), ASSIGNER_ID)
+
+
+def check_agent_id(scenario: Scenario, agent: str) -> None:
+    """The id must be a robot of the scenario (or the stand-alone assigner)."""
+    check_key_chunk(agent, "--robot")
+    robots = [r.id for r in scenario.robots]
+    spec = scenario.assigner
+    if agent == ASSIGNER_ID:
+        if spec.kind == "robot":
+            raise InputError(
+                f"the task assigner runs on {spec.host} in this scenario "
+                f"(assigner.host): start '--robot {spec.host}' instead",
+                field="--robot",
+            )
+        return
+    if agent not in robots:
+        raise InputError(
+            f"robot {agent!r} is not in scenario {scenario.name}{did_you_mean(agent, robots)}; "
+            f"robots: {', '.join(robots)}",
+            field="--robot",
+        )
+
+
+class AgentProcess:
+    """One live agent process (see the module docstring)."""
+
+    def __init__(self, settings: LiveSettings, agent: str, incarnation: int) -> None:
+        self.settings = settings
+        run = settings.run
+        self.world = SimWorld.load(run.scenario)
+        self.scenario = self.world.scenario
+        check_agent_id(self.scenario, agent)
+        self.agent = agent
+        self.incarnation = incarnation
+        self.robot_ids = tuple(r.id for r in self.scenario.robots)
+        spec = self.scenario.assigner
+        hosts_assigner = agent == ASSIGNER_ID or spec.host == agent
+        self.hosted = ((agent,) if agent != ASSIGNER_ID else ()) + (
+            (ASSIGNER_ID,) if hosts_assigner else ()
+        )
+        self.node = ZenohNode(settings.zenoh)
+        # The world (clock, base) on its own session when configured, sharing the inbox.
+        self.infra = (
+            ZenohNode(settings.world, inbox=self.node.inbox)
+            if settings.world is not None
+            else self.node
+        )
+        self._enc = encoder()
+        positions = PositionBook()
+        if spec.kind == "robot" and spec.host is not None:
+            positions.aliases[ASSIGNER_ID] = spec.host
+        elif spec.kind == "base_station" and spec.position is not None:
+            positions.fixed[ASSIGNER_ID] = (spec.position[0], spec.position[1])
+        self.bus = ZenohBus(
+            self.node,
+            LinkRules(network=run.network, loss_percent=run.spl, ah_range=run.ah_range),
+            positions,
+        )
+        self.journal = Journal(journal_path(settings.record_dir, agent, incarnation))
+        executor_class = behaviour_class(run.behaviour)
+        self.executor: TaskExecutor | None = None
+        self.base: RemoteBase | None = None
+        self.tail: TimelineTail | None = None
+        self.resync: Resync | None = None
+        if agent != ASSIGNER_ID:
+            start = next(r.pose for r in self.scenario.robots if r.id == agent)
+            self.base = RemoteBase(
+                agent, incarnation, start, self._send_command, self.world.planner
+            )
+            base = self.base
+            positions.own[agent] = lambda: (base.pose.x, base.pose.y)
+            ranks = stream(run.seed, "tie-break").permutation(len(self.robot_ids))
+            rank_of = {rid: float(ranks[i]) for i, rid in enumerate(self.robot_ids)}
+            endpoint = self.bus.endpoint(agent, stream(run.seed, "loss", agent))
+            timeline = Timeline(agent)
+            self.executor = executor_class(
+                endpoint,
+                self.base,
+                timeline,
+                tie_break_rank=rank_of.__getitem__,
+                link_sensor=build_link_sensor(run, self.world),
+                incarnation=incarnation,
+            )
+            if settings.lease is not None and hasattr(self.executor, "lf"):
+                # The LF executor reads its AON lease when its assignment arrives.
+                lf: Any = self.executor
+                lf.lf = replace(lf.lf, aon_lease=settings.lease)
+            self.tail = TimelineTail(timeline, self.journal)
+            self.resync = Resync(self.executor, endpoint, self._request_sync, wait=SYNC_WAIT)
+        self.assigner: TaskAssigner | None = None
+        if hosts_assigner:
+            self.assigner = TaskAssigner(
+                self.bus.endpoint(ASSIGNER_ID, stream(run.seed, "loss", ASSIGNER_ID)),
+                self.robot_ids,
+                self.scenario.tasks,
+                incarnation=incarnation,
+                use_aon=executor_class.uses_aon,
+            )
+        self.recorder = AgentRecorder(self.journal, self.bus, agent, self.executor, self.assigner)
+        self.bus.observer = self.recorder.delivery
+        self.team = team_processes(self.scenario)
+        self.present: dict[str, set[int]] = {}
+        self.now = 0.0
+        self.first_tick: float | None = None
+        self.ended = False
+        self._ready = False
+        self._last_beat = -1e9
+        self._last_done: tuple[bool, bool] | None = None
+        self._next_snapshot = 0.0
+        self._crc = config_crc(run)
+        self.max_lag = 0.0
+
+    # -- life cycle --------------------------------------------------------------------
+    def run(self) -> int:
+        previous = _install_stop_handlers()
+        try:
+            self._subscribe()
+            self._join()
+            self._loop()
+        except _Stop:
+            self.journal.write("stopped", time=self.now, wall=time.time())
+        finally:
+            self._finish()
+            _restore_handlers(previous)
+        return 0
+
+    def _subscribe(self) -> None:
+        for key, node in (
+            (CH_AGENT_STATE, self.infra),
+            (CH_BASE_CMD, self.infra),
+            (CH_SYNC_REQUEST, self.node),
+            (CH_SYNC_REPLY, self.node),
+        ):
+            node.prepare(node.key(self.agent, key), Lane.CONTROL)
+        prefix = self.node.prefix
+        self.infra.listen(f"{prefix}/{WORLD_ID}/{CH_TICK}", CH_TICK, decoder_of(Tick))
+        self.node.listen(f"{prefix}/*/{CH_SYNC_REQUEST}", CH_SYNC_REQUEST, decoder_of(SyncRequest))
+        self.node.listen(f"{prefix}/*/{CH_SYNC_REPLY}", CH_SYNC_REPLY, decoder_of(SyncReply))
+        self.node.watch_presence()
+        if self.infra is not self.node:
+            self.infra.watch_presence(WORLD_ID)
+
+    def _join(self) -> None:
+        """Reach the world, refuse a duplicate id, declare our tokens."""
+        deadline = time.monotonic() + self.settings.join_timeout
+        while WORLD_ID not in self.present or not self.present[WORLD_ID]:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                world = self.settings.world or self.settings.zenoh
+                where = ", ".join(world.connect) or "multicast scouting"
+                raise InputError(
+                    f"no team reachable within {self.settings.join_timeout:g} s "
+                    f"(no world process seen via {where})",
+                    field="--world-connect" if self.settings.world else "--connect",
+                )
+            item = self.node.poll(min(remaining, 0.2))
+            if item is not None and item.channel == "presence":
+                self._on_presence(item.value)
+        for agent in self.hosted:
+            others = [i for i in self.node.present(agent) if i != self.incarnation]
+            if others:
+                raise InputError(
+                    f"{agent!r} is already running (incarnation {others[0]}): "
+                    "two agents cannot claim the same id",
+                    field="--robot",
+                )
+        self.journal.start(
+            process=self.agent,
+            incarnation=self.incarnation,
+            hosted=list(self.hosted),
+            behaviour=self.settings.run.behaviour,
+        )
+        for agent in self.hosted:
+            self.node.declare_alive(agent, self.incarnation)
+            if self.infra is not self.node:
+                self.infra.declare_alive(agent, self.incarnation)  # for the world
+
+    def _loop(self) -> None:
+        while not self.ended:
+            self._heartbeat()
+            item = self.node.poll(HEARTBEAT_PERIOD / 2)
+            while item is not None:
+                self._on_item(item)
+                if self.ended:
+                    return
+                item = self.node.poll(None)
+            self.journal.flush()
+
+    def _on_item(self, item: Incoming) -> None:
+        channel = item.channel
+        if channel == "bus":
+            self.bus.handle(item)
+        elif channel == CH_TICK:
+            self._on_tick(item)
+        elif channel == "presence":
+            self._on_presence(item.value)
+        elif channel == CH_SYNC_REQUEST:
+            self._on_sync_request(item.value)
+        elif channel == CH_SYNC_REPLY and self.resync is not None:
+            self.resync.on_reply(item.value)
+
+    # -- the clock -----------------------------------------------------------------------
+    def _on_tick(self, item: Incoming) -> None:
+        tick: Tick = item.value
+        if tick.time < self.now:
+            return  # a stale tick overtaken by a newer one
+        if item.sent_wall is not None:
+            self.max_lag = max(self.max_lag, time.time() - item.sent_wall)
+        self.now = now = tick.time
+        self.bus.now = now
+        if self.base is not None:
+            for state in tick.states:
+                if state.robot == self.agent:
+                    self.base.update(state)
+                    break
+        if tick.end:
+            self._end(tick)
+            return
+        if self.first_tick is None:
+            self.first_tick = now
+            self.journal.write("first_tick", time=now, wall=time.time())
+            if now > LATE_JOIN and self.resync is not None:
+                self.resync.start(now)  # joined a running mission: catch up first
+        self._step(now)
+        if now >= self._next_snapshot:
+            self._next_snapshot = now + SNAPSHOT_PERIOD
+            self._snapshot(item)
+        self.journal.flush()
+
+    def _step(self, now: float) -> None:
+        if self.resync is not None and self.executor is not None:
+            alive = {
+                self._process_of(a) for a, incs in self.present.items() if incs and a in self.team
+            }
+            alive.discard(self.agent)
+            if self.resync.step(now, alive):
+                self.journal.write("resync", time=now, skipped=self.resync.skipped)
+            elif (
+                not self.resync.active
+                and not self.resync.applied
+                and self.executor.timeline.first(L.ASSIGNMENT_RECEIVED) is None
+                and self.first_tick is not None
+                and now - self.first_tick >= ASSIGNMENT_WAIT
+            ):
+                self.resync.start(now)  # missed the assignment: ask for it
+        self._heard_from_present(now)
+        if self.assigner is not None:
+            self.assigner.step(now)
+            self.recorder.receipts()
+        if self.executor is not None:
+            self.executor.step(now)
+            absent = [a for a in self.team if a != self.agent and not self.present.get(a)]
+            self.recorder.left_out(now, sorted(absent))
+        if self.tail is not None:
+            self.tail.flush(now)
+
+    def _end(self, tick: Tick) -> None:
+        end = tick.end_time
+        if self.executor is not None:
+            self.executor.timeline.close_all(end)
+            assert self.tail is not None
+            self.tail.flush(end)
+        self.journal.write("end", time=end, timed_out=tick.timed_out, wall=time.time())
+        self.ended = True
+
+    # -- team ----------------------------------------------------------------------------
+    def _process_of(self, agent: str) -> str:
+        """The process that hosts ``agent`` (the assigner may live on a robot)."""
+        host = self.scenario.assigner.host
+        return host if agent == ASSIGNER_ID and host is not None else agent
+
+    def _on_presence(self, presence: Presence) -> None:
+        incs = self.present.setdefault(presence.agent, set())
+        if presence.alive:
+            incs.add(presence.incarnation)
+        else:
+            incs.discard(presence.incarnation)
+        self.journal.write(
+            "presence",
+            time=self.now,
+            agent=presence.agent,
+            incarnation=presence.incarnation,
+            alive=presence.alive,
+        )
+
+    def _heard_from_present(self, now: float) -> None:
+        """A member whose liveliness token is present is alive for the AON lease (the
+        assigner publishes no poses; a crashed robot's token vanishes with its session),
+        so only a member that has really gone is ever left out."""
+        alive = [a for a, incs in self.present.items() if incs and a in self.team]
+        for aon in self.recorder.aon_endpoints().values():
+            for agent in alive:
+                aon.heard_from(agent, now)
+
+    def _heartbeat(self) -> None:
+        ready = all(self.present.get(a) for a in (*self.team, WORLD_ID))
+        done = self.executor.done if self.executor is not None else True
+        settled = self.assigner.settled if self.assigner is not None else True
+        wall = time.monotonic()
+        changed = (done, settled) != self._last_done or ready != self._ready
+        if not changed and wall - self._last_beat < HEARTBEAT_PERIOD:
+            return
+        self._ready = ready
+        self._last_done = (done, settled)
+        self._last_beat = wall
+        state = AgentState(
+            agent=self.agent,
+            incarnation=self.incarnation,
+            ready=ready,
+            done=done,
+            hosted=self.hosted,
+            settled=settled,
+            time=self.now,
+            config_crc=self._crc,
+        )
+        self.infra.put(
+            self.infra.key(self.agent, CH_AGENT_STATE), self._enc.encode(state), Lane.CONTROL
+        )
+
+    def _send_command(self, command: BaseCommand) -> None:
+        self.infra.put(
+            self.infra.key(self.agent, CH_BASE_CMD), self._enc.encode(command), Lane.CONTROL
+        )
+
+    def _request_sync(self) -> None:
+        self.journal.write("sync_request", time=self.now)
+        request = SyncRequest(self.agent, self.incarnation)
+        self.node.put(
+            self.node.key(self.agent, CH_SYNC_REQUEST), self._enc.encode(request), Lane.CONTROL
+        )
+
+    def _on_sync_request(self, request: SyncRequest) -> None:
+        if request.robot == self.agent:
+            return
+        reply = reply_for(request, self.agent, self.executor, self.assigner, self.now)
+        self.node.put(
+            self.node.key(self.agent, CH_SYNC_REPLY), self._enc.encode(reply), Lane.CONTROL
+        )
+
+    # -- recording -----------------------------------------------------------------------
+    def _snapshot(self, item: Incoming) -> None:
+        self.journal.write(
+            "clock",
+            sim=self.now,
+            wall=item.recv_wall,
+            sent_wall=item.sent_wall,
+            lag=round(self.max_lag, 6),
+        )
+        self.recorder.counts()
+
+    def _finish(self) -> None:
+        self.recorder.final(self.max_lag)
+        self.journal.close()
+        if self.infra is not self.node:
+            self.infra.close()
+        self.node.close()
+
+
+def _install_stop_handlers() -> dict[int, Any]:
+    def stop(signum: int, frame: FrameType | None) -> None:
+        raise _Stop()
+
+    previous: dict[int, Any] = {}
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        previous[sig] = signal.signal(sig, stop)
+    return previous
+
+
+def _restore_handlers(previous: dict[int, Any]) -> None:
+    for sig, handler in previous.items():
+        signal.signal(sig, handler)
+
+
+def run_agent(settings: LiveSettings, agent: str, incarnation: int | None = None) -> int:
+    """Run one agent process to the end of the mission; returns the exit status."""
+    inc = incarnation if incarnation is not None else time.time_ns() // 1_000_000
+    process = AgentProcess(settings, agent, inc)
+    return process.run()

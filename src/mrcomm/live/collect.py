@@ -1,0 +1,359 @@
+"""Merging the journals of a live run into one result (``mrcomm collect``; issue 7 §3).
+
+Every process recorded its own data (``live.journal``). This module reads a record
+directory and builds the same :class:`~mrcomm.sim.mission.MissionResult` as a
+simulated run, with ``config.mode = "live"``:
+
+* each robot's timeline from its own journals — all its incarnations, a killed one's
+  open intervals closed at the last time it recorded;
+* failed tasks from what the task assigner recorded receiving (all its incarnations);
+* message counts per agent and topic, AON statistics, from the agents' journals;
+* distance, separations, links and trajectories from the world's ground truth.
+
+A ``live`` section adds what only a live run has: incarnations, pose latency
+(p50/p99), the agents' lag behind the clock and each host's clock offset.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mrcomm.agents.assignment import round_robin
+from mrcomm.agents.behaviours import behaviour_class
+from mrcomm.errors import InputError
+from mrcomm.live.protocol import WORLD_ID
+from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robot_metrics
+from mrcomm.metrics.timeline import Event, Interval, Timeline
+from mrcomm.sim.config import make_config
+from mrcomm.sim.mission import MissionResult
+from mrcomm.world.scenario import load_scenario
+
+
+@dataclass
+class JournalData:
+    """One process incarnation's journal, parsed."""
+
+    process: str
+    incarnation: int
+    lines: list[dict[str, Any]] = field(default_factory=list)
+
+    def of(self, kind: str) -> list[dict[str, Any]]:
+        return [line for line in self.lines if line.get("k") == kind]
+
+    def last(self, kind: str) -> dict[str, Any] | None:
+        for line in reversed(self.lines):
+            if line.get("k") == kind:
+                return line
+        return None
+
+    @property
+    def last_time(self) -> float:
+        """Latest simulated time this incarnation recorded."""
+        times = [
+            float(line[key])
+            for line in self.lines
+            for key in ("time", "sim", "t", "end")
+            if isinstance(line.get(key), (int, float)) and line.get("k") != "start"
+        ]
+        return max(times, default=0.0)
+
+
+def read_journals(record_dir: Path) -> list[JournalData]:
+    if not record_dir.is_dir():
+        raise InputError("not a directory", file=record_dir, field="RECORD_DIR")
+    out: list[JournalData] = []
+    for path in sorted(record_dir.glob("*.jsonl")):
+        process, _, inc = path.stem.rpartition(".")
+        if not process or not inc.isdigit():
+            continue
+        data = JournalData(process, int(inc))
+        with path.open(encoding="utf-8") as handle:
+            for raw in handle:
+                raw = raw.strip()
+                if not raw:
+                    continue
+                try:
+                    data.lines.append(json.loads(raw))
+                except json.JSONDecodeError:
+                    break  # a line cut by a crash: everything before it stands
+        if data.lines and data.lines[0].get("k") == "start":
+            out.append(data)
+    if not any(j.process == WORLD_ID for j in out):
+        raise InputError("no world journal (world.*.jsonl) found", file=record_dir)
+    return sorted(out, key=lambda j: (j.process, j.incarnation))
+
+
+def collect(record_dir: Path) -> tuple[MissionResult, dict[str, Any]]:
+    """The run's result (as ``mrcomm run`` gives it) and its live-only report."""
+    journals = read_journals(record_dir)
+    world = [j for j in journals if j.process == WORLD_ID][-1]
+    start = world.lines[0]
+    config_values = dict(start["config"])
+    run = make_config(str(record_dir), **config_values)
+    scenario = load_scenario(run.scenario)
+    robot_ids = tuple(r.id for r in scenario.robots)
+    truth = world.last("truth") or {}
+    end = float(truth.get("end_time", world.last_time))
+    timed_out = bool(truth.get("timed_out", True))
+    by_process: dict[str, list[JournalData]] = {}
+    for j in journals:
+        if j.process != WORLD_ID:
+            by_process.setdefault(j.process, []).append(j)
+
+    timelines = {rid: _timeline(rid, by_process.get(rid, []), end) for rid in robot_ids}
+    received = _assigner_receipts(journals)
+    agenda = round_robin(scenario.tasks, robot_ids)
+    failed_pairs = [
+        (t.task_id, rid)
+        for rid in robot_ids
+        for t in agenda[rid]
+        if (t.task_id, rid) not in received
+    ]
+    uses_aon = behaviour_class(run.behaviour).uses_aon
+    robots: dict[str, dict[str, Any]] = {}
+    truth_robots = truth.get("robots", {})
+    for rid in robot_ids:
+        tr = truth_robots.get(rid, {})
+        facts = RobotFacts(
+            distance=float(tr.get("distance", 0.0)),
+            min_separation=tr.get("min_separation"),
+            max_separation=tr.get("max_separation"),
+            tasks_assigned=len(agenda[rid]),
+            tasks_failed=sum(1 for _, r in failed_pairs if r == rid),
+        )
+        metrics = robot_metrics(timelines[rid], facts)
+        if uses_aon:
+            metrics.update(lf_metrics(timelines[rid]))
+        metrics["failed_tasks"] = [t for t, r in failed_pairs if r == rid]
+        metrics["replans"] = tr.get("replans")
+        metrics["recoveries"] = tr.get("recoveries")
+        robots[rid] = _rounded(metrics)
+    failed_tasks = list(dict.fromkeys(t for t, _ in failed_pairs))
+    mission = mission_metrics(
+        robots, timelines, tasks_total=len(scenario.tasks), failed_tasks=failed_tasks
+    )
+    mission["timed_out"] = timed_out
+    mission["end_time"] = round(end, 6)
+    by_agent = _counts_by_agent(journals)
+    config = run.model_dump(mode="json")
+    config["label"] = run.label()
+    config["scenario_name"] = scenario.name
+    config["mode"] = "live"
+    config["speed"] = start.get("speed")
+    result = MissionResult(
+        config=config,
+        mission=_rounded(mission),
+        robots=robots,
+        messages=sum_counts(by_agent.values()),
+        messages_by_agent=by_agent,
+        aon=_aon_summary(journals, timelines),
+        links=truth.get("links", {}),
+        sim_time_s=round(end, 6),
+        wall_time_s=float(truth.get("wall_time", 0.0)),
+        timelines=timelines,
+        trajectories=_trajectories(world, robot_ids),
+        scenario=scenario,
+        rssi_series=[],
+    )
+    return result, _live_report(journals, world, by_process)
+
+
+def sum_counts(per_agent: Iterable[Mapping[str, Mapping[str, int]]]) -> dict[str, dict[str, int]]:
+    """Totals per topic over several agents' counts."""
+    totals: dict[str, dict[str, int]] = {}
+    for counts in per_agent:
+        for topic, c in counts.items():
+            t = totals.setdefault(
+                topic, {"sent": 0, "received": 0, "dropped_loss": 0, "dropped_range": 0}
+            )
+            for k in t:
+                t[k] += int(c.get(k, 0))
+    return dict(sorted(totals.items()))
+
+
+# -- timelines -------------------------------------------------------------------------
+
+
+def _timeline(robot: str, journals: list[JournalData], end: float) -> Timeline:
+    tl = Timeline(robot)
+    intervals: list[Interval] = []
+    events: list[Event] = []
+    ordered = sorted(journals, key=lambda j: j.incarnation)
+    for k, j in enumerate(ordered):
+        for line in j.lines:
+            if line.get("robot") != robot:
+                continue
+            if line["k"] == "iv":
+                intervals.append(Interval(line["track"], line["label"], line["start"], line["end"]))
+            elif line["k"] == "ev":
+                events.append(Event(line["time"], line["label"], dict(line.get("data") or {})))
+        if j.last("end") is None:
+            # Killed: close what was open at the last time it recorded (or when the next
+            # incarnation started, if earlier).
+            stop = j.last_time
+            if k + 1 < len(ordered):
+                first = ordered[k + 1].last("first_tick")
+                if first is not None:
+                    stop = min(stop, float(first["time"]))
+            stop = min(stop, end)
+            opened = j.last("open")
+            for track, label, began in (opened or {}).get("intervals", []):
+                if stop > began:
+                    intervals.append(Interval(track, label, float(began), stop))
+    tl.intervals.extend(sorted(intervals, key=lambda i: (i.start, i.track)))
+    tl.events.extend(sorted(events, key=lambda e: e.time))
+    return tl
+
+
+# -- assigner, counts, AON ---------------------------------------------------------------
+
+
+def _assigner_receipts(journals: list[JournalData]) -> set[tuple[str, str]]:
+    received: set[tuple[str, str]] = set()
+    for j in journals:
+        for line in j.of("status_rx"):
+            if line.get("state") == "SUCCESS":
+                received.add((str(line["task_id"]), str(line["robot"])))
+    return received
+
+
+def _counts_by_agent(journals: list[JournalData]) -> dict[str, dict[str, dict[str, int]]]:
+    """Per agent and topic, summed over incarnations (each journal's last snapshot)."""
+    out: dict[str, dict[str, dict[str, int]]] = {}
+    for j in journals:
+        snapshot = j.last("counts")
+        if snapshot is None:
+            continue
+        for agent, topics in snapshot["agents"].items():
+            mine = out.setdefault(agent, {})
+            for topic, counts in topics.items():
+                t = mine.setdefault(
+                    topic, {"sent": 0, "received": 0, "dropped_loss": 0, "dropped_range": 0}
+                )
+                for key in t:
+                    t[key] += int(counts.get(key, 0))
+    return {a: dict(sorted(t.items())) for a, t in sorted(out.items())}
+
+
+def _aon_summary(journals: list[JournalData], timelines: dict[str, Timeline]) -> dict[str, Any]:
+    per_agent: dict[str, dict[str, Any]] = {}
+    keys = (
+        "publications",
+        "resend_publications",
+        "replies",
+        "restarts",
+        "deliveries",
+        "finished",
+        "left_out_reports",
+    )
+    times: dict[str, list[float]] = {}
+    for j in journals:
+        last: dict[str, dict[str, Any]] = {}
+        for line in j.of("aon"):
+            last[line["agent"]] = line
+        for agent, line in last.items():
+            row = per_agent.setdefault(agent, {k: 0 for k in (*keys, "pending")})
+            for k in keys:
+                row[k] += int(line.get(k, 0))
+            row["pending"] = int(line.get("pending", 0))  # the latest incarnation's
+            times.setdefault(agent, []).extend(float(x) for x in line.get("finish_times", []))
+    if not per_agent:
+        return {}
+    for agent, row in per_agent.items():
+        ts = times.get(agent, [])
+        row["mean_finish_time"] = round(sum(ts) / len(ts), 6) if ts else None
+        row["max_finish_time"] = round(max(ts), 6) if ts else None
+    rows = per_agent.values()
+    finish = [r["max_finish_time"] for r in rows if r["max_finish_time"] is not None]
+    total: dict[str, Any] = {
+        k: sum(r[k] for r in rows)
+        for k in ("publications", "resend_publications", "replies", "restarts", "pending")
+    }
+    total["statuses_sent"] = sum(
+        1 for tl in timelines.values() for e in tl.events if e.label == "task_completed"
+    )
+    total["max_finish_time"] = max(finish) if finish else None
+    return {"total": total, "agents": dict(sorted(per_agent.items()))}
+
+
+def _trajectories(world: JournalData, robot_ids: tuple[str, ...]) -> dict[str, list[Any]]:
+    out: dict[str, list[tuple[float, float, float]]] = {rid: [] for rid in robot_ids}
+    for line in world.of("traj"):
+        for rid, (x, y) in line["p"].items():
+            if rid in out:
+                out[rid].append((float(line["t"]), float(x), float(y)))
+    return {rid: sorted(points) for rid, points in out.items()}
+
+
+# -- the live report ----------------------------------------------------------------------
+
+
+def _live_report(
+    journals: list[JournalData], world: JournalData, by_process: dict[str, list[JournalData]]
+) -> dict[str, Any]:
+    world_wall = {round(float(c["sim"]), 3): float(c["wall"]) for c in world.of("clock")}
+    latency: list[float] = []
+    processes: dict[str, Any] = {}
+    for process, js in sorted(by_process.items()):
+        lags = [float(line["max_lag"]) for j in js for line in j.of("lag")]
+        offsets = [
+            float(c["wall"]) - world_wall[round(float(c["sim"]), 3)]
+            for j in js
+            for c in j.of("clock")
+            if round(float(c["sim"]), 3) in world_wall
+        ]
+        for j in js:
+            for line in j.of("pose_latency"):
+                latency.extend(float(x) for x in line["samples"])
+        processes[process] = {
+            "incarnations": [j.incarnation for j in js],
+            "host": js[-1].lines[0].get("host"),
+            "finished": [j.last("end") is not None for j in js],
+            "resynced": [j.last("resync") is not None for j in js],
+            "max_lag_s": max(lags) if lags else None,
+            # Receipt of the clock on this host minus its send on the world's host:
+            # the hosts' clock offset plus the transport latency.
+            "clock_offset_s": round(float(np.median(offsets)), 6) if offsets else None,
+            "left_out": [
+                {"time": line["time"], "msg": line["msg"], "absent": line["absent"]}
+                for j in js
+                for line in j.of("left_out")
+            ],
+        }
+    report: dict[str, Any] = {"processes": processes}
+    report["pose_latency_ms"] = _percentiles(latency)
+    return report
+
+
+def _percentiles(samples: list[float]) -> dict[str, Any]:
+    if not samples:
+        return {"n": 0}
+    a = np.asarray(samples) * 1000.0
+    return {
+        "n": int(a.size),
+        "p50": round(float(np.percentile(a, 50)), 3),
+        "p95": round(float(np.percentile(a, 95)), 3),
+        "p99": round(float(np.percentile(a, 99)), 3),
+        "max": round(float(a.max()), 3),
+    }
+
+
+def _rounded(metrics: dict[str, Any]) -> dict[str, Any]:
+    return {
+        k: (round(v, 6) if isinstance(v, float) and math.isfinite(v) else v)
+        for k, v in metrics.items()
+    }
+
+
+def live_summary(result: MissionResult, report: dict[str, Any]) -> dict[str, Any]:
+    """The JSON of ``mrcomm live --json``: the run summary plus the live report."""
+    summary = result.summary()
+    summary["live"] = report
+    return summary

@@ -1,0 +1,253 @@
+"""``mrcomm live``: one live mission on this host, every agent its own OS process.
+
+:class:`LiveTeam` starts the world process and one agent process per robot (plus a
+stand-alone task assigner when the scenario does not host it on a robot), each a
+Zenoh peer listening on its own loopback port and connecting to all the others (no
+router, no single point of failure). It waits for the mission to end, then collects
+every process's own records (``live.collect``). Tests and fault experiments use its
+handles to kill or restart a process mid-mission.
+
+Children run the ``mrcomm`` command line itself, so what the launcher does can be done
+by hand on several machines (``mrcomm world`` / ``mrcomm agent``, see docs/LIVE.md).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO, Any
+
+from mrcomm.agents.assigner import ASSIGNER_ID
+from mrcomm.errors import InputError
+from mrcomm.live.collect import collect
+from mrcomm.live.protocol import WORLD_ID
+from mrcomm.live.settings import LiveSettings
+from mrcomm.sim.mission import MissionResult
+from mrcomm.world.scenario import load_scenario
+
+_CLI = "from mrcomm.cli.main import app; app()"
+EXIT_GRACE = 15.0  # wall s the agents get to finish after the world has ended
+
+
+@dataclass
+class TlsLayout:
+    """Certificates of a launched team: ``ca.pem`` and ``<process>.pem`` / ``.key``."""
+
+    directory: Path
+    acl: bool = False
+
+    def files(self, process: str) -> tuple[Path, Path, Path]:
+        d = self.directory
+        return d / "ca.pem", d / f"{process}.pem", d / f"{process}.key"
+
+
+@dataclass
+class Child:
+    name: str
+    port: int
+    process: subprocess.Popen[bytes]
+    log: Path
+    handle: IO[bytes] = field(repr=False)
+
+
+class LiveTeam:
+    """The world and agent processes of one live mission on this host."""
+
+    def __init__(
+        self,
+        settings: LiveSettings,
+        *,
+        tls: TlsLayout | None = None,
+        host: str = "127.0.0.1",
+        extra_args: dict[str, list[str]] | None = None,
+        addresses: dict[str, str] | None = None,
+        wrappers: dict[str, list[str]] | None = None,
+    ) -> None:
+        """``addresses`` / ``wrappers`` place processes elsewhere: each listens on its
+        own address (port 7447) and starts under its wrapper command (e.g.
+        ``ip netns exec NS``); by default all listen on ``host``, on free ports."""
+        self.settings = settings
+        self.tls = tls
+        self.host = host
+        self.extra_args = extra_args or {}
+        self.addresses = addresses
+        self.wrappers = wrappers or {}
+        scenario = load_scenario(settings.run.scenario)
+        self.robots = tuple(r.id for r in scenario.robots)
+        standalone = scenario.assigner.kind != "robot"
+        self.names = (WORLD_ID, *self.robots, *((ASSIGNER_ID,) if standalone else ()))
+        self.ports: dict[str, int] = {}
+        self.children: dict[str, Child] = {}
+        self.restarts: dict[str, int] = {}
+
+    # -- processes ---------------------------------------------------------------------
+    def start(self) -> None:
+        self.settings.record_dir.mkdir(parents=True, exist_ok=True)
+        udp = self.settings.zenoh.protocol == "udp"
+        if self.addresses is not None:
+            self.ports = dict.fromkeys(self.names, 7447)  # one address each
+        else:
+            self.ports = {name: free_port(self.host, udp=udp) for name in self.names}
+        for name in self.names:
+            self.spawn(name)
+
+    def spawn(self, name: str) -> Child:
+        """Start (or restart) process ``name`` on its port."""
+        if name not in self.names:
+            raise ValueError(f"no process {name!r} in this team")
+        old = self.children.get(name)
+        if old is not None and old.process.poll() is None:
+            raise RuntimeError(f"{name} is still running")
+        count = self.restarts.get(name, -1) + 1
+        self.restarts[name] = count
+        suffix = f".{count}" if count else ""
+        log = self.settings.record_dir / f"{name}{suffix}.log"
+        handle = log.open("wb")
+        args = [*self.wrappers.get(name, []), sys.executable, "-c", _CLI, *self.command(name)]
+        env = dict(os.environ)
+        env.setdefault("PYTHONUNBUFFERED", "1")
+        process = subprocess.Popen(args, stdout=handle, stderr=subprocess.STDOUT, env=env)
+        child = Child(name, self.ports[name], process, log, handle)
+        self.children[name] = child
+        return child
+
+    def command(self, name: str) -> list[str]:
+        """The ``mrcomm`` arguments that start process ``name``."""
+        s = self.settings
+        run = s.run
+        proto = s.zenoh.protocol
+        args = ["world" if name == WORLD_ID else "agent", str(run.scenario)]
+        if name != WORLD_ID:
+            args += ["--robot", name]
+        args += [
+            "--network", run.network.value,
+            "--spl", f"{run.spl:g}",
+            "--behaviour", run.behaviour,
+            "--threshold", run.threshold,
+            "--seed", str(run.seed),
+            "--max-time", f"{run.max_time:g}",
+            "--dt", f"{run.dt:g}",
+            "--team", s.zenoh.team,
+            "--record-dir", str(s.record_dir),
+            "--listen", f"{proto}/{self.address(name)}:{self.ports[name]}",
+            "--link-lease", f"{s.zenoh.link_lease:g}",
+        ]  # fmt: skip
+        # The team's peers form one mesh; each agent reaches the world (its robot's
+        # body) on a session of its own, so world traffic never shares team links.
+        if name != WORLD_ID:
+            for other in self.names:
+                if other not in (name, WORLD_ID):
+                    args += ["--connect", f"{proto}/{self.address(other)}:{self.ports[other]}"]
+            world = f"{proto}/{self.address(WORLD_ID)}:{self.ports[WORLD_ID]}"
+            args += ["--world-connect", world]
+        if proto == "udp":
+            args += ["--protocol", "udp"]
+        if s.zenoh.multicast:
+            args += ["--multicast"]
+        if name == WORLD_ID:
+            args += ["--speed", f"{s.speed:g}", "--start-timeout", f"{s.start_timeout:g}"]
+        else:
+            args += ["--join-timeout", f"{s.join_timeout:g}"]
+            if s.lease is not None:
+                args += ["--lease", f"{s.lease:g}"]
+        if self.tls is not None:
+            ca, cert, key = self.tls.files(name)
+            args += ["--tls-ca", str(ca), "--tls-cert", str(cert), "--tls-key", str(key)]
+            if self.tls.acl:
+                args += ["--acl", ",".join(self.names)]
+        return args + self.extra_args.get(name, [])
+
+    def address(self, name: str) -> str:
+        return self.addresses[name] if self.addresses is not None else self.host
+
+    def kill(self, name: str, sig: int = signal.SIGKILL) -> None:
+        child = self.children[name]
+        if child.process.poll() is None:
+            child.process.send_signal(sig)
+            child.process.wait(timeout=10)
+
+    def running(self, name: str) -> bool:
+        child = self.children.get(name)
+        return child is not None and child.process.poll() is None
+
+    # -- waiting -------------------------------------------------------------------------
+    def mission_timeout(self) -> float:
+        s = self.settings
+        return s.start_timeout + s.run.max_time / s.speed + 60.0
+
+    def wait(self, timeout: float | None = None) -> None:
+        """Wait for the world to end the mission and the agents to finish; a failed
+        world (bad input, team never ready) raises its one-line error."""
+        deadline = time.monotonic() + (timeout if timeout is not None else self.mission_timeout())
+        world = self.children[WORLD_ID].process
+        try:
+            world.wait(timeout=max(deadline - time.monotonic(), 0.1))
+        except subprocess.TimeoutExpired:
+            self.stop()
+            raise TimeoutError("the live mission did not end in time (see the logs)") from None
+        if world.returncode != 0:
+            self.stop()
+            raise InputError(self.first_error() or f"world exited with status {world.returncode}")
+        agents_deadline = time.monotonic() + EXIT_GRACE
+        for child in self.children.values():
+            remaining = max(agents_deadline - time.monotonic(), 0.1)
+            try:
+                child.process.wait(timeout=remaining)
+            except subprocess.TimeoutExpired:
+                child.process.terminate()
+                child.process.wait(timeout=10)
+
+    def first_error(self) -> str | None:
+        """The first one-line error any process printed (``name: message``)."""
+        for name, child in self.children.items():
+            if not child.handle.closed:
+                child.handle.flush()
+            for line in child.log.read_text(errors="replace").splitlines():
+                if line.startswith("mrcomm: error:"):
+                    return f"{name}: {line.removeprefix('mrcomm: error:').strip()}"
+        return None
+
+    def stop(self) -> None:
+        for child in self.children.values():
+            if child.process.poll() is None:
+                child.process.terminate()
+        for child in self.children.values():
+            try:
+                child.process.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                child.process.kill()
+                child.process.wait()
+            child.handle.close()
+
+    def collect(self) -> tuple[MissionResult, dict[str, Any]]:
+        return collect(self.settings.record_dir)
+
+    def __enter__(self) -> LiveTeam:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+
+def free_port(host: str, *, udp: bool = False) -> int:
+    """A port nobody listens on right now (the OS picks it)."""
+    kind = socket.SOCK_DGRAM if udp else socket.SOCK_STREAM
+    with socket.socket(socket.AF_INET, kind) as sock:
+        sock.bind((host, 0))
+        return int(sock.getsockname()[1])
+
+
+def run_live(
+    settings: LiveSettings, *, tls: TlsLayout | None = None
+) -> tuple[MissionResult, dict[str, Any]]:
+    """Launch, wait for the end of the mission, collect: the live ``mrcomm run``."""
+    with LiveTeam(settings, tls=tls) as team:
+        team.start()
+        team.wait()
+        return team.collect()

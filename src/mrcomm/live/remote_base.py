@@ -1,0 +1,108 @@
+"""RemoteBase: the Base port of an agent process whose robot's body lives elsewhere
+(the world process in live mode; a robot's navigation stack behind an adapter).
+
+``navigate_to`` / ``cancel`` publish a :class:`~mrcomm.live.protocol.BaseCommand`
+on the reliable control lane and never block. The base's state arrives with every
+clock tick; :meth:`update` takes it. Until the state acknowledges the latest command,
+the status is what that command implies (ACTIVE after ``navigate_to``, IDLE after
+``cancel``), so an agent never mistakes the previous goal's SUCCEEDED for the new one.
+
+``make_plan`` plans on the robot's own copy of the map with the same global planner
+as the base (as move_base's ``make_plan`` service does on the robot), from the latest
+pose estimate; without a planner it cannot tell (None).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from mrcomm.live.protocol import BaseCommand, BaseState
+from mrcomm.ports import NavStatus
+from mrcomm.robot.planner import GridPlanner
+from mrcomm.world.geometry import Pose
+
+SendFn = Callable[[BaseCommand], None]
+Point = tuple[float, float]
+
+
+class RemoteBase:
+    """Implements the Base port from commands sent and states received."""
+
+    def __init__(
+        self,
+        robot: str,
+        incarnation: int,
+        start: Pose,
+        send: SendFn,
+        planner: GridPlanner | None = None,
+    ) -> None:
+        self.robot = robot
+        self._planner = planner
+        self.incarnation = incarnation
+        self._send = send
+        self._seq = 0
+        self._pending_status = NavStatus.IDLE
+        self._state: BaseState | None = None
+        self._pose = start
+        self._odometry = 0.0
+        self._speed = 0.0
+
+    # -- Base port -------------------------------------------------------------------
+    def navigate_to(self, x: float, y: float) -> None:
+        self._command("goto", float(x), float(y))
+        self._pending_status = NavStatus.ACTIVE
+
+    def cancel(self) -> None:
+        self._command("cancel", 0.0, 0.0)
+        self._pending_status = NavStatus.IDLE
+
+    def make_plan(self, x: float, y: float) -> tuple[Point, ...] | None:
+        if self._planner is None:
+            return None
+        pose = self._pose
+        path = self._planner.plan((pose.x, pose.y), (float(x), float(y)))
+        return None if path is None else path.waypoints
+
+    @property
+    def status(self) -> NavStatus:
+        if not self.acknowledged:
+            return self._pending_status
+        assert self._state is not None
+        return NavStatus(self._state.status)
+
+    @property
+    def pose(self) -> Pose:
+        return self._pose
+
+    @property
+    def odometry_distance(self) -> float:
+        return self._odometry
+
+    @property
+    def speed(self) -> float:
+        return self._speed
+
+    # -- state from the world / the robot ----------------------------------------------
+    @property
+    def acknowledged(self) -> bool:
+        """The last state received reflects our latest command."""
+        state = self._state
+        if self._seq == 0:
+            return state is not None
+        if state is None or state.incarnation != self.incarnation:
+            return False
+        return state.ack >= self._seq
+
+    @property
+    def has_state(self) -> bool:
+        return self._state is not None
+
+    def update(self, state: BaseState) -> None:
+        self._state = state
+        self._pose = Pose(state.x, state.y, state.theta)
+        self._odometry = state.odometry
+        self._speed = state.v
+
+    def _command(self, kind: str, x: float, y: float) -> None:
+        self._seq += 1
+        self._send(BaseCommand(self.robot, self.incarnation, self._seq, kind, x, y))

@@ -1,0 +1,61 @@
+"""Settings shared by the live processes (world, agents, launcher): the run's
+configuration (the same model as ``mrcomm run``), how to join the Zenoh network,
+where to record, and the live-only knobs (speed, AON lease, time-outs)."""
+
+from __future__ import annotations
+
+import json
+import zlib
+from dataclasses import dataclass
+from pathlib import Path
+
+from mrcomm.errors import InputError
+from mrcomm.net.zenoh_config import ZenohOptions
+from mrcomm.sim.config import RunConfig
+
+
+@dataclass(frozen=True)
+class LiveSettings:
+    run: RunConfig
+    zenoh: ZenohOptions
+    record_dir: Path
+    #: An agent's separate session to the world process (the stand-in for its robot's
+    #: body, local on a real robot): clock and base traffic then never share the team's
+    #: emulated network. None: one session for everything.
+    world: ZenohOptions | None = None
+    #: Simulated seconds per wall-clock second (the world's pace).
+    speed: float = 1.0
+    #: AON lease (simulated s): a member silent this long is reported left out.
+    lease: float | None = None
+    #: Wall seconds an agent waits to reach the team (the world) before giving up.
+    join_timeout: float = 20.0
+    #: Wall seconds the world waits for every agent to be ready.
+    start_timeout: float = 60.0
+
+    def __post_init__(self) -> None:
+        if self.speed <= 0.0:
+            raise InputError("must be positive", field="--speed")
+        if self.lease is not None and self.lease <= 0.0:
+            raise InputError("must be positive", field="--lease")
+        if self.join_timeout <= 0.0:
+            raise InputError("must be positive", field="--join-timeout")
+
+
+def config_crc(run: RunConfig) -> int:
+    """Fingerprint of what the team must agree on (every process gets the same run
+    options; a mismatch would silently change the experiment)."""
+    data = run.model_dump(mode="json")
+    data["scenario"] = Path(str(data["scenario"])).name
+    return zlib.crc32(json.dumps(data, sort_keys=True).encode())
+
+
+def check_record_dir(path: Path) -> Path:
+    path = path.expanduser()
+    if path.exists() and not path.is_dir():
+        raise InputError("not a directory", file=path, field="--record-dir")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        message = f"cannot create: {err.strerror}"
+        raise InputError(message, file=path, field="--record-dir") from None
+    return path

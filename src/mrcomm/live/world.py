@@ -1,0 +1,360 @@
+"""The world process of live mode (``mrcomm world SCENARIO``; issue 7 §2).
+
+Plays the role Stage plays for ROS robots with ``use_sim_time``: it simulates every
+robot's base (:class:`~mrcomm.robot.base.SimBase`, the same as in simulation, with the
+team's true positions for blocking and contact) and publishes the shared clock. Each
+tick of ``dt`` simulated seconds, paced at ``speed`` times wall-clock time:
+
+1. apply the base commands that arrived (in order, per robot and agent incarnation);
+2. advance every base by ``dt``;
+3. publish a :class:`~mrcomm.live.protocol.Tick`: the time and every base's state;
+4. record ground truth (trajectories, separations, link summaries, distance).
+
+It starts once every team member reports ready with the same run configuration, and
+ends the mission when every robot is done and the assigner has settled (after a short
+grace for messages still in flight) or at the time limit, announcing the end until
+the agents have gone. It is not a team member: a crash of any agent leaves it running.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from mrcomm.agents.assigner import ASSIGNER_ID
+from mrcomm.errors import InputError
+from mrcomm.live.agent import team_processes
+from mrcomm.live.journal import Journal, journal_path
+from mrcomm.live.protocol import (
+    CH_AGENT_STATE,
+    CH_BASE_CMD,
+    CH_TICK,
+    WORLD_ID,
+    AgentState,
+    BaseCommand,
+    BaseState,
+    Tick,
+    decoder_of,
+    encoder,
+)
+from mrcomm.live.settings import LiveSettings, config_crc
+from mrcomm.net.links import LinkModel, LinkRecorder
+from mrcomm.net.zenoh_bus import Incoming, Lane, Presence, ZenohNode
+from mrcomm.robot.base import SimBase
+from mrcomm.seeding import stream
+from mrcomm.sim.signals import build_threshold
+from mrcomm.sim.world import SimWorld
+
+TRAJECTORY_PERIOD = 0.5  # simulated s between trajectory samples
+END_GRACE_SIM = 1.0  # simulated s everyone must stay done before the mission ends ...
+END_GRACE_WALL = 0.3  # ... and wall s, for messages still in flight
+END_LINGER = 3.0  # wall s the end is announced while agents are still present
+
+
+class WorldProcess:
+    """Simulates the robots' bases and drives the shared clock."""
+
+    def __init__(self, settings: LiveSettings, incarnation: int) -> None:
+        self.settings = settings
+        run = settings.run
+        self.world = SimWorld.load(run.scenario)
+        scenario = self.world.scenario
+        self.robot_ids = tuple(r.id for r in scenario.robots)
+        self.bases = {
+            r.id: SimBase(
+                r.id,
+                scenario.grid,
+                self.world.planner,
+                r.pose,
+                self.world.robot_params,
+                stream(run.seed, "robot", r.id),
+            )
+            for r in scenario.robots
+        }
+        self.node_ids = (*self.robot_ids, ASSIGNER_ID)
+        self.links = LinkModel(
+            self.node_ids,
+            scenario.grid,
+            run.network,
+            build_threshold(run, self.world, self.node_ids),
+            ah_range=run.ah_range,
+        )
+        host = scenario.assigner.host
+        skip = {(ASSIGNER_ID, host), (host, ASSIGNER_ID)} if host else set()
+        self.link_recorder = LinkRecorder(self.node_ids, skip)
+        self.incarnation = incarnation
+        self.team = team_processes(scenario)
+        self.node = ZenohNode(settings.zenoh)
+        self.journal = Journal(journal_path(settings.record_dir, WORLD_ID, incarnation))
+        self._enc = encoder()
+        self._applied: dict[str, tuple[int, int]] = {}  # robot -> (incarnation, seq)
+        self.states: dict[str, AgentState] = {}
+        self.present: dict[str, set[int]] = {}
+        n = len(self.robot_ids)
+        self._min_sep = np.full(n, np.inf)
+        self._max_sep = np.zeros(n)
+        self._off_diagonal = ~np.eye(n, dtype=np.bool_)
+        self.now = 0.0
+        self._done_since: tuple[float, float] | None = None
+        self._next_sample = 0.0
+        self.wall_start = 0.0
+        self.wall_time = 0.0
+
+    # -- life cycle --------------------------------------------------------------------
+    def run(self) -> int:
+        prefix = self.node.prefix
+        try:
+            self.node.listen(f"{prefix}/*/{CH_BASE_CMD}", CH_BASE_CMD, decoder_of(BaseCommand))
+            self.node.listen(f"{prefix}/*/{CH_AGENT_STATE}", CH_AGENT_STATE, decoder_of(AgentState))
+            self.node.watch_presence()
+            self.node.prepare(self.node.key(WORLD_ID, CH_TICK), Lane.BEST_EFFORT)
+            self.node.declare_alive(WORLD_ID, self.incarnation)
+            config = self.settings.run.model_dump(mode="json")
+            # Collection may run elsewhere: name the scenario by its absolute path.
+            config["scenario"] = str(self.settings.run.scenario.resolve())
+            self.journal.start(
+                process=WORLD_ID,
+                incarnation=self.incarnation,
+                config=config,
+                speed=self.settings.speed,
+                robots=list(self.robot_ids),
+                listen=list(self.settings.zenoh.listen),
+            )
+            self._wait_for_team()
+            end, timed_out = self._tick_loop()
+            self._announce_end(end, timed_out)
+            self._write_truth(end, timed_out)
+        finally:
+            self.journal.close()
+            self.node.close()
+        return 0
+
+    def _wait_for_team(self) -> None:
+        deadline = time.monotonic() + self.settings.start_timeout
+        crc = config_crc(self.settings.run)
+        while True:
+            ready = {a for a, s in self.states.items() if s.ready}
+            covered = {h for a in ready for h in self.states[a].hosted}
+            for agent in ready:
+                if self.states[agent].config_crc != crc:
+                    raise InputError(
+                        f"{agent} runs a different run configuration than the world "
+                        "(every process needs the same scenario and run options)",
+                        field=agent,
+                    )
+            if set(self.team) <= covered:
+                return
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                missing = sorted(set(self.team) - covered)
+                raise InputError(
+                    f"team not ready within {self.settings.start_timeout:g} s: "
+                    f"missing {', '.join(missing)}",
+                    field="--start-timeout",
+                )
+            item = self.node.poll(min(remaining, 0.1))
+            if item is not None:
+                self._on_item(item)
+
+    def _tick_loop(self) -> tuple[float, bool]:
+        run = self.settings.run
+        dt = run.dt
+        period = dt / self.settings.speed
+        self.wall_start = start = time.monotonic()
+        self.journal.write("started", wall=time.time())
+        k = 0
+        self._publish_tick(Tick(0.0, self.settings.speed, self._base_states()))
+        while True:
+            self._drain(None)
+            self._advance(dt)
+            k += 1
+            self.now = round(k * dt, 9)
+            end = self._end_reached()
+            timed_out = end is None and self.now >= run.max_time - 1e-9
+            if end is not None or timed_out:
+                self.wall_time = time.monotonic() - start
+                return (end if end is not None else self.now), timed_out
+            self._publish_tick(Tick(self.now, self.settings.speed, self._base_states()))
+            self._record()
+            target = start + k * period
+            while True:
+                remaining = target - time.monotonic()
+                if remaining <= 0:
+                    break
+                self._drain(remaining)
+
+    def _drain(self, wait: float | None) -> None:
+        item = self.node.poll(wait)
+        while item is not None:
+            self._on_item(item)
+            item = self.node.poll(None)
+
+    def _on_item(self, item: Incoming) -> None:
+        if item.channel == CH_BASE_CMD:
+            self._apply(item.value)
+        elif item.channel == CH_AGENT_STATE:
+            state: AgentState = item.value
+            self.states[state.agent] = state
+        elif item.channel == "presence":
+            presence: Presence = item.value
+            incs = self.present.setdefault(presence.agent, set())
+            if presence.alive:
+                incs.add(presence.incarnation)
+            else:
+                incs.discard(presence.incarnation)
+            self.journal.write(
+                "presence",
+                time=self.now,
+                agent=presence.agent,
+                incarnation=presence.incarnation,
+                alive=presence.alive,
+            )
+
+    def _apply(self, command: BaseCommand) -> None:
+        base = self.bases.get(command.robot)
+        if base is None:
+            return
+        applied = self._applied.get(command.robot)
+        if applied is not None and applied[0] == command.incarnation and command.seq <= applied[1]:
+            return  # duplicate or stale
+        self._applied[command.robot] = (command.incarnation, command.seq)
+        if command.kind == "goto":
+            base.navigate_to(command.x, command.y)
+        elif command.kind == "cancel":
+            base.cancel()
+
+    def _advance(self, dt: float) -> None:
+        truth = [b.true_xy for b in self.bases.values()]
+        for i, base in enumerate(self.bases.values()):
+            base.update(dt, self.now, truth[:i] + truth[i + 1 :])
+
+    def _base_states(self) -> tuple[BaseState, ...]:
+        out = []
+        for rid, base in self.bases.items():
+            pose = base.pose
+            inc, ack = self._applied.get(rid, (0, 0))
+            out.append(
+                BaseState(
+                    rid,
+                    base.status.value,
+                    pose.x,
+                    pose.y,
+                    pose.theta,
+                    base.odometry_distance,
+                    base.speed,
+                    inc,
+                    ack,
+                )
+            )
+        return tuple(out)
+
+    def _publish_tick(self, tick: Tick) -> None:
+        self.node.put(self.node.key(WORLD_ID, CH_TICK), self._enc.encode(tick), Lane.BEST_EFFORT)
+
+    # -- the end ---------------------------------------------------------------------------
+    def _end_reached(self) -> float | None:
+        """Time the team became done, once it has stayed done for the grace period."""
+        done = self._team_done()
+        if not done:
+            self._done_since = None
+            return None
+        if self._done_since is None:
+            self._done_since = (self.now, time.monotonic())
+            return None
+        since, wall = self._done_since
+        if self.now - since >= END_GRACE_SIM and time.monotonic() - wall >= END_GRACE_WALL:
+            return since
+        return None
+
+    def _team_done(self) -> bool:
+        hosts: dict[str, AgentState] = {}
+        for state in self.states.values():
+            if state.incarnation not in self.present.get(state.agent, set()):
+                continue  # a process that has gone
+            for agent in state.hosted:
+                hosts[agent] = state
+        for robot in self.robot_ids:
+            host = hosts.get(robot)
+            if host is None or not host.done:
+                return False
+        assigner = hosts.get(ASSIGNER_ID)
+        return assigner is not None and assigner.settled
+
+    def _announce_end(self, end: float, timed_out: bool) -> None:
+        tick = Tick(self.now, self.settings.speed, self._base_states(), True, end, timed_out)
+        self.journal.write("end", time=end, timed_out=timed_out, wall_time=self.wall_time)
+        deadline = time.monotonic() + END_LINGER
+        while time.monotonic() < deadline:
+            self._publish_tick(tick)
+            agents_left = any(self.present.get(a) for a in self.team)
+            if not agents_left:
+                return
+            self._drain(0.1)
+
+    # -- ground truth ------------------------------------------------------------------------
+    def _record(self) -> None:
+        positions = self._positions()
+        links = self.links.update(positions, self.now)
+        self.link_recorder.record(links, self.settings.run.dt)
+        n = len(self.robot_ids)
+        if n >= 2:
+            d = links.distance[:n, :n]
+            closest = np.where(self._off_diagonal, d, np.inf).min(axis=1)
+            furthest = np.where(self._off_diagonal, d, -np.inf).max(axis=1)
+            np.minimum(self._min_sep, closest, out=self._min_sep)
+            np.maximum(self._max_sep, furthest, out=self._max_sep)
+        if self.now >= self._next_sample:
+            self._next_sample += TRAJECTORY_PERIOD
+            points = {rid: [round(x, 3), round(y, 3)] for rid, (x, y) in self._true_xy()}
+            self.journal.write("traj", t=round(self.now, 3), p=points)
+            self.journal.write("clock", sim=self.now, wall=time.time())
+            self.journal.flush()
+
+    def _true_xy(self) -> list[tuple[str, tuple[float, float]]]:
+        return [(rid, b.true_xy) for rid, b in self.bases.items()]
+
+    def _positions(self) -> np.ndarray:
+        rows = [[b.true_pose.x, b.true_pose.y] for b in self.bases.values()]
+        spec = self.world.scenario.assigner
+        if spec.kind == "robot" and spec.host is not None:
+            host = self.bases[spec.host].true_pose
+            rows.append([host.x, host.y])
+        elif spec.kind == "base_station" and spec.position is not None:
+            rows.append([spec.position[0], spec.position[1]])
+        else:
+            rows.append([math.nan, math.nan])
+        return np.array(rows, dtype=np.float64)
+
+    def _write_truth(self, end: float, timed_out: bool) -> None:
+        truth: dict[str, Any] = {}
+        for i, (rid, base) in enumerate(self.bases.items()):
+            truth[rid] = {
+                "distance": round(base.odometry_distance, 6),
+                "min_separation": _finite(self._min_sep[i]),
+                "max_separation": _finite(self._max_sep[i]),
+                "replans": base.replans,
+                "recoveries": base.recoveries,
+            }
+            p = base.true_pose
+            self.journal.write("traj", t=round(end, 3), p={rid: [round(p.x, 3), round(p.y, 3)]})
+        self.journal.write(
+            "truth",
+            end_time=end,
+            timed_out=timed_out,
+            wall_time=self.wall_time,
+            robots=truth,
+            links=self.link_recorder.summaries(),
+        )
+
+
+def _finite(value: float) -> float | None:
+    return round(float(value), 6) if math.isfinite(value) else None
+
+
+def run_world(settings: LiveSettings, incarnation: int | None = None) -> int:
+    """Run the world process to the end of the mission; returns the exit status."""
+    inc = incarnation if incarnation is not None else time.time_ns() // 1_000_000
+    return WorldProcess(settings, inc).run()

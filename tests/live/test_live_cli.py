@@ -1,0 +1,148 @@
+"""Bad input to the live commands: a clear one-line error and exit status 2 — unknown
+robot, unreachable endpoints, two agents claiming one id, bad TLS files, a busy port,
+a record directory without a world journal."""
+
+from __future__ import annotations
+
+import json
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from mrcomm.live.launcher import free_port
+
+from .certs import make_ca, make_certs
+from .helpers import S1, wait_for
+
+CODE = "from mrcomm.cli.main import app; app()"
+
+
+def mrcomm(*args: str, timeout: float = 60) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-c", CODE, *args], capture_output=True, text=True, timeout=timeout
+    )
+
+
+def one_line_error(done: subprocess.CompletedProcess[str], *needles: str) -> str:
+    assert done.returncode == 2, (done.returncode, done.stdout[-500:], done.stderr[-2000:])
+    lines = [line for line in done.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("mrcomm: error:"), done.stderr
+    for needle in needles:
+        assert needle in lines[0], lines[0]
+    assert "Traceback" not in done.stderr
+    return lines[0]
+
+
+def test_unknown_robot_and_misplaced_assigner(tmp_path: Path) -> None:
+    rec = ["--record-dir", str(tmp_path)]
+    one_line_error(
+        mrcomm("agent", str(S1), "--robot", "robot_9", *rec),
+        "--robot",
+        "robot 'robot_9' is not in scenario S1",
+        "did you mean",
+    )
+    one_line_error(
+        mrcomm("agent", str(S1), "--robot", "assigner", *rec), "runs on robot_2", "--robot robot_2"
+    )
+    one_line_error(mrcomm("agent", str(S1), "--robot", "a/b", *rec), "not a valid id")
+
+
+def test_unreachable_endpoints_and_bad_endpoints(tmp_path: Path) -> None:
+    nobody = free_port("127.0.0.1")
+    done = mrcomm(
+        "agent", str(S1), "--robot", "robot_1", "--connect", f"tcp/127.0.0.1:{nobody}",
+        "--join-timeout", "1", "--record-dir", str(tmp_path),
+    )  # fmt: skip
+    one_line_error(done, "--connect", "no team reachable within 1 s", f"127.0.0.1:{nobody}")
+    assert not list(tmp_path.glob("*.jsonl"))  # nothing half-written
+    one_line_error(
+        mrcomm("agent", str(S1), "--robot", "robot_1", "--connect", "nowhere"), "--connect"
+    )
+    one_line_error(mrcomm("world", str(S1), "--protocol", "sctp"), "--protocol")
+    one_line_error(mrcomm("live", str(S1), "--network", "mesh"), "--network")
+
+
+def test_busy_listen_port(tmp_path: Path) -> None:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        sock.listen()
+        port = sock.getsockname()[1]
+        done = mrcomm(
+            "world", str(S1), "--listen", f"tcp/127.0.0.1:{port}", "--record-dir", str(tmp_path)
+        )
+    one_line_error(done, "--listen", "Address already in use")
+
+
+def test_bad_tls_files(tmp_path: Path) -> None:
+    make_certs(tmp_path, ("robot_1", "robot_2"), make_ca(tmp_path))
+    tls = ["--tls-ca", str(tmp_path / "ca.pem"), "--tls-cert", str(tmp_path / "robot_1.pem")]
+    base = ["world", str(S1), "--listen", "127.0.0.1:0", "--record-dir", str(tmp_path)]
+    one_line_error(
+        mrcomm(*base, *tls, "--tls-key", str(tmp_path / "missing.key")),
+        "missing.key",
+        "--tls-key",
+        "file not found",
+    )
+    one_line_error(
+        mrcomm(*base, *tls, "--tls-key", str(tmp_path / "robot_1.pem")), "not a PEM private key"
+    )
+    one_line_error(
+        mrcomm(*base, *tls, "--tls-key", str(tmp_path / "robot_2.key")), "--tls-cert", "TLS"
+    )
+    one_line_error(mrcomm(*base, *tls[:2]), "needs all of --tls-ca, --tls-cert and --tls-key")
+
+
+def test_two_agents_cannot_claim_the_same_id(tmp_path: Path) -> None:
+    world_port, agent_port = free_port("127.0.0.1"), free_port("127.0.0.1")
+    common = ["--record-dir", str(tmp_path)]
+    world = subprocess.Popen(
+        [sys.executable, "-c", CODE, "world", str(S1), "--listen",
+         f"tcp/127.0.0.1:{world_port}", "--start-timeout", "120", *common],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    first = subprocess.Popen(
+        [sys.executable, "-c", CODE, "agent", str(S1), "--robot", "robot_1", "--listen",
+         f"tcp/127.0.0.1:{agent_port}", "--connect", f"tcp/127.0.0.1:{world_port}", *common],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    try:
+        wait_for(lambda: list(tmp_path.glob("robot_1.*.jsonl")), 60, "robot_1 to join")
+        second = mrcomm(
+            "agent", str(S1), "--robot", "robot_1", "--connect",
+            f"tcp/127.0.0.1:{world_port}", *common,
+        )  # fmt: skip
+        one_line_error(second, "--robot", "'robot_1' is already running", "same id")
+        assert first.poll() is None  # the first one carries on
+        assert len(list(tmp_path.glob("robot_1.*.jsonl"))) == 1
+    finally:
+        for process in (first, world):
+            process.terminate()
+            process.wait(timeout=20)
+
+
+def test_collect_needs_a_world_journal(tmp_path: Path) -> None:
+    one_line_error(mrcomm("collect", str(tmp_path)), "no world journal")
+    one_line_error(mrcomm("collect", str(tmp_path / "nope")), "not a directory")
+
+
+@pytest.mark.parametrize("value", ["0", "-1"])
+def test_speed_must_be_positive(value: str, tmp_path: Path) -> None:
+    one_line_error(
+        mrcomm("world", str(S1), "--speed", value, "--record-dir", str(tmp_path)), "--speed"
+    )
+
+
+def test_live_over_udp_runs_a_mission_slice(tmp_path: Path) -> None:
+    done = mrcomm(
+        "live", str(S1), "--protocol", "udp", "--speed", "20", "--max-time", "30", "--json",
+        "--record-dir", str(tmp_path), timeout=180,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    summary = json.loads(done.stdout)
+    assert summary["mission"]["timed_out"] is True and summary["sim_time_s"] == 30.0
+    pose = summary["messages"]["pose"]
+    assert pose["sent"] > 100 and pose["received"] >= 0.99 * 3 * pose["sent"]
+    assert summary["config"]["mode"] == "live"

@@ -1,0 +1,124 @@
+"""Faults in live mode (issue 7 §4), each a whole mission of separate processes:
+
+* a robot killed with SIGKILL mid-mission: the rest carries on, the mission ends by its
+  time limit, that robot's unfinished tasks count as failed and nothing else is lost;
+* a robot restarted after a crash rejoins with a new incarnation, resynchronises and
+  resumes its remaining agenda without redoing what the team knows is done;
+* with an AON lease, a silent member is reported as left out instead of being waited
+  for, and is brought up to date when it returns.
+"""
+
+from __future__ import annotations
+
+import json
+import signal
+from pathlib import Path
+
+import pytest
+
+from mrcomm.live.launcher import LiveTeam
+from mrcomm.live.settings import LiveSettings
+from mrcomm.net.zenoh_config import make_options
+from mrcomm.sim.config import make_config
+
+from .helpers import S1, wait_for
+
+pytestmark = pytest.mark.slow
+
+SPEED = 20.0
+
+
+def journal_lines(record_dir: Path, process: str) -> list[dict[str, object]]:
+    lines: list[dict[str, object]] = []
+    for path in sorted(record_dir.glob(f"{process}.*.jsonl")):
+        for raw in path.read_text().splitlines():
+            try:
+                lines.append(json.loads(raw))
+            except json.JSONDecodeError:
+                break  # a line being written
+    return lines
+
+
+def completed(record_dir: Path, robot: str) -> list[str]:
+    return [
+        str(line["data"]["task_id"])  # type: ignore[index]
+        for line in journal_lines(record_dir, robot)
+        if line.get("k") == "ev" and line.get("label") == "task_completed"
+    ]
+
+
+def team(tmp_path: Path, lease: float | None = None, **run: object) -> LiveTeam:
+    config = make_config(None, scenario=S1, **run)
+    return LiveTeam(LiveSettings(config, make_options(), tmp_path, speed=SPEED, lease=lease))
+
+
+def test_killed_robot_leaves_the_team_carrying_on_and_its_tasks_failed(tmp_path: Path) -> None:
+    with team(tmp_path, max_time=200.0) as t:
+        t.start()
+        wait_for(lambda: "1" in completed(tmp_path, "robot_1"), 60, "robot_1's first task")
+        t.kill("robot_1", signal.SIGKILL)
+        t.wait()
+        result, report = t.collect()
+    mission = result.mission
+    assert mission["timed_out"] is True and mission["end_time"] == pytest.approx(200.0)
+    assert mission["successful"] is False
+    assert result.robots["robot_1"]["failed_tasks"] == ["4", "7"]  # unfinished: failed
+    assert result.robots["robot_2"]["failed_tasks"] == []  # the rest carried on
+    assert result.robots["robot_3"]["failed_tasks"] == []
+    assert result.robots["robot_2"]["tasks_completed"] == 2
+    assert result.robots["robot_3"]["tasks_completed"] == 2
+    # Nothing else lost: what robot_1 recorded before the kill is in the result.
+    assert result.robots["robot_1"]["tasks_completed"] == 1
+    assert result.robots["robot_1"]["movement_time"] > 10.0
+    assert report["processes"]["robot_1"]["finished"] == [False]
+    assert all(report["processes"][r]["finished"] == [True] for r in ("robot_2", "robot_3"))
+
+
+def test_restarted_robot_resyncs_and_does_not_redo_known_tasks(tmp_path: Path) -> None:
+    with team(tmp_path, max_time=400.0) as t:
+        t.start()
+        wait_for(lambda: "1" in completed(tmp_path, "robot_1"), 60, "robot_1's first task")
+        t.kill("robot_1", signal.SIGKILL)
+        t.spawn("robot_1")  # a new process: a new incarnation
+        t.wait()
+        result, report = t.collect()
+    process = report["processes"]["robot_1"]
+    assert len(process["incarnations"]) == 2
+    assert process["incarnations"][0] < process["incarnations"][1]
+    assert process["resynced"] == [False, True]
+    assert process["finished"] == [False, True]
+    assert result.mission["successful"] is True and result.mission["timed_out"] is False
+    assert sorted(completed(tmp_path, "robot_1")) == ["1", "4", "7"]  # task 1 only once
+    resync = [x for x in journal_lines(tmp_path, "robot_1") if x.get("k") == "resync"]
+    assert resync and resync[0]["skipped"] == ["1"]
+
+
+def test_lease_leaves_a_silent_member_out_and_updates_it_when_it_returns(
+    tmp_path: Path,
+) -> None:
+    with team(tmp_path, behaviour="lf", threshold="slt", max_time=600.0, lease=10.0) as t:
+        t.start()
+        wait_for(lambda: "3" in completed(tmp_path, "robot_3"), 60, "robot_3's first task")
+        t.kill("robot_3", signal.SIGKILL)
+
+        def left_out() -> list[dict[str, object]]:
+            return [
+                x
+                for r in ("robot_1", "robot_2")
+                for x in journal_lines(tmp_path, r)
+                if x.get("k") == "left_out"
+            ]
+
+        # A status sent while robot_3 is gone is, after the lease, reported finished
+        # with robot_3 left out (not waited for).
+        reports = wait_for(left_out, 120, "a left-out report")
+        assert all("robot_3" in x["absent"] for x in reports)  # type: ignore[operator]
+        assert all(x["msg"][0] != "robot_3" for x in reports)  # type: ignore[index]
+        t.spawn("robot_3")
+        t.wait()
+        result, _ = t.collect()
+    assert result.mission["successful"] is True
+    assert sum(a["left_out_reports"] for a in result.aon["agents"].values()) >= 1
+    # Brought up to date: nothing pending anywhere at the end.
+    assert result.aon["total"]["pending"] == 0
+    assert sorted(completed(tmp_path, "robot_3")) == ["3", "6"]

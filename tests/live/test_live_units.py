@@ -1,0 +1,168 @@
+"""Fast unit tests of the live pieces: RemoteBase (the Base port over commands and
+states), the restart resynchronisation, timeline journalling and its merge."""
+
+from __future__ import annotations
+
+import inspect
+import json
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+from mrcomm.live.collect import _timeline, read_journals
+from mrcomm.live.journal import Journal, TimelineTail
+from mrcomm.live.protocol import BaseCommand, BaseState, SyncReply, SyncRequest
+from mrcomm.live.remote_base import RemoteBase
+from mrcomm.live.resync import Resync, reply_for
+from mrcomm.messaging.messages import TOPIC_ASSIGNMENT, Assignment, Message, TaskSpec, TaskStatus
+from mrcomm.metrics.timeline import ACTIVITY, Timeline
+from mrcomm.ports import Base, NavStatus
+from mrcomm.world.geometry import Pose
+
+
+def state(status: str, inc: int, ack: int, x: float = 1.0) -> BaseState:
+    return BaseState("robot_1", status, x, 2.0, 0.5, 3.0, 0.4, inc, ack)
+
+
+def test_remote_base_implements_every_member_of_the_base_port() -> None:
+    members = {n for n, _ in inspect.getmembers(Base) if not n.startswith("_")}
+    assert members <= set(dir(RemoteBase)), members - set(dir(RemoteBase))
+
+
+def test_remote_base_reports_the_latest_command_until_the_world_acknowledges_it() -> None:
+    sent: list[BaseCommand] = []
+    base = RemoteBase("robot_1", 7, Pose(0.0, 0.0, 0.0), sent.append)
+    assert base.status is NavStatus.IDLE and base.pose == Pose(0.0, 0.0, 0.0)
+    base.update(state("succeeded", 7, 0))  # before any command: the world's view
+    assert base.status is NavStatus.SUCCEEDED
+    base.navigate_to(5.0, 6.0)
+    assert sent[-1] == BaseCommand("robot_1", 7, 1, "goto", 5.0, 6.0)
+    base.update(state("succeeded", 7, 0))  # the old goal's success: not ours
+    assert base.status is NavStatus.ACTIVE
+    base.update(state("succeeded", 3, 5))  # a former incarnation's acknowledgement
+    assert base.status is NavStatus.ACTIVE
+    base.update(state("aborted", 7, 1, x=4.0))
+    assert base.status is NavStatus.ABORTED
+    assert (base.pose.x, base.odometry_distance, base.speed) == (4.0, 3.0, 0.4)
+    base.cancel()
+    assert sent[-1].kind == "cancel" and base.status is NavStatus.IDLE
+    assert base.make_plan(1.0, 1.0) is None  # no planner: cannot tell
+
+
+def test_remote_base_plans_on_its_own_map(s1_world: Any) -> None:
+    start = s1_world.scenario.robots[0].pose
+    base = RemoteBase("robot_1", 1, start, lambda c: None, s1_world.planner)
+    route = base.make_plan(22.2, 13.8)
+    assert route is not None and len(route) >= 2
+    assert abs(route[-1][0] - 22.2) < 0.5 and abs(route[-1][1] - 13.8) < 0.5
+
+
+class _FakeExecutor:
+    def __init__(self) -> None:
+        self.robot_id = "robot_1"
+        self.incarnation = 9
+        self.known_done: set[str] = {"2"}
+        self.statuses: list[TaskStatus] = []
+
+    def on_team_status(self, status: TaskStatus) -> None:
+        self.statuses.append(status)
+
+
+class _FakeEndpoint:
+    def __init__(self) -> None:
+        self.gate: Any = None
+        self.injected: list[tuple[str, Message]] = []
+
+    def inject(self, topic: str, message: Message) -> None:
+        self.injected.append((topic, message))
+
+
+def _task(task_id: str, n: int = 1) -> TaskSpec:
+    return TaskSpec(task_id, "T", 0.0, 0.0, num_robots=n)
+
+
+def _assignment(*tasks: TaskSpec) -> Assignment:
+    return Assignment(
+        sender="assigner",
+        incarnation=1,
+        seq=0,
+        stamp=0.0,
+        robot="robot_1",
+        tasks=tasks,
+        team=("robot_1", "robot_2"),
+    )
+
+
+def test_resync_skips_what_the_team_knows_this_robot_completed() -> None:
+    executor, endpoint, requests = _FakeExecutor(), _FakeEndpoint(), []
+    resync = Resync(executor, endpoint, lambda: requests.append(1), wait=2.0)  # type: ignore[arg-type]
+    resync.start(50.0)
+    assert requests == [1] and endpoint.gate is not None
+    agenda = _assignment(_task("1"), _task("4"), _task("5", n=2), _task("7"))
+    # The assignment broadcast arriving meanwhile is held back (and kept).
+    assert endpoint.gate(TOPIC_ASSIGNMENT, agenda) is None
+    resync.on_reply(SyncReply("robot_2", "robot_1", 8, (("9", ""),)))  # an old incarnation's
+    resync.on_reply(
+        SyncReply(
+            "robot_2",
+            "robot_1",
+            9,
+            (("1", "robot_1"), ("4", ""), ("5", "robot_2")),
+        )
+    )
+    assert not resync.step(50.5, alive={"robot_2", "robot_3"})  # robot_3 still to answer
+    assert resync.step(52.0, alive={"robot_2", "robot_3"})  # the wait is over
+    topic, message = endpoint.injected[0]
+    assert topic == TOPIC_ASSIGNMENT and isinstance(message, Assignment)
+    # 1: robot_1's own; 4: single-robot task done by someone; 5 needs two robots and
+    # robot_2's part says nothing of ours; 7: unknown.
+    assert [t.task_id for t in message.tasks] == ["5", "7"]
+    assert resync.skipped == ["1", "4"]
+    assert {s.task_id for s in executor.statuses} == {"1", "4", "5"}
+    assert endpoint.gate is None
+
+
+def test_reply_carries_known_tasks_and_the_assigners_agenda() -> None:
+    executor = _FakeExecutor()
+
+    assigner = SimpleNamespace(
+        incarnation=3,
+        team=("robot_1", "robot_2"),
+        agenda={"robot_1": [_task("1")], "robot_2": [_task("2")]},
+        success_received={("2", "robot_2"): 10.0},
+    )
+    request = SyncRequest("robot_1", 9)
+    reply = reply_for(request, "robot_2", executor, assigner, 60.0)  # type: ignore[arg-type]
+    assert reply.to == "robot_1" and reply.to_incarnation == 9
+    assert set(reply.done) == {("2", ""), ("2", "robot_2")}
+    assert reply.assignment is not None and [t.task_id for t in reply.assignment.tasks] == ["1"]
+
+
+def test_journalled_timeline_survives_a_kill_and_merges_incarnations(tmp_path: Path) -> None:
+    first = Timeline("robot_1")
+    journal = Journal(tmp_path / "robot_1.1.jsonl")
+    journal.start(process="robot_1", incarnation=1)
+    tail = TimelineTail(first, journal)
+    first.set_state(ACTIVITY, "init", 0.0)
+    tail.flush(0.0)
+    first.set_state(ACTIVITY, "moving", 1.0)
+    first.event("task_completed", 5.0, task_id="1")
+    tail.flush(5.0)
+    journal.write("clock", sim=8.0, wall=0.0)
+    journal.flush()  # ... and then SIGKILL: no close, no end line
+    second = Timeline("robot_1")
+    journal2 = Journal(tmp_path / "robot_1.2.jsonl")
+    journal2.start(process="robot_1", incarnation=2)
+    journal2.write("first_tick", time=10.0, wall=0.0)
+    tail2 = TimelineTail(second, journal2)
+    second.set_state(ACTIVITY, "moving", 10.0)
+    second.close_all(20.0)
+    tail2.flush(20.0)
+    journal2.write("end", time=20.0)
+    journal2.close()
+    (tmp_path / "world.1.jsonl").write_text(json.dumps({"k": "start"}) + "\n")
+    journals = [j for j in read_journals(tmp_path) if j.process == "robot_1"]
+    merged = _timeline("robot_1", journals, end=20.0)
+    moving = [(i.start, i.end) for i in merged.intervals if i.label == "moving"]
+    assert moving == [(1.0, 8.0), (10.0, 20.0)]  # the killed one closed where it stopped
+    assert merged.count("task_completed") == 1
