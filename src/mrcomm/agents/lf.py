@@ -367,15 +367,7 @@ class LeaderFollowerExecutor(TaskExecutor):
             return
         if message.round > self._round:
             self._open_round(message.round)
-        if message.round != self._round:
-            return
-        if self.leader is not None and message.leader != self.leader:
-            # The round split: members decided on different partial scores after a
-            # time-out. Start a new round; with everyone's scores they agree.
-            self.timeline.event(L.ROUND_SPLIT, self._now, round=self._round)
-            self._open_round(self._round + 1)
-            return
-        if self.state != "assigning":
+        if message.round != self._round or self.state != "assigning":
             return
         self._roles[message.sender] = message.role
         self._scores.setdefault(message.sender, 0.0)

@@ -36,5 +36,4 @@ ROLE_REGROUPING = "regrouping"
 DISCONNECT_DETECTED = "disconnect_detected"
 ROLE_ASSIGNED = "role_assigned"
 ROLES_DISSOLVED = "roles_dissolved"
-ROUND_SPLIT = "round_split"  # two leaders for one round: a new round is opened
 DIRECT_ROUTE = "direct_route"  # a follower's route would leave the connection area
