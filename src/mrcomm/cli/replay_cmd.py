@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 from rich.console import Console
 from rich.table import Table
 
+from mrcomm.cli.display import fmt
 from mrcomm.experiment.recording_reader import (
     OUTCOMES,
     RecordingSummary,
@@ -47,7 +48,7 @@ def print_summary(summary: RecordingSummary, console: Console) -> None:
     for col in ("messages", "start s", "end s"):
         channels.add_column(col, justify="right")
     for c in summary.channels:
-        channels.add_row(c.topic, c.schema, str(c.count), _fmt(c.start), _fmt(c.end))
+        channels.add_row(c.topic, c.schema, str(c.count), fmt(c.start), fmt(c.end))
     console.print(channels)
 
     if result is None:
@@ -59,9 +60,9 @@ def print_summary(summary: RecordingSummary, console: Console) -> None:
         console.print(
             f"Mission {verdict} (scenario {config.get('scenario_name', '?')}, seed "
             f"{config.get('seed', '?')}): {mission.get('tasks_completed', '?')} tasks completed,"
-            f" failed tasks: {_fmt(mission.get('failed_tasks'))}, execution phase "
-            f"{_fmt(mission.get('execution_phase_time'))} s, timed out: "
-            f"{_fmt(mission.get('timed_out'))}"
+            f" failed tasks: {fmt(mission.get('failed_tasks'))}, execution phase "
+            f"{fmt(mission.get('execution_phase_time'))} s, timed out: "
+            f"{fmt(mission.get('timed_out'))}"
         )
 
     outcomes = Table(title="Message outcomes (/messages)")
@@ -71,13 +72,3 @@ def print_summary(summary: RecordingSummary, console: Console) -> None:
     for topic, counts in summary.outcomes.items():
         outcomes.add_row(topic, *(str(counts[o]) for o in OUTCOMES))
     console.print(outcomes)
-
-
-def _fmt(value: Any) -> str:
-    if value is None:
-        return "-"
-    if isinstance(value, float):
-        return f"{value:.2f}"
-    if isinstance(value, list):
-        return ", ".join(map(str, value)) or "none"
-    return str(value)

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 from rich.console import Console
 from rich.table import Table
 
+from mrcomm.cli.display import fmt
 from mrcomm.cli.files import check_writable, write_atomically
 from mrcomm.errors import InputError
 from mrcomm.net.network import NetworkType
@@ -103,7 +104,7 @@ def print_result(result: MissionResult, console: Console) -> None:
         "max_separation",
         "timed_out",
     ):
-        mission.add_row(key, _fmt(m.get(key)))
+        mission.add_row(key, fmt(m.get(key)))
     console.print(mission)
 
     robots = Table(title="Robots")
@@ -125,7 +126,7 @@ def print_result(result: MissionResult, console: Console) -> None:
         "min_separation",
         "max_separation",
     ):
-        robots.add_row(key, *(_fmt(row.get(key)) for row in result.robots.values()))
+        robots.add_row(key, *(fmt(row.get(key)) for row in result.robots.values()))
     console.print(robots)
 
     messages = Table(title="Messages")
@@ -135,13 +136,3 @@ def print_result(result: MissionResult, console: Console) -> None:
     for topic, counts in result.messages.items():
         messages.add_row(topic, *(str(counts[c]) for c in counts))
     console.print(messages)
-
-
-def _fmt(value: Any) -> str:
-    if value is None:
-        return "-"
-    if isinstance(value, float):
-        return f"{value:.2f}"
-    if isinstance(value, list):
-        return ", ".join(map(str, value)) or "none"
-    return str(value)

@@ -32,7 +32,7 @@ from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
 from mrcomm.agents.behaviours import behaviour_class
 from mrcomm.agents.executor import TaskExecutor
 from mrcomm.errors import InputError, did_you_mean
-from mrcomm.live.journal import Journal, TimelineTail, journal_path
+from mrcomm.live.journal import Journal, TimelineTail, journal_path, track_presence
 from mrcomm.live.protocol import (
     CH_AGENT_STATE,
     CH_BASE_CMD,
@@ -355,18 +355,7 @@ class AgentProcess:
         return host if agent == ASSIGNER_ID and host is not None else agent
 
     def _on_presence(self, presence: Presence) -> None:
-        incs = self.present.setdefault(presence.agent, set())
-        if presence.alive:
-            incs.add(presence.incarnation)
-        else:
-            incs.discard(presence.incarnation)
-        self.journal.write(
-            "presence",
-            time=self.now,
-            agent=presence.agent,
-            incarnation=presence.incarnation,
-            alive=presence.alive,
-        )
+        track_presence(self.present, presence, self.journal, self.now)
 
     def _heard_from_present(self, now: float) -> None:
         """A member whose liveliness token is present is alive for the AON lease (the

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from mrcomm.metrics.timeline import ACTIVITY, ROLE, Timeline
+from mrcomm.net.zenoh_bus import Presence
 
 #: Outcome codes of the message log (short: the log has a line per delivery).
 OUTCOME_CODE = {"received": "r", "dropped_loss": "l", "dropped_range": "x"}
@@ -136,3 +137,21 @@ class TimelineTail:
                     return interval.end
                 break
         return now
+
+
+def track_presence(
+    present: dict[str, set[int]], presence: Presence, journal: Journal, now: float
+) -> None:
+    """Apply a liveliness change to ``present`` (agent -> live incarnations) and journal it."""
+    incarnations = present.setdefault(presence.agent, set())
+    if presence.alive:
+        incarnations.add(presence.incarnation)
+    else:
+        incarnations.discard(presence.incarnation)
+    journal.write(
+        "presence",
+        time=now,
+        agent=presence.agent,
+        incarnation=presence.incarnation,
+        alive=presence.alive,
+    )

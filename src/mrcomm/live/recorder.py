@@ -104,13 +104,7 @@ class AgentRecorder:
             self.journal.write(
                 "aon",
                 agent=agent,
-                publications=st.publications,
-                resend_publications=st.resend_publications,
-                replies=st.replies,
-                restarts=st.restarts,
-                deliveries=st.deliveries,
-                finished=st.finished,
-                left_out_reports=st.left_out_reports,
+                **st.counters(),
                 pending=len(aon.pending_ids()),
                 finish_times=list(st.finish_times.values()),
             )

@@ -27,7 +27,7 @@ import numpy as np
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.errors import InputError
 from mrcomm.live.agent import team_processes
-from mrcomm.live.journal import Journal, journal_path
+from mrcomm.live.journal import Journal, journal_path, track_presence
 from mrcomm.live.protocol import (
     CH_AGENT_STATE,
     CH_BASE_CMD,
@@ -42,7 +42,7 @@ from mrcomm.live.protocol import (
 )
 from mrcomm.live.settings import LiveSettings, config_crc
 from mrcomm.net.links import LinkModel, LinkRecorder
-from mrcomm.net.zenoh_bus import Incoming, Lane, Presence, ZenohNode
+from mrcomm.net.zenoh_bus import Incoming, Lane, ZenohNode
 from mrcomm.robot.base import SimBase
 from mrcomm.seeding import stream
 from mrcomm.sim.signals import build_threshold
@@ -199,19 +199,7 @@ class WorldProcess:
             state: AgentState = item.value
             self.states[state.agent] = state
         elif item.channel == "presence":
-            presence: Presence = item.value
-            incs = self.present.setdefault(presence.agent, set())
-            if presence.alive:
-                incs.add(presence.incarnation)
-            else:
-                incs.discard(presence.incarnation)
-            self.journal.write(
-                "presence",
-                time=self.now,
-                agent=presence.agent,
-                incarnation=presence.incarnation,
-                alive=presence.alive,
-            )
+            track_presence(self.present, item.value, self.journal, self.now)
 
     def _apply(self, command: BaseCommand) -> None:
         base = self.bases.get(command.robot)
@@ -317,16 +305,8 @@ class WorldProcess:
         return [(rid, b.true_xy) for rid, b in self.bases.items()]
 
     def _positions(self) -> np.ndarray:
-        rows = [[b.true_pose.x, b.true_pose.y] for b in self.bases.values()]
-        spec = self.world.scenario.assigner
-        if spec.kind == "robot" and spec.host is not None:
-            host = self.bases[spec.host].true_pose
-            rows.append([host.x, host.y])
-        elif spec.kind == "base_station" and spec.position is not None:
-            rows.append([spec.position[0], spec.position[1]])
-        else:
-            rows.append([math.nan, math.nan])
-        return np.array(rows, dtype=np.float64)
+        robots = {rid: b.true_xy for rid, b in self.bases.items()}
+        return np.array([*robots.values(), self.world.scenario.assigner.locate(robots)])
 
     def _write_truth(self, end: float, timed_out: bool) -> None:
         truth: dict[str, Any] = {}

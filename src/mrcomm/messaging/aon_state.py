@@ -138,5 +138,18 @@ class AonStats:
     finished: int = 0
     #: Finish reports naming left-out members.
     left_out_reports: int = 0
+
+    def counters(self) -> dict[str, int]:
+        """The integer counters, by name (for results and journals)."""
+        return {
+            "publications": self.publications,
+            "resend_publications": self.resend_publications,
+            "replies": self.replies,
+            "restarts": self.restarts,
+            "deliveries": self.deliveries,
+            "finished": self.finished,
+            "left_out_reports": self.left_out_reports,
+        }
+
     #: Seconds from first holding a message to its (first) finish, per message.
     finish_times: dict[MessageId, float] = field(default_factory=dict)

@@ -11,6 +11,10 @@ from enum import StrEnum
 
 import msgspec
 
+from mrcomm.world.tasks import TaskSpec
+
+__all__ = ["TaskSpec"]  # re-exported: the assignment message carries tasks
+
 # Topic names (the key space in live mode is mrcomm/<team>/<robot>/<topic>).
 TOPIC_ASSIGNMENT = "assignment"
 TOPIC_POSE = "pose"
@@ -44,19 +48,6 @@ class Message(msgspec.Struct, frozen=True, tag=True, kw_only=True):
     incarnation: int
     seq: int
     stamp: float
-
-
-class TaskSpec(msgspec.Struct, frozen=True):
-    """One task of the mission (SPEC §1 task file)."""
-
-    task_id: str
-    type: str
-    x: float
-    y: float
-    arrival_time: float = 0.0
-    num_robots: int = 1
-    duration: float = 0.0
-    depends: tuple[str, ...] = ()
 
 
 class Assignment(Message, frozen=True, tag="assignment"):

@@ -172,7 +172,8 @@ class Mission:
     def step(self) -> None:
         now = self.now
         dt = self.config.dt
-        positions = self._node_positions()
+        truth = [b.true_xy for b in self.bases.values()]
+        positions = self._node_positions(truth)
         links = self.links.update(positions, now)
         self.last_links = links
         self.network.set_connected(links.connected.tolist())
@@ -185,7 +186,7 @@ class Mission:
         self.assigner.step(now)
         for executor in self.executors.values():
             executor.step(now)
-        truth = [(b.true_pose.x, b.true_pose.y) for b in self.bases.values()]
+        # Bases have not moved since `truth` was taken: it is each one's view of the others.
         for i, base in enumerate(self.bases.values()):
             others = truth[:i] + truth[i + 1 :]
             base.update(dt, now, others)
@@ -207,17 +208,11 @@ class Mission:
             self.finished = True
 
     # -- per-step bookkeeping ------------------------------------------------------------
-    def _node_positions(self) -> np.ndarray:
-        rows = [[b.true_pose.x, b.true_pose.y] for b in self.bases.values()]
-        spec = self.world.scenario.assigner
-        if spec.kind == "robot" and spec.host is not None:
-            host = self.bases[spec.host].true_pose
-            rows.append([host.x, host.y])
-        elif spec.kind == "base_station" and spec.position is not None:
-            rows.append([spec.position[0], spec.position[1]])
-        else:
-            rows.append([math.nan, math.nan])  # virtual: no position, never out of range
-        return np.array(rows, dtype=np.float64)
+    def _node_positions(self, robots: list[tuple[float, float]]) -> np.ndarray:
+        assigner = self.world.scenario.assigner.locate(
+            dict(zip(self.robot_ids, robots, strict=True))
+        )
+        return np.array([*robots, assigner], dtype=np.float64)
 
     def _track_separation(self, links: LinkState) -> None:
         n = len(self.robot_ids)
@@ -307,13 +302,7 @@ class Mission:
             st = aon.stats
             times = list(st.finish_times.values())
             per_agent[agent] = {
-                "publications": st.publications,
-                "resend_publications": st.resend_publications,
-                "replies": st.replies,
-                "restarts": st.restarts,
-                "deliveries": st.deliveries,
-                "finished": st.finished,
-                "left_out_reports": st.left_out_reports,
+                **st.counters(),
                 "pending": len(aon.pending_ids()),
                 "mean_finish_time": round(sum(times) / len(times), 6) if times else None,
                 "max_finish_time": round(max(times), 6) if times else None,

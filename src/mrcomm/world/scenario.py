@@ -23,6 +23,7 @@ import functools
 import graphlib
 import math
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -33,10 +34,10 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from scipy import ndimage
 
 from mrcomm.errors import InputError
-from mrcomm.messaging.messages import TaskSpec
 from mrcomm.world.geometry import Pose
 from mrcomm.world.mapio import load_map
 from mrcomm.world.occupancy import OccupancyGrid
+from mrcomm.world.tasks import TaskSpec
 from mrcomm.world.yamlfile import read_yaml, validation_error
 
 #: Turtlebot 2 footprint radius (SPEC §6): the default clearance a pose needs.
@@ -151,6 +152,15 @@ class AssignerSpec:
     kind: Literal["robot", "base_station", "virtual"]
     host: str | None = None
     position: tuple[float, float] | None = None
+
+    def locate(self, robots: Mapping[str, tuple[float, float]]) -> tuple[float, float]:
+        """Where the assigner is, given the robots' positions: its host's position, the
+        base station's, or NaN for a virtual assigner (no position, never out of range)."""
+        if self.kind == "robot" and self.host is not None:
+            return robots[self.host]
+        if self.kind == "base_station" and self.position is not None:
+            return self.position
+        return (math.nan, math.nan)
 
 
 @dataclass(frozen=True)
