@@ -52,15 +52,21 @@ def team(tmp_path: Path, lease: float | None = None, **run: object) -> LiveTeam:
     return LiveTeam(LiveSettings(config, make_options(), tmp_path, speed=SPEED, lease=lease))
 
 
+# S1 NB missions take 180-190 s simulated: the limit leaves the surviving robots room to
+# finish (a live run lags a little behind the simulated clock, and a dead robot is an
+# obstacle to drive around) while the killed robot's tasks stay unfinished.
+KILL_MISSION_LIMIT = 300.0
+
+
 def test_killed_robot_leaves_the_team_carrying_on_and_its_tasks_failed(tmp_path: Path) -> None:
-    with team(tmp_path, max_time=200.0) as t:
+    with team(tmp_path, max_time=KILL_MISSION_LIMIT) as t:
         t.start()
         wait_for(lambda: "1" in completed(tmp_path, "robot_1"), 60, "robot_1's first task")
         t.kill("robot_1", signal.SIGKILL)
         t.wait()
         result, report = t.collect()
     mission = result.mission
-    assert mission["timed_out"] is True and mission["end_time"] == pytest.approx(200.0)
+    assert mission["timed_out"] is True and mission["end_time"] == pytest.approx(KILL_MISSION_LIMIT)
     assert mission["successful"] is False
     assert result.robots["robot_1"]["failed_tasks"] == ["4", "7"]  # unfinished: failed
     assert result.robots["robot_2"]["failed_tasks"] == []  # the rest carried on
