@@ -78,3 +78,21 @@ def test_vectorised_matches_scalar_on_random_segments() -> None:
 def test_line_of_sight_empty_batch() -> None:
     grid = _walled()
     assert grid.line_of_sight_many(np.zeros((0, 2)), np.zeros((0, 2))).shape == (0,)
+
+
+def test_ends_on_the_outermost_cells_are_obstructed() -> None:
+    # Bounds are checked once at the ends (not per cell): a ray may touch the map's
+    # border only by ending there, and that counts as obstructed, as off the map does.
+    grid = _empty()  # 41 x 41 cells of 5 cm from (-1, -1); no obstacle at all
+    assert grid.line_of_sight(-0.9, 0.0, 0.9, 0.0)  # second cell to second-last cell
+    assert not grid.line_of_sight(-0.99, 0.0, 0.9, 0.0)  # starts on the first column
+    assert not grid.line_of_sight(0.0, 0.0, 0.0, 1.04)  # ends on the last row
+    assert grid.ray_clearance(-0.99, 0.0, 0.9, 0.0) < 0.0
+
+
+def test_ray_clearance_is_the_nearest_wall_along_the_ray_less_a_cell_diagonal() -> None:
+    grid = _walled()  # wall at x in [1.5, 1.55), open below y = 0.25
+    # A horizontal ray at y = 1.025 from x = 0.525 to 1.025: nearest wall cell centre
+    # 1.525 - 1.025 = 0.5 m from the ray's last cell centre.
+    clearance = grid.ray_clearance(0.525, 1.025, 1.025, 1.025)
+    assert clearance == pytest.approx(0.5 - np.sqrt(2) * 0.05)

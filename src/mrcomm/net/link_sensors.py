@@ -44,6 +44,7 @@ class ModelSensor:
     def __init__(self, grid: OccupancyGrid, table: RssiTable, warning_dbm: float) -> None:
         self.grid = grid
         self.sight = LineOfSightCache(grid)
+        grid.prepare_ray_casts()
         self.table = table
         self.warning_dbm = warning_dbm
 

@@ -17,7 +17,7 @@ model within that distance. Nothing is cast while both ends stand still.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mrcomm.net.network import AH_RANGE_M, NetworkType
-from mrcomm.net.thresholds import BoolArray, FloatArray, PairGeometry, Threshold
+from mrcomm.net.thresholds import BoolArray, FloatArray, PairGeometry, PairLayout, Threshold
 from mrcomm.world.occupancy import OccupancyGrid
 
 
@@ -68,80 +68,92 @@ class LinkModel:
         self.ah_range = ah_range
         aliases = dict(aliases or {})
         self.evaluated_ids = tuple(node for node in ids if node not in aliases)
-        self._evaluated = np.array([ids.index(node) for node in self.evaluated_ids])
-        expand = [self.evaluated_ids.index(aliases.get(node, node)) for node in ids]
-        self._expand = np.ix_(expand, expand) if aliases else None
+        self._evaluated = [ids.index(node) for node in self.evaluated_ids]
         n = len(self.evaluated_ids)
-        iu = np.triu_indices(n, k=1)
-        self._pairs_i, self._pairs_j = iu
-        self._eye = np.eye(n, dtype=np.bool_)
-        self._pairs = list(zip(self._pairs_i.tolist(), self._pairs_j.tolist(), strict=True))
+        self.layout = PairLayout(n)
+        self._off_diagonal = ~np.eye(n, dtype=np.bool_)
+        # Flat indices that expand an evaluated (n, n) matrix to all ids (aliases copy
+        # their host's row and column) in one take.
+        rows = [self.evaluated_ids.index(aliases.get(node, node)) for node in ids]
+        self._expand = (
+            np.array([[i * n + j for j in rows] for i in rows], dtype=np.intp) if aliases else None
+        )
         # Per pair: its ends at the last ray cast, what that cast found, and how far an
         # end may move before the answer may change.
-        self._cast_from: list[tuple[float, float, float, float] | None] = [None] * len(self._pairs)
-        self._cast_value = [True] * len(self._pairs)
-        self._cast_slack = [0.0] * len(self._pairs)
+        pairs = self.layout.pairs
+        self._cast_from: list[tuple[float, float, float, float] | None] = [None] * len(pairs)
+        self._cast_value = [True] * len(pairs)
+        self._cast_slack = [0.0] * len(pairs)
+        self._sight: tuple[tuple[bool, ...], BoolArray] | None = None
         self.casts = 0
+        if threshold.needs_line_of_sight:
+            grid.prepare_ray_casts()
 
-    def update(self, positions: NDArray[np.float64], now: float) -> LinkState:
-        """``positions``: (n, 2), NaN rows for nodes without a position."""
+    def update(
+        self, positions: Sequence[Sequence[float]] | NDArray[np.float64], now: float
+    ) -> LinkState:
+        """``positions``: one (x, y) per id, NaN for nodes without a position."""
+        xy = positions.tolist() if isinstance(positions, np.ndarray) else positions
         if self._expand is not None:
-            positions = positions[self._evaluated]
-        diff = positions[:, None, :] - positions[None, :, :]
-        distance = np.sqrt((diff**2).sum(axis=2))
+            xy = [xy[i] for i in self._evaluated]
+        hypot = math.hypot
+        pair_distance = [
+            hypot(xy[a][0] - xy[b][0], xy[a][1] - xy[b][1]) for a, b in self.layout.pairs
+        ]
+        distance = self.layout.matrix(pair_distance, 0.0)
         line_of_sight: BoolArray | None = None
+        sight: list[bool] | None = None
         if self.threshold.needs_line_of_sight:
-            rows = distance.tolist()
-            sight = self._line_of_sight(positions.tolist(), rows)
-            pairs = PairGeometry(distance, rows, sight)
-            line_of_sight = np.array(sight, dtype=np.bool_)
-        else:
-            pairs = PairGeometry(distance)
+            sight = self._line_of_sight(xy, pair_distance)
+            line_of_sight = self._sight_matrix(sight)
+        pairs = PairGeometry(distance, self.layout, pair_distance, sight)
         rssi, warning = self.threshold.evaluate(pairs, now)
+        warning = warning & self._off_diagonal
+        if self._expand is not None:
+            e = self._expand
+            distance, warning = distance.take(e), warning.take(e)
+            line_of_sight = None if line_of_sight is None else line_of_sight.take(e)
+            rssi = None if rssi is None else rssi.take(e)
         if self.network is NetworkType.AH:
             connected = ~(distance > self.ah_range)  # NaN (virtual) stays connected
         else:
             connected = np.ones(distance.shape, dtype=np.bool_)
-        warning = warning & ~self._eye
-        if self._expand is not None:
-            e = self._expand
-            distance, warning, connected = distance[e], warning[e], connected[e]
-            line_of_sight = None if line_of_sight is None else line_of_sight[e]
-            rssi = None if rssi is None else rssi[e]
         return LinkState(self.ids, distance, line_of_sight, rssi, warning, connected)
 
-    def _line_of_sight(self, xy: list[list[float]], d: list[list[float]]) -> list[list[bool]]:
+    def _sight_matrix(self, sight: list[bool]) -> BoolArray:
+        # Line of sight changes rarely: rebuild the matrix only when a pair changed.
+        key = tuple(sight)
+        if self._sight is None or self._sight[0] != key:
+            matrix = self.layout.matrix([float(v) for v in sight], 1.0).astype(np.bool_)
+            self._sight = (key, matrix)
+        return self._sight[1]
+
+    def _line_of_sight(self, xy: Sequence[Sequence[float]], distance: list[float]) -> list[bool]:
         # Only pairs within the network's reach matter for signal (beyond the AH limit
-        # nothing is delivered anyway). Plain Python: a team has a handful of pairs, and
-        # for those it is cheaper than a chain of small numpy operations.
-        n = len(xy)
-        los = [[True] * n for _ in range(n)]
+        # nothing is delivered anyway): farther pairs count as obstructed, unrayed.
         reach = self.ah_range if self.network is NetworkType.AH else math.inf
-        refresh = self.los_refresh
-        done: dict[tuple[float, float, float, float], float] = {}
-        for k, (a, b) in enumerate(self._pairs):
-            dist = d[a][b]
+        hypot = math.hypot
+        cast_from, cast_value, cast_slack = self._cast_from, self._cast_value, self._cast_slack
+        sight: list[bool] = []
+        for k, (a, b) in enumerate(self.layout.pairs):
+            dist = distance[k]
             if not (0.0 < dist <= reach):  # also False for NaN (virtual node)
-                if dist > reach:
-                    los[a][b] = los[b][a] = False
+                sight.append(not dist > reach)
                 continue
-            ends = (xy[a][0], xy[a][1], xy[b][0], xy[b][1])
-            last = self._cast_from[k]
-            slack = self._cast_slack[k]
+            (ax, ay), (bx, by) = xy[a], xy[b]
+            last = cast_from[k]
             if (
                 last is None
-                or math.hypot(ends[0] - last[0], ends[1] - last[1]) >= slack
-                or math.hypot(ends[2] - last[2], ends[3] - last[3]) >= slack
+                or hypot(ax - last[0], ay - last[1]) >= cast_slack[k]
+                or hypot(bx - last[2], by - last[3]) >= cast_slack[k]
             ):
-                if ends not in done:
-                    done[ends] = self.grid.ray_clearance(*ends)
-                    self.casts += 1
-                clearance = done[ends]
-                self._cast_value[k] = clearance >= 0.0
-                self._cast_slack[k] = clearance if clearance >= 0.0 else refresh
-                self._cast_from[k] = ends
-            los[a][b] = los[b][a] = self._cast_value[k]
-        return los
+                clearance = self.grid.ray_clearance(ax, ay, bx, by)
+                self.casts += 1
+                cast_value[k] = clearance >= 0.0
+                cast_slack[k] = clearance if clearance >= 0.0 else self.los_refresh
+                cast_from[k] = (ax, ay, bx, by)
+            sight.append(cast_value[k])
+        return sight
 
 
 class LinkRecorder:

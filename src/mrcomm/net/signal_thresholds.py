@@ -44,24 +44,18 @@ class ModelThreshold(Threshold):
         self._flat = {los: (table.flat_from(los), table.rssi_at(1e9, los)) for los in (False, True)}
 
     def evaluate(self, pairs: PairGeometry, now: float) -> tuple[FloatArray | None, BoolArray]:
-        assert pairs.distance_rows is not None and pairs.sight_rows is not None
-        # Plain Python over the pairs (RSSI is symmetric: same distance, same model):
-        # a team has a handful of pairs, too few for numpy to pay off.
-        d = pairs.distance_rows
-        visible = pairs.sight_rows
-        n = len(d)
+        assert pairs.pair_sight is not None
+        # RSSI is symmetric (same distance, same model): one lookup per unordered pair.
         rssi_at = self.table.rssi_at
         flat = self._flat
-        rows = [[math.nan] * n for _ in range(n)]
-        for a in range(n):
-            for b in range(a + 1, n):
-                dist = d[a][b]
-                if dist != dist:
-                    continue  # NaN: a virtual node has no RSSI
-                sight = visible[a][b]
-                start, value = flat[sight]
-                rows[a][b] = rows[b][a] = value if dist >= start else rssi_at(dist, sight)
-        rssi = np.array(rows)
+        values: list[float] = []
+        for dist, sight in zip(pairs.pair_distance, pairs.pair_sight, strict=True):
+            if dist != dist:
+                values.append(math.nan)  # a virtual node has no RSSI
+                continue
+            start, saturated = flat[sight]
+            values.append(saturated if dist >= start else rssi_at(dist, sight))
+        rssi = pairs.layout.matrix(values, math.nan)
         return rssi, rssi < self.warning_dbm  # NaN never warns
 
     def describe(self) -> dict[str, Any]:

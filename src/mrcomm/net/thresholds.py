@@ -26,16 +26,36 @@ FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 
+class PairLayout:
+    """The unordered pairs (a < b) of ``n`` nodes, and how one value per pair spreads
+    into the symmetric (n, n) matrix in one gather."""
+
+    def __init__(self, n: int) -> None:
+        self.n = n
+        self.pairs = [(a, b) for a in range(n) for b in range(a + 1, n)]
+        # Index n*(n-1)/2 is the diagonal's value, appended by :meth:`matrix`.
+        gather = np.full((n, n), len(self.pairs), dtype=np.intp)
+        for k, (a, b) in enumerate(self.pairs):
+            gather[a, b] = gather[b, a] = k
+        self._gather = gather
+
+    def matrix(self, values: list[float], diagonal: float) -> FloatArray:
+        """The (n, n) matrix whose (a, b) and (b, a) hold ``values[k]`` for pair k."""
+        return np.array([*values, diagonal])[self._gather]
+
+
 @dataclass(frozen=True)
 class PairGeometry:
-    """The geometry of every pair at one step, in the forms thresholds use: the
-    distance matrix (NaN for a node without a position), and — for thresholds that need
-    line of sight — the same distances and the line-of-sight flags as nested lists
-    (cheaper than numpy for a team's handful of pairs)."""
+    """The geometry of every pair at one step: the distance matrix (NaN for a node
+    without a position), the same distances once per unordered pair (in ``layout``'s
+    order), and — for thresholds that need it — line of sight per pair. Per-pair plain
+    lists because a team has a handful of pairs: a Python loop over them is cheaper than
+    a chain of small numpy operations, and one gather makes the matrix."""
 
     distance: FloatArray
-    distance_rows: list[list[float]] | None = None
-    sight_rows: list[list[bool]] | None = None
+    layout: PairLayout
+    pair_distance: list[float]
+    pair_sight: list[bool] | None = None
 
 
 class Threshold:

@@ -25,7 +25,6 @@ class OccupancyGrid:
     resolution: float
     origin: tuple[float, float] = (0.0, 0.0)
     _free_distance: NDArray[np.float64] | None = field(default=None, repr=False, compare=False)
-    _cell_bytes: bytes | None = field(default=None, repr=False, compare=False)
     _clearance_list: list[float] | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -96,30 +95,38 @@ class OccupancyGrid:
 
         Exact grid traversal (Amanatides & Woo): every cell the segment passes through
         is visited, in order, stopping at the first occupied one, so no wall however
-        thin is stepped over. Points off the map count as obstructed. Pure Python on
-        purpose: for the short segments robots ask about it is several times faster
-        than a vectorised sampler, whose cost is mostly per-call overhead.
+        thin is stepped over. Points off the map or on its outermost cells count as
+        obstructed. Pure Python on purpose: for the short segments robots ask about it
+        is several times faster than a vectorised sampler, whose cost is mostly
+        per-call overhead.
         """
-        return self._traverse(x0, y0, x1, y1, None) >= 0.0
+        return self._traverse(x0, y0, x1, y1, False) >= 0.0
 
     def ray_clearance(self, x0: float, y0: float, x1: float, y1: float) -> float:
         """-1 when the segment is obstructed; otherwise a lower bound (m, may be 0) on
         the distance from any point of the segment to any occupied cell. A segment
         whose ends each move less than this stays unobstructed (every point of the
         moved segment is within that displacement of the old one)."""
-        return self._traverse(x0, y0, x1, y1, self._clearances())
+        return self._traverse(x0, y0, x1, y1, True)
 
-    def _traverse(
-        self, x0: float, y0: float, x1: float, y1: float, clearances: list[float] | None
-    ) -> float:
+    def _traverse(self, x0: float, y0: float, x1: float, y1: float, clearances: bool) -> float:
         res = self.resolution
         ox, oy = self.origin
         fx0, fy0 = (x0 - ox) / res, (y0 - oy) / res
         fx1, fy1 = (x1 - ox) / res, (y1 - oy) / res
         ix, iy = math.floor(fx0), math.floor(fy0)
         end_x, end_y = math.floor(fx1), math.floor(fy1)
-        width, height = self.width, self.height
-        cells = self._cells()
+        height, width = self.occupied.shape
+        # Every visited cell lies in the box spanned by the two end cells (give or take
+        # one cell of rounding at a tie), so bounds are checked once, here, not per cell:
+        # ends on the map's outermost cells or beyond count as obstructed.
+        if not (
+            0 < ix < width - 1
+            and 0 < end_x < width - 1
+            and 0 < iy < height - 1
+            and 0 < end_y < height - 1
+        ):
+            return -1.0
         dx, dy = fx1 - fx0, fy1 - fy0
         if dx > 0:
             step_x, t_max_x, t_dx = 1, (ix + 1 - fx0) / dx, 1.0 / dx
@@ -128,27 +135,29 @@ class OccupancyGrid:
         else:
             step_x, t_max_x, t_dx = 0, math.inf, math.inf
         if dy > 0:
-            step_y, t_max_y, t_dy = 1, (iy + 1 - fy0) / dy, 1.0 / dy
+            step_y, t_max_y, t_dy = width, (iy + 1 - fy0) / dy, 1.0 / dy
         elif dy < 0:
-            step_y, t_max_y, t_dy = -1, (fy0 - iy) / -dy, -1.0 / dy
+            step_y, t_max_y, t_dy = -width, (fy0 - iy) / -dy, -1.0 / dy
         else:
             step_y, t_max_y, t_dy = 0, math.inf, math.inf
+        # One list holds both answers: an occupied cell is at distance 0 from the nearest
+        # occupied cell, a free one at least a cell's width away.
+        clear = self._clearances()
+        k = iy * width + ix
         nearest = math.inf
         for _ in range(abs(end_x - ix) + abs(end_y - iy) + 1):
-            if not (0 <= ix < width and 0 <= iy < height):
-                return -1.0
-            k = iy * width + ix
-            if cells[k]:
-                return -1.0
-            if clearances is not None and clearances[k] < nearest:
-                nearest = clearances[k]
+            c = clear[k]
+            if c < nearest:
+                if c == 0.0:
+                    return -1.0
+                nearest = c
             if t_max_x < t_max_y:
-                ix += step_x
+                k += step_x
                 t_max_x += t_dx
             else:
-                iy += step_y
+                k += step_y
                 t_max_y += t_dy
-        if clearances is None:
+        if not clearances:
             return 0.0
         # Cell-centre distances; a point in a cell is up to half a diagonal from its
         # centre, and so is the nearest point of the occupied cell: subtract both.
@@ -169,19 +178,21 @@ class OccupancyGrid:
             dtype=np.bool_,
         )
 
+    def prepare_ray_casts(self) -> None:
+        """Build the lookup ray casts use (once per grid, ~0.1 s for an office map), so
+        that the first cast inside a timed loop does not pay for it."""
+        self._clearances()
+
     def _clearances(self) -> list[float]:
         """The distance field as a flat list (fast scalar indexing); cached."""
         if self._clearance_list is None:
-            object.__setattr__(self, "_clearance_list", self.distance_field().ravel().tolist())
+            # The field holds few distinct values (cell distances): share one float object
+            # per value, so the list's targets stay few and cache-resident.
+            shared: dict[float, float] = {}
+            values = [shared.setdefault(v, v) for v in self.distance_field().ravel().tolist()]
+            object.__setattr__(self, "_clearance_list", values)
         assert self._clearance_list is not None
         return self._clearance_list
-
-    def _cells(self) -> bytes:
-        """Occupancy as bytes in row-major order (fast scalar indexing); cached."""
-        if self._cell_bytes is None:
-            object.__setattr__(self, "_cell_bytes", self.occupied.tobytes())
-        assert self._cell_bytes is not None
-        return self._cell_bytes
 
 
 class LineOfSightCache:

@@ -1,0 +1,85 @@
+"""LinkModel bookkeeping: per-pair values spread into matrices, a hosted node shares its
+host's links, and rays are re-cast only when a link's line of sight may have changed."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from mrcomm.net.links import LinkModel
+from mrcomm.net.network import NetworkType
+from mrcomm.net.signal.bundled import default_model
+from mrcomm.net.signal.table import RssiTable
+from mrcomm.net.signal_thresholds import ModelThreshold
+from mrcomm.net.thresholds import DistanceThreshold, PairLayout
+from mrcomm.world.occupancy import OccupancyGrid
+
+
+def test_pair_layout_spreads_one_value_per_pair_symmetrically() -> None:
+    layout = PairLayout(3)
+    assert layout.pairs == [(0, 1), (0, 2), (1, 2)]
+    m = layout.matrix([1.0, 2.0, 3.0], -1.0)
+    np.testing.assert_array_equal(m, [[-1, 1, 2], [1, -1, 3], [2, 3, -1]])
+
+
+def _room() -> OccupancyGrid:
+    occupied = np.zeros((80, 200), dtype=bool)
+    occupied[:60, 99:101] = True  # a wall across x = 5 m, open above y = 3 m
+    return OccupancyGrid(occupied, 0.05)
+
+
+@pytest.fixture(scope="module")
+def table() -> RssiTable:
+    return RssiTable.from_model(default_model())
+
+
+def test_a_hosted_node_copies_its_hosts_row_and_column(table: RssiTable) -> None:
+    grid = _room()
+    ids = ("a", "b", "c", "host")
+    xy = np.array([[1.0, 1.0], [4.0, 1.0], [6.0, 1.5], [math.nan, math.nan]])
+    aliased = LinkModel(ids, grid, NetworkType.AH, ModelThreshold(table), aliases={"host": "b"})
+    state = aliased.update(xy, 0.0)
+    # The same as evaluating "host" at b's position as a node of its own.
+    explicit = LinkModel(ids, grid, NetworkType.AH, ModelThreshold(table))
+    plain = explicit.update(np.array([*xy[:3], xy[1]]), 0.0)
+    assert aliased.evaluated_ids == ("a", "b", "c")
+    for field in ("distance", "rssi", "line_of_sight", "warning", "connected"):
+        got, want = getattr(state, field), getattr(plain, field)
+        # b <-> host: distance 0, so the explicit model has a diagonal-like entry there.
+        off = ~np.eye(4, dtype=bool)
+        off[1, 3] = off[3, 1] = False
+        np.testing.assert_array_equal(got[off], want[off], err_msg=field)
+    assert state.distance[1, 3] == 0.0 and not state.warning[1, 3] and state.connected[1, 3]
+    assert not state.line_of_sight[1, 2]  # b and c see each other through no wall
+    assert state.line_of_sight[0, 1] and state.warning[1, 2]
+
+
+def test_rays_are_recast_only_when_line_of_sight_may_have_changed(table: RssiTable) -> None:
+    grid = _room()
+    model = LinkModel(("a", "b"), grid, NetworkType.AH, ModelThreshold(table))
+    # In sight, 2 m apart in open space (clearance to the wall ~ 1 m): a 5 cm step
+    # of both ends keeps the old answer; standing still never re-casts.
+    model.update(np.array([[1.0, 2.0], [3.0, 2.0]]), 0.0)
+    model.update(np.array([[1.05, 2.0], [3.05, 2.0]]), 0.1)
+    model.update(np.array([[1.05, 2.0], [3.05, 2.0]]), 0.2)
+    assert model.casts == 1
+    # Behind the wall: re-cast after los_refresh (0.25 m) of motion, not before.
+    model.update(np.array([[4.0, 1.0], [6.0, 1.0]]), 0.3)
+    assert model.casts == 2
+    model.update(np.array([[4.0, 1.2], [6.0, 1.0]]), 0.4)
+    assert model.casts == 2
+    model.update(np.array([[4.0, 1.3], [6.0, 1.0]]), 0.5)
+    assert model.casts == 3
+    # Out of the AH range: obstructed without a cast.
+    state = model.update(np.array([[0.5, 1.0], [9.0, 1.0]]), 0.6)
+    assert model.casts == 3 and state.line_of_sight is not None
+    assert not state.line_of_sight[0, 1] and not state.connected[0, 1]
+
+
+def test_no_ray_is_cast_for_a_threshold_without_signal_model() -> None:
+    grid = _room()
+    model = LinkModel(("a", "b"), grid, NetworkType.AH, DistanceThreshold(4.0))
+    state = model.update(np.array([[4.0, 1.0], [6.0, 1.0]]), 0.0)
+    assert model.casts == 0 and state.line_of_sight is None and state.rssi is None
