@@ -104,3 +104,58 @@ def test_ssd_followers_take_direct_routes_and_missions_succeed(s1_world) -> None
         1 for tl in result.timelines.values() for e in tl.events if e.label == "direct_route"
     )
     assert direct > 0
+
+
+def _first_leader(world):  # type: ignore[no-untyped-def]
+    """A mission stepped until a robot leads and its followers' poses say so."""
+    from mrcomm.sim.mission import Mission
+
+    mission = Mission(
+        make_config(None, scenario=S1_PATH, network="ah", threshold="slt", behaviour="lf", seed=3),
+        world,
+    )
+    while not mission.done:
+        mission.step()
+        leaders = [e for e in mission.executors.values() if e.state.startswith("leader")]
+        if leaders:
+            leader = leaders[0]
+            others = [r for r in leader.team if r in mission.executors]
+            if all(leader.mate_leaders.get(r) == leader.robot_id for r in others):
+                return mission, leader
+    raise AssertionError("no leader with followers in the whole mission")
+
+
+def test_a_leader_waits_for_its_own_followers_only(s1_world) -> None:  # type: ignore[no-untyped-def]
+    # Under heavy real loss a round can end with two leaders (each decided on the
+    # utilities it had at its time-out); leaders holding for each other would wait for
+    # ever. A leader holds only for mates whose poses say they follow it.
+    from mrcomm.messaging.messages import PoseMsg
+
+    _, leader = _first_leader(s1_world)
+    mate = leader.team[0]
+    pose = leader.base.pose
+    far = dict(x=pose.x + 7.0, y=pose.y, theta=0.0)  # SLT: in warning beyond 4 m
+
+    seqs = iter(range(10_000, 20_000))
+
+    def heard(role: str, follows: str) -> None:
+        stamp = leader._now
+        message = PoseMsg(
+            sender=mate,
+            incarnation=1,
+            seq=next(seqs),
+            stamp=stamp,
+            role=role,
+            leader=follows,
+            **far,
+        )
+        leader._on_pose(message)
+
+    heard("follower", leader.robot_id)
+    assert leader._judge_followers()  # my follower is out: hold
+    heard("leader", "")
+    assert not leader._judge_followers()  # another leader: never wait for it
+    heard("follower", leader.team[1])
+    assert not leader._judge_followers()  # follows someone else
+    heard("na", "")
+    assert not leader._judge_followers()  # left the roles: its own monitor decides

@@ -145,6 +145,7 @@ class TaskExecutor:
         self.mates: dict[str, MateState] = {}
         self.mate_heard: dict[str, float] = {}
         self.mate_roles: dict[str, str] = {}
+        self.mate_leaders: dict[str, str] = {}  # mate -> the robot it follows ("" none)
         self.goal: TaskSpec | None = None
         self._now = 0.0
         self._t0: float | None = None  # assignment received: mission start for this robot
@@ -420,11 +421,16 @@ class TaskExecutor:
                 v=self.base.speed,
                 goal_dist=self._goal_distance(),
                 role=self.current_role(),
+                leader=self.current_leader(),
             ),
         )
 
     def current_role(self) -> str:
         """Team role shared in pose messages (NB has none)."""
+        return ""
+
+    def current_leader(self) -> str:
+        """The robot this one follows, shared in pose messages (NB: nobody)."""
         return ""
 
     def _goal_distance(self) -> float:
@@ -453,6 +459,7 @@ class TaskExecutor:
         )
         self.mate_heard[message.sender] = self._now
         self.mate_roles[message.sender] = message.role
+        self.mate_leaders[message.sender] = message.leader
 
     def _on_status(self, message: Message) -> None:
         assert isinstance(message, TaskStatus)

@@ -14,9 +14,10 @@ A hierarchical state machine: ``na`` is NB plus a network trigger; ``leader`` an
   then published the same way. A role message settles the round for whoever still
   collects, and a member already past the round answers late utilities with its role,
   so no exchange waits on another; a timeout decides with what was collected.
-* Leader: drives to its closest task and holds while any follower's link is in
-  warning (leader disconnect time). On completion it reports with AON and dissolves
-  the roles.
+* Leader: drives to its closest task and holds while any of *its* followers' links is
+  in warning (leader disconnect time); its followers are the mates whose poses say
+  they follow it (or that named it leader this round and have not spoken since). On
+  completion it reports with AON and dissolves the roles.
 * Follower: drives to the leader's last known position, refreshing the goal as leader
   poses arrive (more often when far), and waits there (follower waiting time). It
   returns to NA when the leader's completion reaches it.
@@ -158,6 +159,8 @@ class LeaderFollowerExecutor(TaskExecutor):
         self._round = 0
         self._scores: dict[str, float] = {}
         self._roles: dict[str, str] = {}
+        # Members that named this robot leader in the current round, and when.
+        self._confirmed_at: dict[str, float] = {}
         self.leader: str | None = None
         self._decided_at = 0.0
         self._next_announce = 0.0
@@ -254,6 +257,7 @@ class LeaderFollowerExecutor(TaskExecutor):
         self._round = round_no
         self._scores = {self.robot_id: self._my_utility()}
         self._roles = {}
+        self._confirmed_at = {}
         self.leader = None
         self._next_announce = self._now
         if self.state == "assigning":
@@ -370,6 +374,8 @@ class LeaderFollowerExecutor(TaskExecutor):
         if message.round != self._round or self.state != "assigning":
             return
         self._roles[message.sender] = message.role
+        if message.leader == self.robot_id:
+            self._confirmed_at[message.sender] = self._now
         self._scores.setdefault(message.sender, 0.0)
         if self.leader is None:
             self._settle(message.leader)  # decided by a member that had every score
@@ -412,9 +418,26 @@ class LeaderFollowerExecutor(TaskExecutor):
             known = self.mates.get(mate)
             if known is None or self._now - self.mate_heard.get(mate, -1e9) > self.lf.lost_timeout:
                 continue
+            if not self._follows_me(mate):
+                continue
             if self.link_sensor.warning(mate, pose, known.x, known.y, self._now):
                 return True
         return False
+
+    def _follows_me(self, mate: str) -> bool:
+        """Whether this leader waits for ``mate``: its latest pose says it follows this
+        robot, or it named this robot leader in this round and has said nothing since.
+        Only followers: under heavy loss a round can end with two leaders (each decided
+        on the utilities it had at the time-out), and two leaders each holding for the
+        other's team would wait for ever; a mate that left the roles is not waited for
+        either (its own link monitor opens a new round when it needs one)."""
+        confirmed = self._confirmed_at.get(mate)
+        if confirmed is not None and self.mate_heard.get(mate, -math.inf) <= confirmed:
+            return True
+        role = self.mate_roles.get(mate)
+        if role == L.ROLE_FOLLOWER:
+            return self.mate_leaders.get(mate) == self.robot_id
+        return role == L.ROLE_ASSIGNING and confirmed is not None
 
     def _step_leader_navigating(self) -> None:
         if self.base.status is NavStatus.ACTIVE and self._followers_out():
@@ -464,6 +487,9 @@ class LeaderFollowerExecutor(TaskExecutor):
 
     def current_role(self) -> str:
         return _ROLE_OF_TOP_STATE.get(self.state.split("_", 1)[0], "")
+
+    def current_leader(self) -> str:
+        return (self.leader or "") if self.state.startswith("follower") else ""
 
     def _leader_gone(self) -> bool:
         """The leader's own poses, sent since we follow it, say it no longer leads (its

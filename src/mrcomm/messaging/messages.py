@@ -61,7 +61,8 @@ class Assignment(Message, frozen=True, tag="assignment"):
 class PoseMsg(Message, frozen=True, tag="pose"):
     """Position, heading and speed; ``goal_dist`` (m, -1 without a goal) lets team
     mates decide right of way at a near collision; ``role`` is the sender's team role
-    (LF: na / assigning / leader / follower / regrouping; empty without roles)."""
+    (LF: na / assigning / leader / follower / regrouping; empty without roles) and
+    ``leader`` the robot it follows (LF followers; empty otherwise)."""
 
     x: float
     y: float
@@ -69,6 +70,7 @@ class PoseMsg(Message, frozen=True, tag="pose"):
     v: float = 0.0
     goal_dist: float = -1.0
     role: str = ""
+    leader: str = ""
 
 
 class TaskStatus(Message, frozen=True, tag="task_status"):
