@@ -171,19 +171,52 @@ def to_latex(name: str, frame: pd.DataFrame) -> str:
 # ---- loading ------------------------------------------------------------------------------
 
 
-def load_study(db_path: Path, experiment: str | None = None) -> Any:
+#: Run modes a study can be restricted to (``--mode``).
+MODES = ("sim", "live")
+
+
+def check_mode(mode: str | None) -> None:
+    if mode is not None and mode not in MODES:
+        raise InputError(f"unknown mode {mode!r}; choose sim or live", field="--mode")
+
+
+def load_study(db_path: Path, experiment: str | None = None, mode: str | None = None) -> Any:
     """The results database at ``db_path`` (``mrcomm.experiment.api.load_results``),
-    optionally only one experiment's runs."""
+    optionally only one experiment's runs, and only the runs of one ``mode``.
+
+    Simulated and live runs are never pooled: the statistics group runs by scenario,
+    network, threshold, behaviour and SPL, which both modes share. A database holding
+    both is refused unless ``mode`` picks one."""
+    check_mode(mode)
     if not db_path.is_file():
         raise InputError("no such results database", file=db_path, field="--db")
     from mrcomm.experiment.api import load_results
 
     try:
-        return load_results(db_path, experiment)
+        data = load_results(db_path, experiment, mode)
     except InputError:
         raise
     except Exception as err:  # duckdb raises its own types for a file that is not a DB
         raise InputError(f"not a results database ({err})", file=db_path, field="--db") from err
+    modes = sorted(str(m) for m in data.runs["mode"].dropna().unique())
+    if mode is None and len(modes) > 1:
+        data.close()
+        raise InputError(
+            f"the runs are of several modes ({', '.join(modes)}), which must not be pooled: "
+            "pick one with --mode sim or --mode live",
+            file=db_path,
+            field="--mode",
+        )
+    if mode is not None and data.runs.empty:
+        data.close()
+        raise InputError(f"the database has no {mode} runs", file=db_path, field="--mode")
+    return data
+
+
+def study_mode(runs: pd.DataFrame) -> str | None:
+    """The one mode of a study's runs (None when unknown or mixed)."""
+    modes = runs["mode"].dropna().unique() if "mode" in runs else []
+    return str(modes[0]) if len(modes) == 1 else None
 
 
 def check_runs(runs: pd.DataFrame, db_path: Path | None) -> None:
@@ -277,8 +310,14 @@ def build_report(
     figures = build_figures(data, chosen, pick_timeline_runs(runs, timeline_runs), svg)
     status = runs["status"].value_counts().to_dict() if "status" in runs else {}
     meta = _meta(data)
+    # The runs' own experiment when they have one (meta names only the latest sweep).
+    names = runs["experiment"].dropna().unique() if "experiment" in runs else []
+    name = str(names[0]) if len(names) == 1 else meta.get("experiment", "") or db_path or ""
+    title = f"MRComm study report: {name}".strip()
+    if study_mode(runs) == "live":
+        title += " (live runs: every agent its own process over Zenoh)"
     context = {
-        "title": f"MRComm study report: {meta.get('experiment', '') or db_path or ''}".strip(),
+        "title": title,
         "generated": dt.datetime.now(dt.UTC).strftime("%Y-%m-%d %H:%M:%S UTC"),
         "db_path": str(db_path) if db_path else "",
         "meta": {k: v for k, v in meta.items() if k != "schema_yaml"},

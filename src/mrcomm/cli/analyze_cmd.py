@@ -16,7 +16,9 @@ FORMATS = ("table", "csv", "latex")
 
 
 def analyze(
-    db: Annotated[Path, typer.Option(help="Results database (DuckDB) written by mrcomm sweep.")],
+    db: Annotated[
+        Path, typer.Option(help="Results database (DuckDB): mrcomm sweep, or run/live --db.")
+    ],
     metric: Annotated[
         list[str] | None,
         typer.Option(help="Metric to test (repeatable; default: every metric with data)."),
@@ -31,6 +33,10 @@ def analyze(
     ] = None,
     experiment: Annotated[
         str | None, typer.Option(help="Only the runs of this experiment.")
+    ] = None,
+    mode: Annotated[
+        str | None,
+        typer.Option(help="Only the runs of this mode: sim | live (needed when both are stored)."),
     ] = None,
     alpha: Annotated[float, typer.Option(help="Significance level.")] = 0.05,
 ) -> None:
@@ -50,11 +56,14 @@ def analyze(
         raise InputError(f"must be between 0 and 1, got {alpha:g}", field="--alpha")
     names = _tables(table)
     st.resolve_metrics(metric)  # unknown metric: fail before loading anything
-    data = rp.load_study(db, experiment)
+    rp.check_mode(mode)
+    data = rp.load_study(db, experiment, mode)
     runs = data.runs
     rp.check_runs(runs, db)
     tables = st.study_tables(runs, metrics_with_data(runs, metric), alpha)
     console = Console(width=250) if fmt == "table" else None
+    if console is not None and rp.study_mode(runs) == "live":
+        console.print("[bold]Live runs[/] (every agent its own process over Zenoh)")
     for i, name in enumerate(names):
         frame = tables.get(name)
         if fmt == "csv":

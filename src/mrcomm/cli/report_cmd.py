@@ -13,7 +13,9 @@ from mrcomm.errors import InputError
 
 
 def report(
-    db: Annotated[Path, typer.Option(help="Results database (DuckDB) written by mrcomm sweep.")],
+    db: Annotated[
+        Path, typer.Option(help="Results database (DuckDB): mrcomm sweep, or run/live --db.")
+    ],
     out: Annotated[Path, typer.Option(help="Output directory (created if missing).")],
     metric: Annotated[
         list[str] | None,
@@ -27,6 +29,10 @@ def report(
     ] = None,
     experiment: Annotated[
         str | None, typer.Option(help="Only the runs of this experiment.")
+    ] = None,
+    mode: Annotated[
+        str | None,
+        typer.Option(help="Only the runs of this mode: sim | live (needed when both are stored)."),
     ] = None,
     svg: Annotated[bool, typer.Option(help="Also write every figure as SVG.")] = True,
     alpha: Annotated[float, typer.Option(help="Significance level.")] = 0.05,
@@ -44,7 +50,8 @@ def report(
     if not parent.is_dir():
         raise InputError(f"directory {parent} does not exist", file=out, field="--out")
     st.resolve_metrics(metric)  # unknown metric: fail before loading anything
-    data = rp.load_study(db, experiment)
+    rp.check_mode(mode)
+    data = rp.load_study(db, experiment, mode)
     result = rp.build_report(
         data, out, db_path=db, metrics=metric, timeline_runs=timeline, svg=svg, alpha=alpha
     )

@@ -10,6 +10,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from mrcomm.cli.db_option import DbOpt, ExperimentOpt, check_db, store_run, stored_json
 from mrcomm.cli.display import fmt
 from mrcomm.cli.files import check_writable, write_atomically
 from mrcomm.errors import InputError
@@ -42,8 +43,11 @@ def run(
     record: Annotated[
         Path | None, typer.Option(help="Record the run to an MCAP file (opens in Foxglove).")
     ] = None,
+    db: DbOpt = None,
+    experiment: ExperimentOpt = None,
 ) -> None:
-    """Run one mission in simulation (faster than real time)."""
+    """Run one mission in simulation (faster than real time); with --db, store it in a
+    results database (mode sim)."""
     if network not in {n.value for n in NetworkType}:
         raise InputError(f"unknown network {network!r}; choose wlan or ah", field="--network")
     config = make_config(
@@ -61,6 +65,7 @@ def run(
     )
     if plot is not None:
         check_writable(plot, "--plot")
+    check_db(db, experiment)
     if record is not None:
         from mrcomm.experiment.recording import run_and_record
 
@@ -72,10 +77,19 @@ def run(
         from mrcomm.analysis.mission_plot import save_mission_plot
 
         write_atomically(plot, lambda tmp: save_mission_plot(result, tmp, fmt=plot.suffix[1:]))
+    stored = store_run(
+        db, experiment, result, if_lost="the run is deterministic: run the command again"
+    )
     if as_json:
-        typer.echo(json.dumps(result.summary(), indent=2))
+        summary = result.summary()
+        if stored is not None:
+            summary["stored"] = stored_json(stored)
+        typer.echo(json.dumps(summary, indent=2))
     else:
-        print_result(result, Console())
+        console = Console()
+        print_result(result, console)
+        if stored is not None:
+            console.print(stored.describe(), markup=False)
 
 
 def print_result(result: MissionResult, console: Console) -> None:

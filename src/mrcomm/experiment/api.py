@@ -4,6 +4,7 @@
     res = load_results("results.duckdb")
     res.runs.groupby("label").execution_phase_time.mean()
     res.con.sql("SELECT label, avg(total_distance) FROM runs GROUP BY label").df()
+    live = load_results("results.duckdb", mode="live")  # only the live runs
 
 The database is opened read-only (several notebooks may read while no sweep writes).
 """
@@ -57,18 +58,33 @@ class Results:
         self.con.close()
 
 
-def load_results(db_path: str | Path, experiment: str | None = None) -> Results:
-    """Load every table of the results database at ``db_path`` (optionally only the
-    runs of one experiment). Raises InputError for a missing or incompatible file."""
+def load_results(
+    db_path: str | Path, experiment: str | None = None, mode: str | None = None
+) -> Results:
+    """Load every table of the results database at ``db_path``: every run, simulated
+    and live alike (the ``mode`` column tells them apart), or only those of one
+    experiment and/or one mode ('sim' | 'live'). Raises InputError for a missing or
+    incompatible file."""
     con = open_readonly(Path(db_path))
+    # Filters apply to the runs table; every other table follows its runs.
+    filters = {k: v for k, v in (("experiment", experiment), ("mode", mode)) if v is not None}
+    condition = " AND ".join(f"runs.{k} = ?" for k in filters)
+    params = list(filters.values())
     frames: dict[str, pd.DataFrame] = {}
     for table in ("configs", *RUN_TABLES):
-        if experiment is None:
-            query, params = f"SELECT * FROM {table}", []
-        elif table in ("configs", "runs"):
-            query, params = f"SELECT * FROM {table} WHERE experiment = ?", [experiment]
+        if not filters:
+            query = f"SELECT * FROM {table}"
+        elif table == "runs":
+            query = f"SELECT * FROM runs WHERE {condition}"
+        elif table == "configs" and mode is None:
+            # Every configuration of the experiment, run or not (yet).
+            query = "SELECT * FROM configs WHERE experiment = ?"
+        elif table == "configs":
+            query = (
+                "SELECT * FROM configs WHERE config_id IN "
+                f"(SELECT config_id FROM runs WHERE {condition})"
+            )
         else:
-            query = f"SELECT x.* FROM {table} x JOIN runs USING (run_id) WHERE runs.experiment = ?"
-            params = [experiment]
+            query = f"SELECT x.* FROM {table} x JOIN runs USING (run_id) WHERE {condition}"
         frames[table] = con.execute(f"{query} ORDER BY {_ORDER[table]}", params).df()
     return Results(con=con, **frames)

@@ -34,7 +34,7 @@ def _config_part(spec: RunSpec, status: str, error: str | None) -> tuple[Any, ..
         c.behaviour,
         spec.repetition,
         spec.seed,
-        "sim",
+        spec.mode,
         status,
         error,
     )

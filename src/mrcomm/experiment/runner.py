@@ -4,7 +4,8 @@
   every run whose ``runs`` row is missing or not ``ok`` (failed and timed-out runs are
   run again), plus, with a recording directory, ``ok`` runs whose recording is missing.
   It refuses a database whose experiment of the same name was swept with a different
-  definition (same label, other configuration), so results never mix.
+  definition (same label, other configuration), or holds ad-hoc runs (``adhoc.py``), so
+  results never mix.
 * :func:`execute_sweep` sends the runs to a ``concurrent.futures.Executor`` (a local
   process pool, or a Dask client's executor for a cluster), keeping a bounded number in
   flight, and writes each outcome as it arrives — in the parent process only, one
@@ -24,6 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from mrcomm.errors import InputError
+from mrcomm.experiment.adhoc import ADHOC_SOURCE
 from mrcomm.experiment.schema import Experiment, RunSpec
 from mrcomm.experiment.store import ResultStore, inspect_database
 from mrcomm.experiment.worker import RunOutcome, RunTask, failed_outcome, ignore_interrupts, run_one
@@ -80,6 +82,12 @@ def plan_sweep(
     if repetitions is not None and repetitions < 1:
         raise InputError(f"must be at least 1, got {repetitions}", field="--reps")
     info = inspect_database(db_path)
+    if info.sources.get(experiment.name) == ADHOC_SOURCE:
+        raise InputError(
+            f"experiment '{experiment.name}' in this database holds ad-hoc runs (mrcomm "
+            "run/live --db); give the schema another name",
+            file=db_path,
+        )
     seed = info.experiments.get(experiment.name)
     if seed is not None and seed != experiment.base_seed:
         raise InputError(

@@ -24,6 +24,7 @@ RunConfig of every configuration.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import re
 from collections.abc import Sequence
@@ -67,7 +68,8 @@ class ExperimentModel(BaseModel):
 
 @dataclass(frozen=True)
 class RunSpec:
-    """One run of a sweep: a configuration, a repetition and the seed they imply."""
+    """One run to store: a configuration, a repetition and its seed (a sweep derives
+    the seed from them; an ad-hoc run brings its own, see ``adhoc.py``)."""
 
     run_id: str
     config_id: str
@@ -77,6 +79,8 @@ class RunSpec:
     repetition: int
     seed: int
     config: RunConfig
+    #: 'sim' (simulation: sweeps, ``mrcomm run``) or 'live' (``mrcomm live``/``collect``).
+    mode: str = "sim"
 
 
 @dataclass(frozen=True)
@@ -89,6 +93,9 @@ class Configuration:
     scenario_name: str
     #: The run options, with seed 0 (each run gets its own).
     config: RunConfig
+    #: Options beyond the RunConfig (a live run's speed, lease, ...), stored with it in
+    #: ``configs.options``. Not hashed: a frozen dataclass hashes its fields.
+    extra_options: dict[str, Any] = dataclasses.field(default_factory=dict, hash=False)
 
     def run(self, repetition: int, base_seed: int) -> RunSpec:
         seed = run_seed(base_seed, self.config_id, repetition)

@@ -4,7 +4,8 @@
   :class:`~mrcomm.errors.InputError`) when it is not a DuckDB file, not an MRComm
   results database, of another schema version, or locked by another process — before
   anything writes to it.
-* :class:`ResultStore` is the writer. Only the sweep's parent process ever holds one.
+* :class:`ResultStore` is the writer: a sweep's parent process, or a command storing
+  one ad-hoc run (``adhoc.py``); DuckDB's file lock keeps it to one at a time.
   Each finished run is written in ONE transaction covering all its tables, so a sweep
   killed at any moment (even SIGKILL) leaves whole runs or nothing: DuckDB's write-ahead
   log drops an uncommitted transaction on the next open.
@@ -17,10 +18,9 @@ import json
 from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import duckdb
-import pandas as pd
 
 from mrcomm.errors import InputError
 from mrcomm.experiment.rows import Rows, check_rows
@@ -31,6 +31,9 @@ from mrcomm.experiment.tables import (
     TABLES,
     create_statement,
 )
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 _DTYPES = {
     "DOUBLE": "float64",
@@ -48,6 +51,8 @@ class DatabaseInfo:
     exists: bool
     #: experiment -> base seed
     experiments: dict[str, int] = field(default_factory=dict)
+    #: experiment -> where it came from (the schema file, or ``adhoc.ADHOC_SOURCE``)
+    sources: dict[str, str] = field(default_factory=dict)
     #: config_id -> (experiment, label)
     configs: dict[str, tuple[str, str]] = field(default_factory=dict)
     #: run_id -> status
@@ -115,11 +120,13 @@ def inspect_database(path: Path) -> DatabaseInfo:
     try:
         if not _check_version(con, path):
             return DatabaseInfo(exists=True)
+        experiments = con.execute(
+            "SELECT experiment, base_seed, schema_path FROM experiments"
+        ).fetchall()
         return DatabaseInfo(
             exists=True,
-            experiments=dict(
-                con.execute("SELECT experiment, base_seed FROM experiments").fetchall()
-            ),
+            experiments={name: seed for name, seed, _ in experiments},
+            sources={name: source for name, _, source in experiments},
             configs={
                 cid: (exp, label)
                 for cid, exp, label in con.execute(
@@ -138,6 +145,9 @@ def _frame(table: str, rows: list[tuple[Any, ...]]) -> pd.DataFrame:
     Built column by column with the dtype given up front: several times faster than
     ``from_records`` + ``astype``, and the parent writes every run of the sweep.
     """
+    # Imported here: checking a database (before a mission) must not pay for pandas.
+    import pandas as pd
+
     columns = list(zip(*rows, strict=True)) if rows else [()] * len(TABLES[table])
     return pd.DataFrame(
         {
@@ -191,57 +201,82 @@ class ResultStore:
         return cls(con, path)
 
     def register(self, experiment: Experiment) -> None:
-        """Record the experiment and its configurations (one transaction)."""
+        """Record a swept experiment and its configurations (one transaction); it
+        becomes the database's latest sweep (``meta``)."""
         con = self.con
-        yaml_text = experiment.yaml_text
         con.execute("BEGIN TRANSACTION")
         try:
             con.executemany(
                 "INSERT OR REPLACE INTO meta VALUES (?, ?)",
                 [
                     ("experiment", experiment.name),
-                    ("schema_yaml", yaml_text),
+                    ("schema_yaml", experiment.yaml_text),
                     ("mrcomm_version", _version()),
                 ],
             )
-            con.execute(
-                "INSERT OR REPLACE INTO experiments VALUES (?, ?, ?, ?, ?)",
-                [experiment.name, experiment.base_seed, str(experiment.path), yaml_text, _now()],
-            )
-            rows = [
-                (
-                    c.config_id,
-                    c.experiment,
-                    c.label,
-                    c.scenario_name,
-                    c.config.network.value,
-                    float(c.config.spl),
-                    c.config.threshold,
-                    c.config.behaviour,
-                    json.dumps(c.config.model_dump(mode="json", exclude={"seed"}), sort_keys=True),
-                )
-                for c in experiment.configurations
-            ]
-            frame = _frame("configs", rows)
-            con.register("_new_configs", frame)
-            con.execute(
-                "INSERT INTO configs SELECT * FROM _new_configs "
-                "WHERE config_id NOT IN (SELECT config_id FROM configs)"
-            )
-            con.unregister("_new_configs")
+            self._register(experiment)
             con.execute("COMMIT")
         except BaseException:
             con.execute("ROLLBACK")
             raise
 
-    def write_run(self, rows: Rows, *, replace: bool = False) -> None:
+    def _register(self, experiment: Experiment) -> None:
+        """The experiment's row and its new configurations (inside a transaction)."""
+        con = self.con
+        con.execute(
+            "INSERT OR REPLACE INTO experiments VALUES (?, ?, ?, ?, ?)",
+            [
+                experiment.name,
+                experiment.base_seed,
+                str(experiment.path),
+                experiment.yaml_text,
+                _now(),
+            ],
+        )
+        rows = [
+            (
+                c.config_id,
+                c.experiment,
+                c.label,
+                c.scenario_name,
+                c.config.network.value,
+                float(c.config.spl),
+                c.config.threshold,
+                c.config.behaviour,
+                json.dumps(
+                    {
+                        **c.config.model_dump(mode="json", exclude={"seed"}),
+                        **c.extra_options,
+                    },
+                    sort_keys=True,
+                ),
+            )
+            for c in experiment.configurations
+        ]
+        frame = _frame("configs", rows)
+        con.register("_new_configs", frame)
+        con.execute(
+            "INSERT INTO configs SELECT * FROM _new_configs "
+            "WHERE config_id NOT IN (SELECT config_id FROM configs)"
+        )
+        con.unregister("_new_configs")
+
+    def write_run(
+        self, rows: Rows, *, replace: bool = False, experiment: Experiment | None = None
+    ) -> None:
         """Write one run (every table) in one transaction; ``replace`` deletes an
-        earlier attempt of the same run first (a failed run being re-run)."""
+        earlier attempt of the same run first (a failed run being re-run);
+        ``experiment`` is registered in the same transaction (an ad-hoc run: its
+        experiment, configuration and rows appear together or not at all)."""
+        import pandas as pd  # see _frame
+
         check_rows(rows)
         run_id = rows["runs"][0][0]
         con = self.con
         con.execute("BEGIN TRANSACTION")
         try:
+            if experiment is not None:
+                self._register(experiment)
             if replace:
                 for table in RUN_TABLES:
                     con.execute(f"DELETE FROM {table} WHERE run_id = ?", [run_id])
@@ -261,6 +296,20 @@ class ResultStore:
         except BaseException:
             con.execute("ROLLBACK")
             raise
+
+    def next_repetition(self, config_id: str) -> int:
+        """The first repetition number after every stored run of ``config_id``."""
+        row = self.con.execute(
+            "SELECT max(repetition) FROM runs WHERE config_id = ?", [config_id]
+        ).fetchone()
+        return int(row[0]) + 1 if row and row[0] is not None else 1
+
+    def experiment_yaml(self, name: str) -> str | None:
+        """The ``schema_yaml`` stored for experiment ``name`` (None: not registered)."""
+        row = self.con.execute(
+            "SELECT schema_yaml FROM experiments WHERE experiment = ?", [name]
+        ).fetchone()
+        return None if row is None else str(row[0])
 
     def close(self) -> None:
         self.con.close()
