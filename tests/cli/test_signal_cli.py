@@ -172,7 +172,7 @@ def test_pulse_prints_json_lines(
         ("rssi", "rssi", "robot_2", -38.0),
         ("rssi", "rssi", "robot_3", -57.0),
     ]
-    assert all(r["robot"] == "robot_1" and r["sender"] == "robot_1/pulse" for r in lines)
+    assert all(r["robot"] == "robot_1" and r["sender"] == "robot_1-pulse" for r in lines)
     assert "1 polls, 2 readings published" in stderr and "1 unknown stations" in stderr
 
 
@@ -215,7 +215,7 @@ def test_run_pulse_paces_polls_on_the_clock() -> None:
         def flush(self) -> None:
             pass
 
-    bus = JsonLinesBus("robot_1/pulse", Sink())  # type: ignore[arg-type]
+    bus = JsonLinesBus("robot_1-pulse", Sink())  # type: ignore[arg-type]
     pulse = Pulse(
         bus,
         "robot_1",
@@ -227,3 +227,31 @@ def test_run_pulse_paces_polls_on_the_clock() -> None:
     assert pulse.stats.polls == 4 and pulse.stats.published == 4
     assert slept == pytest.approx([0.5, 0.5, 0.5])
     assert sum('"peer": "robot_2"' in line for line in lines) == 4
+
+
+@pytest.mark.parametrize(
+    ("args", "expected"),
+    [
+        ((), "--iface: give either --iface (and --peers) or --trace"),
+        (("--iface", "wlan0", "--trace", "t.csv"), "give either --iface (and --peers) or --trace"),
+        (("--iface", "wlan0"), "--peers: reading the card needs the robots' MAC addresses"),
+        (("--trace", "t.csv"), "--trace: a trace is replayed on the world's clock"),
+        (
+            ("--iface", "wlan0", "--peers", "p.yaml", "--world-connect", "127.0.0.1:7447"),
+            "--world-connect: only a replayed --trace runs on the world's clock",
+        ),
+        (("--trace", "nope.csv", "--connect", "127.0.0.1:7447"), "nope.csv: file not found"),
+        (("--trace", "t.csv", "--connect", "nowhere"), "--connect: bad endpoint 'nowhere'"),
+    ],
+)
+def test_pulse_source_and_zenoh_errors(
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    args: tuple[str, ...],
+    expected: str,
+) -> None:
+    trace = Path(__file__).parents[2] / "data" / "traces" / "s1_synthetic_esd.csv"
+    given = [str(trace) if a == "t.csv" else a for a in args]
+    code, stdout, stderr = mrcomm(monkeypatch, capsys, "pulse", "--robot", "robot_1", *given)
+    assert code == 2 and stdout == ""
+    assert len(stderr.strip().splitlines()) == 1 and expected in stderr, stderr

@@ -8,14 +8,12 @@ namespace, joined by veth links, with kernel-level random packet drop (nftables
   reconnects by itself.
 
 The world process (the stand-in for each robot's own body) is spared the drop. Skipped,
-with the reason, where namespaces or nftables cannot be used. Set
-``MRCOMM_NETNS_MISSIONS=1`` to run the LF missions under kernel loss (not always green yet).
+with the reason, where namespaces or nftables cannot be used.
 """
 
 from __future__ import annotations
 
 import json
-import os
 import queue
 import subprocess
 import sys
@@ -37,11 +35,6 @@ from .netns import Netns, skip_unless_possible
 pytestmark = pytest.mark.slow
 
 PROBE = Path(__file__).with_name("probe_node.py")
-# The LF missions under kernel loss pass most of the time but not always: LF role
-# assignment can deadlock under heavy real loss (two leaders in one round after a
-# time-out on partial scores; an open problem of issue 7). Until that is fixed they run
-# only on request, so that a red run means a regression.
-MISSIONS = os.environ.get("MRCOMM_NETNS_MISSIONS") == "1"
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -68,10 +61,6 @@ def short_scenario(directory: Path) -> Path:
     return path
 
 
-@pytest.mark.skipif(
-    not MISSIONS,
-    reason="LF can deadlock under heavy real loss (open, issue 7); MRCOMM_NETNS_MISSIONS=1 runs it",
-)
 @pytest.mark.parametrize(("loss", "speed", "outage"), [(20, 4.0, True), (30, 2.0, False)])
 def test_lf_aon_delivers_every_status_under_kernel_loss(
     loss: int, speed: float, outage: bool, tmp_path: Path

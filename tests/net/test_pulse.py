@@ -11,7 +11,7 @@ import pytest
 
 from mrcomm.errors import InputError
 from mrcomm.messaging.messages import TOPIC_RSSI, Message, RssiMsg
-from mrcomm.net.pulse import PollError, Pulse, iw_poller, load_peers
+from mrcomm.net.pulse import PollError, Pulse, ReplayPulse, iw_poller, load_peers
 from mrcomm.ports import Handler
 
 FIXTURES = Path(__file__).parent / "fixtures"
@@ -19,7 +19,7 @@ PEERS = {"02:00:00:00:00:02": "robot_2", "02:00:00:00:00:03": "robot_3"}
 
 
 class RecordingBus:
-    owner = "robot_1/pulse"
+    owner = "robot_1-pulse"
 
     def __init__(self) -> None:
         self.sent: list[tuple[str, Message]] = []
@@ -52,7 +52,7 @@ def test_publishes_one_message_per_known_peer_at_2_hz(caplog: pytest.LogCaptureF
     topic, first = bus.sent[0]
     assert topic == TOPIC_RSSI and isinstance(first, RssiMsg)
     assert (first.robot, first.peer, first.rssi) == ("robot_1", "robot_2", -38.0)
-    assert (first.sender, first.incarnation, first.stamp) == ("robot_1/pulse", 7, 0.0)
+    assert (first.sender, first.incarnation, first.stamp) == ("robot_1-pulse", 7, 0.0)
     assert [m.seq for _, m in bus.sent] == [1, 2, 3, 4, 5, 6]
     assert bus.sent[-1][1].stamp == pytest.approx(1.0)
     # The unknown station is skipped, counted every time, warned about once.
@@ -162,3 +162,45 @@ def test_iw_poller_runtime_failure_is_poll_error(tmp_path: Path) -> None:
     flag.write_text("")
     with pytest.raises(PollError, match="device gone"):
         poll()
+
+
+def test_replay_pulse_publishes_what_the_simulated_pulse_hands_the_sensor() -> None:
+    """Live ESD on one host replays the trace exactly as the simulation does."""
+    from mrcomm.net.link_sensors import MeasuredSensor
+    from mrcomm.net.signal.trace import RssiTrace
+    from mrcomm.sim.signals import TracePulse
+
+    trace = RssiTrace.from_readings(
+        [0.0, 0.0, 0.7, 1.0, 1.2, 2.0],
+        ["robot_1", "robot_1", "robot_1", "robot_2", "robot_1", "robot_1"],
+        ["robot_2", "robot_3", "robot_2", "robot_1", "robot_3", "robot_2"],
+        [-30.0, -35.0, -44.0, -31.0, -50.0, -60.0],
+    )
+    robots = ("robot_1", "robot_2", "robot_3")
+    sensor = MeasuredSensor(-41.0)
+    sim = TracePulse(trace, {"robot_1": sensor}, robots)
+    bus = RecordingBus()
+    replay = ReplayPulse(bus, "robot_1", trace)
+    simulated: list[tuple[float, str, float]] = []
+    for k in range(40):  # 0 .. 3.9 s on a 0.1 s clock: past the end of the recording
+        now = round(k * 0.1, 9)
+        before = dict(sensor.latest)
+        sim.step(now)
+        simulated += [
+            (t, peer, rssi)
+            for peer, (rssi, t) in sensor.latest.items()
+            if before.get(peer) != (rssi, t)
+        ]
+        replay.step(now)
+    published = [(m.stamp, m.peer, m.rssi) for _, m in bus.sent if isinstance(m, RssiMsg)]
+    assert sorted(published) == sorted(simulated)
+    assert (2.0, "robot_2", -60.0) in published and max(t for t, _, _ in published) == 2.0
+    assert all(m.robot == "robot_1" and m.sender == "robot_1-pulse" for _, m in bus.sent)
+
+
+def test_replay_pulse_needs_readings_of_its_robot() -> None:
+    from mrcomm.net.signal.trace import RssiTrace
+
+    trace = RssiTrace.from_readings([0.0], ["robot_1"], ["robot_2"], [-30.0])
+    with pytest.raises(InputError, match="no readings measured by 'robot_2'"):
+        ReplayPulse(RecordingBus(), "robot_2", trace)

@@ -21,6 +21,7 @@ from typing import Annotated, Any
 import typer
 from rich.console import Console
 
+from mrcomm.cli.db_option import DbOpt, ExperimentOpt, check_db, store_run, stored_json
 from mrcomm.cli.run_cmd import print_result
 from mrcomm.errors import InputError
 from mrcomm.net.network import NetworkType
@@ -60,6 +61,13 @@ SpeedOpt = Annotated[float, typer.Option(help="Simulated seconds per wall-clock 
 LeaseOpt = Annotated[
     float | None, typer.Option(help="AON lease, simulated s: silent members are left out.")
 ]
+RssiTraceOpt = Annotated[
+    Path | None,
+    typer.Option(
+        help="Recorded RSSI trace CSV (time,from,to,rssi) for ESD: replayed by one pulse "
+        "process per robot (live) and as the world's ground truth; every process gets it."
+    ),
+]
 
 
 def _run_config(**values: Any) -> RunConfig:
@@ -69,7 +77,7 @@ def _run_config(**values: Any) -> RunConfig:
     return make_config(None, **values)
 
 
-def _zenoh(
+def zenoh_options(
     team: str,
     listen: list[str] | None,
     connect: list[str] | None,
@@ -82,6 +90,7 @@ def _zenoh(
     zenoh_config: Path | None,
     link_lease: float,
 ) -> ZenohOptions:
+    """The Zenoh options of a live process (world, agent, pulse) from its command line."""
     members = [m.strip() for m in acl.split(",") if m.strip()] if acl is not None else None
     return make_options(
         team=team,
@@ -107,6 +116,7 @@ def world(
     seed: SeedOpt = 1,
     max_time: MaxTimeOpt = 1800.0,
     dt: DtOpt = 0.1,
+    rssi_trace: RssiTraceOpt = None,
     speed: SpeedOpt = 1.0,
     team: TeamOpt = "team",
     listen: ListenOpt = None,
@@ -130,9 +140,9 @@ def world(
 
     run = _run_config(
         scenario=scenario, network=network, spl=spl, behaviour=behaviour,
-        threshold=threshold, seed=seed, max_time=max_time, dt=dt,
+        threshold=threshold, seed=seed, max_time=max_time, dt=dt, rssi_trace=rssi_trace,
     )  # fmt: skip
-    zenoh = _zenoh(
+    zenoh = zenoh_options(
         team, listen, connect, multicast, protocol, tls_ca, tls_cert, tls_key, acl,
         zenoh_config, link_lease,
     )  # fmt: skip
@@ -152,6 +162,7 @@ def agent(
     seed: SeedOpt = 1,
     max_time: MaxTimeOpt = 1800.0,
     dt: DtOpt = 0.1,
+    rssi_trace: RssiTraceOpt = None,
     team: TeamOpt = "team",
     listen: ListenOpt = None,
     connect: ConnectOpt = None,
@@ -184,16 +195,16 @@ def agent(
 
     run = _run_config(
         scenario=scenario, network=network, spl=spl, behaviour=behaviour,
-        threshold=threshold, seed=seed, max_time=max_time, dt=dt,
+        threshold=threshold, seed=seed, max_time=max_time, dt=dt, rssi_trace=rssi_trace,
     )  # fmt: skip
     check_agent_id(load_scenario(run.scenario), robot)
-    zenoh = _zenoh(
+    zenoh = zenoh_options(
         team, listen, connect, multicast, protocol, tls_ca, tls_cert, tls_key, acl,
         zenoh_config, link_lease,
     )  # fmt: skip
     world_options = None
     if world_connect:
-        world_options = _zenoh(
+        world_options = zenoh_options(
             team, None, world_connect, False, protocol, tls_ca, tls_cert, tls_key, acl,
             None, link_lease,
         )  # fmt: skip
@@ -217,6 +228,7 @@ def live(
     seed: SeedOpt = 1,
     max_time: MaxTimeOpt = 1800.0,
     dt: DtOpt = 0.1,
+    rssi_trace: RssiTraceOpt = None,
     speed: SpeedOpt = 1.0,
     team: TeamOpt = "team",
     protocol: ProtocolOpt = "tcp",
@@ -230,20 +242,24 @@ def live(
         Path | None, typer.Option(help="Keep the records here (default: a temporary dir).")
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    db: DbOpt = None,
+    experiment: ExperimentOpt = None,
 ) -> None:
-    """Run one mission live: world and every agent as separate processes over Zenoh."""
+    """Run one mission live: world and every agent as separate processes over Zenoh;
+    with --db, store it in a results database (mode live)."""
     from mrcomm.live.collect import live_summary
     from mrcomm.live.launcher import TlsLayout, run_live
     from mrcomm.live.settings import LiveSettings, check_record_dir
 
     run = _run_config(
         scenario=scenario, network=network, spl=spl, behaviour=behaviour,
-        threshold=threshold, seed=seed, max_time=max_time, dt=dt,
+        threshold=threshold, seed=seed, max_time=max_time, dt=dt, rssi_trace=rssi_trace,
     )  # fmt: skip
     if tls_dir is not None and not (tls_dir / "ca.pem").is_file():
         raise InputError("no ca.pem in the TLS directory", file=tls_dir, field="--tls-dir")
     if acl and tls_dir is None:
         raise InputError("the ACL identifies members by certificate: add --tls-dir", field="--acl")
+    check_db(db, experiment)  # before any process is launched
     zenoh = make_options(team=team, protocol=protocol)
     directory = (
         check_record_dir(record_dir)
@@ -255,11 +271,31 @@ def live(
     settings = LiveSettings(run, zenoh, directory, speed=speed, lease=lease)
     tls = TlsLayout(tls_dir, acl=acl) if tls_dir is not None else None
     result, report = run_live(settings, tls=tls)
+    live_options = {
+        "speed": speed,
+        "lease": lease,
+        "protocol": protocol if tls_dir is None else "tcp",  # --tls-dir implies TLS
+        "tls_dir": tls_dir,
+        "acl": acl,
+    }
+    stored = store_run(
+        db,
+        experiment,
+        result,
+        live_options=live_options,
+        if_lost=f"the records stay in {directory}: store them with mrcomm collect "
+        f"{directory} --db ...",
+    )
     if as_json:
-        typer.echo(json.dumps(live_summary(result, report), indent=2))
+        summary = live_summary(result, report)
+        if stored is not None:
+            summary["stored"] = stored_json(stored)
+        typer.echo(json.dumps(summary, indent=2))
         return
     console = Console()
     print_result(result, console)
+    if stored is not None:
+        console.print(stored.describe(), markup=False)
     latency = report.get("pose_latency_ms", {})
     console.print(
         f"live: records in {directory}; pose latency p50 {latency.get('p50', '-')} ms, "
@@ -270,12 +306,23 @@ def live(
 def collect_cmd(
     record_dir: Annotated[Path, typer.Argument(help="Record directory of a live run.")],
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    db: DbOpt = None,
+    experiment: ExperimentOpt = None,
 ) -> None:
-    """Merge the records every process of a live run wrote into one result."""
+    """Merge the records every process of a live run wrote into one result; with --db,
+    store it in a results database (mode live)."""
     from mrcomm.live.collect import collect, live_summary
 
+    check_db(db, experiment)
     result, report = collect(record_dir)
+    stored = store_run(db, experiment, result)
     if as_json:
-        typer.echo(json.dumps(live_summary(result, report), indent=2))
+        summary = live_summary(result, report)
+        if stored is not None:
+            summary["stored"] = stored_json(stored)
+        typer.echo(json.dumps(summary, indent=2))
     else:
-        print_result(result, Console())
+        console = Console()
+        print_result(result, console)
+        if stored is not None:
+            console.print(stored.describe(), markup=False)

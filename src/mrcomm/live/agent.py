@@ -5,7 +5,8 @@ hosts the task assigner on this robot, the assigner too (``--robot assigner`` ru
 base-station or virtual assigner on its own). The process:
 
 1. opens its Zenoh peer session and subscribes (agent topics, the world's clock tick,
-   resynchronisation, liveliness);
+   resynchronisation, liveliness; with ESD, its own pulse's readings
+   ``<robot>-pulse/rssi``, which feed the robot's measured-signal sensor);
 2. joins: waits until the world is reachable (else a one-line error, exit 2), refuses
    an id another live process already holds, declares its liveliness tokens and
    reports *ready* once it sees every team member;
@@ -52,8 +53,11 @@ from mrcomm.live.recorder import AgentRecorder
 from mrcomm.live.remote_base import RemoteBase
 from mrcomm.live.resync import Resync, reply_for
 from mrcomm.live.settings import LiveSettings, config_crc
+from mrcomm.messaging.messages import TOPIC_RSSI, RssiMsg, decode
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import Timeline
+from mrcomm.net.link_sensors import MeasuredSensor
+from mrcomm.net.pulse import pulse_id
 from mrcomm.net.zenoh_bus import (
     Incoming,
     Lane,
@@ -74,6 +78,7 @@ SNAPSHOT_PERIOD = 1.0  # simulated s between counts / clock snapshots in the jou
 ASSIGNMENT_WAIT = 3.0  # simulated s without an assignment before asking for it
 SYNC_WAIT = 2.0  # simulated s a (re)joining robot waits for the team's answers
 LATE_JOIN = 1.0  # a first tick later than this (simulated s) means a late join
+_CH_PULSE = "pulse"  # inbox channel of this robot's own pulse readings
 
 
 class _Stop(Exception):
@@ -147,6 +152,9 @@ class AgentProcess:
         self.base: RemoteBase | None = None
         self.tail: TimelineTail | None = None
         self.resync: Resync | None = None
+        #: ESD: the sensor this robot's pulse readings feed, and how many it took.
+        self.measured: MeasuredSensor | None = None
+        self.pulse_readings = 0
         if agent != ASSIGNER_ID:
             start = next(r.pose for r in self.scenario.robots if r.id == agent)
             self.base = RemoteBase(
@@ -158,12 +166,15 @@ class AgentProcess:
             rank_of = {rid: float(ranks[i]) for i, rid in enumerate(self.robot_ids)}
             endpoint = self.bus.endpoint(agent, stream(run.seed, "loss", agent))
             timeline = Timeline(agent)
+            sensor = build_link_sensor(run, self.world)
+            if isinstance(sensor, MeasuredSensor):
+                self.measured = sensor
             self.executor = executor_class(
                 endpoint,
                 self.base,
                 timeline,
                 tie_break_rank=rank_of.__getitem__,
-                link_sensor=build_link_sensor(run, self.world),
+                link_sensor=sensor,
                 incarnation=incarnation,
             )
             if settings.lease is not None and hasattr(self.executor, "lf"):
@@ -221,6 +232,10 @@ class AgentProcess:
         self.infra.listen(f"{prefix}/{WORLD_ID}/{CH_TICK}", CH_TICK, decoder_of(Tick))
         self.node.listen(f"{prefix}/*/{CH_SYNC_REQUEST}", CH_SYNC_REQUEST, decoder_of(SyncRequest))
         self.node.listen(f"{prefix}/*/{CH_SYNC_REPLY}", CH_SYNC_REPLY, decoder_of(SyncReply))
+        if self.measured is not None:
+            # Only this robot's own pulse: readings measured BY this robot, of its peers.
+            key = f"{prefix}/{pulse_id(self.agent)}/{TOPIC_RSSI}"
+            self.node.listen(key, _CH_PULSE, decode)
         self.node.watch_presence()
         if self.infra is not self.node:
             self.infra.watch_presence(WORLD_ID)
@@ -283,6 +298,23 @@ class AgentProcess:
             self._on_sync_request(item.value)
         elif channel == CH_SYNC_REPLY and self.resync is not None:
             self.resync.on_reply(item.value)
+        elif channel == _CH_PULSE:
+            self._on_pulse(item.value)
+
+    def _on_pulse(self, message: object) -> None:
+        """ESD: a reading of this robot's pulse feeds its measured-signal sensor. It is
+        dated on the agent's own clock (the shared clock) when it arrives, so its age is
+        judged as in simulation: stale 5 s after the pulse stopped reporting that peer.
+        The pulse is local to the robot: no emulated network between them."""
+        if (
+            self.measured is None
+            or not isinstance(message, RssiMsg)
+            or message.robot != self.agent
+            or message.peer == self.agent
+        ):
+            return
+        self.measured.update(message.peer, message.rssi, self.now)
+        self.pulse_readings += 1
 
     # -- the clock -----------------------------------------------------------------------
     def _on_tick(self, item: Incoming) -> None:
@@ -421,9 +453,17 @@ class AgentProcess:
             lag=round(self.max_lag, 6),
         )
         self.recorder.counts()
+        self._record_pulse()
+
+    def _record_pulse(self) -> None:
+        """ESD: how many pulse readings arrived so far, and the latest of each peer."""
+        if self.measured is not None:
+            latest = {p: [rssi, t] for p, (rssi, t) in sorted(self.measured.latest.items())}
+            self.journal.write("pulse", time=self.now, readings=self.pulse_readings, latest=latest)
 
     def _finish(self) -> None:
         self.recorder.final(self.max_lag)
+        self._record_pulse()
         self.journal.close()
         if self.infra is not self.node:
             self.infra.close()

@@ -8,7 +8,8 @@ simulated run, with ``config.mode = "live"``:
   open intervals closed at the last time it recorded;
 * failed tasks from what the task assigner recorded receiving (all its incarnations);
 * message counts per agent and topic, AON statistics, from the agents' journals;
-* distance, separations, links and trajectories from the world's ground truth.
+* distance, separations, links, trajectories and the robot pairs' RSSI series from the
+  world's ground truth.
 
 A ``live`` section adds what only a live run has: incarnations, pose latency
 (p50/p99), the agents' lag behind the clock and each host's clock offset.
@@ -160,7 +161,11 @@ def collect(record_dir: Path) -> tuple[MissionResult, dict[str, Any]]:
         timelines=timelines,
         trajectories=_trajectories(world, robot_ids),
         scenario=scenario,
-        rssi_series=[],
+        rssi_series=[
+            (float(line["t"]), str(a), str(b), float(v))
+            for line in world.of("rssi")
+            for a, b, v in line["v"]
+        ],
     )
     return result, _live_report(journals, world, by_process)
 
@@ -321,6 +326,8 @@ def _live_report(
             # Receipt of the clock on this host minus its send on the world's host:
             # the hosts' clock offset plus the transport latency.
             "clock_offset_s": round(float(np.median(offsets)), 6) if offsets else None,
+            # ESD: readings of the robot's own pulse that fed its sensor (all incarnations).
+            "pulse_readings": _pulse_readings(js),
             "left_out": [
                 {"time": line["time"], "msg": line["msg"], "absent": line["absent"]}
                 for j in js
@@ -330,6 +337,12 @@ def _live_report(
     report: dict[str, Any] = {"processes": processes}
     report["pose_latency_ms"] = _percentiles(latency)
     return report
+
+
+def _pulse_readings(js: list[JournalData]) -> int | None:
+    """Pulse readings an agent took, summed over its incarnations (None: no ESD)."""
+    lasts = [line for line in (j.last("pulse") for j in js) if line is not None]
+    return sum(int(line["readings"]) for line in lasts) if lasts else None
 
 
 def _percentiles(samples: list[float]) -> dict[str, Any]:

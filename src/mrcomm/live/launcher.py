@@ -3,9 +3,11 @@
 :class:`LiveTeam` starts the world process and one agent process per robot (plus a
 stand-alone task assigner when the scenario does not host it on a robot), each a
 Zenoh peer listening on its own loopback port and connecting to all the others (no
-router, no single point of failure). It waits for the mission to end, then collects
-every process's own records (``live.collect``). Tests and fault experiments use its
-handles to kill or restart a process mid-mission.
+router, no single point of failure). With ESD it also starts each robot's pulse,
+replaying the run's RSSI trace on the world's clock (``mrcomm pulse --trace``). It
+waits for the mission to end, then collects every process's own records
+(``live.collect``). Tests and fault experiments use its handles to kill or restart a
+process mid-mission.
 
 Children run the ``mrcomm`` command line itself, so what the launcher does can be done
 by hand on several machines (``mrcomm world`` / ``mrcomm agent``, see docs/LIVE.md).
@@ -28,6 +30,8 @@ from mrcomm.errors import InputError
 from mrcomm.live.collect import collect
 from mrcomm.live.protocol import WORLD_ID
 from mrcomm.live.settings import LiveSettings
+from mrcomm.net.pulse import pulse_id
+from mrcomm.net.signal.trace import RssiTrace
 from mrcomm.sim.mission import MissionResult
 from mrcomm.world.scenario import load_scenario
 
@@ -82,6 +86,13 @@ class LiveTeam:
         self.robots = tuple(r.id for r in scenario.robots)
         standalone = scenario.assigner.kind != "robot"
         self.names = (WORLD_ID, *self.robots, *((ASSIGNER_ID,) if standalone else ()))
+        #: ESD: one trace-replaying pulse process per robot that measured anything in the
+        #: trace (pulse id -> robot); a robot without readings never warns, as in sim.
+        self.pulses: dict[str, str] = {}
+        run = settings.run
+        if run.threshold == "esd" and run.rssi_trace is not None:
+            measuring = {a for a, _ in RssiTrace.load(run.rssi_trace).pairs}
+            self.pulses = {pulse_id(r): r for r in self.robots if r in measuring}
         self.ports: dict[str, int] = {}
         self.children: dict[str, Child] = {}
         self.restarts: dict[str, int] = {}
@@ -94,12 +105,12 @@ class LiveTeam:
             self.ports = dict.fromkeys(self.names, 7447)  # one address each
         else:
             self.ports = {name: free_port(self.host, udp=udp) for name in self.names}
-        for name in self.names:
+        for name in (*self.names, *self.pulses):
             self.spawn(name)
 
     def spawn(self, name: str) -> Child:
         """Start (or restart) process ``name`` on its port."""
-        if name not in self.names:
+        if name not in self.names and name not in self.pulses:
             raise ValueError(f"no process {name!r} in this team")
         old = self.children.get(name)
         if old is not None and old.process.poll() is None:
@@ -109,16 +120,19 @@ class LiveTeam:
         suffix = f".{count}" if count else ""
         log = self.settings.record_dir / f"{name}{suffix}.log"
         handle = log.open("wb")
-        args = [*self.wrappers.get(name, []), sys.executable, "-c", _CLI, *self.command(name)]
+        host = self.pulses.get(name, name)  # a pulse runs on its robot's host
+        args = [*self.wrappers.get(host, []), sys.executable, "-c", _CLI, *self.command(name)]
         env = dict(os.environ)
         env.setdefault("PYTHONUNBUFFERED", "1")
         process = subprocess.Popen(args, stdout=handle, stderr=subprocess.STDOUT, env=env)
-        child = Child(name, self.ports[name], process, log, handle)
+        child = Child(name, self.ports.get(name, 0), process, log, handle)
         self.children[name] = child
         return child
 
     def command(self, name: str) -> list[str]:
         """The ``mrcomm`` arguments that start process ``name``."""
+        if name in self.pulses:
+            return self.pulse_command(name)
         s = self.settings
         run = s.run
         proto = s.zenoh.protocol
@@ -133,6 +147,7 @@ class LiveTeam:
             "--seed", str(run.seed),
             "--max-time", f"{run.max_time:g}",
             "--dt", f"{run.dt:g}",
+            *(["--rssi-trace", str(run.rssi_trace)] if run.rssi_trace is not None else []),
             "--team", s.zenoh.team,
             "--record-dir", str(s.record_dir),
             "--listen", f"{proto}/{self.address(name)}:{self.ports[name]}",
@@ -158,6 +173,30 @@ class LiveTeam:
                 args += ["--lease", f"{s.lease:g}"]
         if self.tls is not None:
             ca, cert, key = self.tls.files(name)
+            args += ["--tls-ca", str(ca), "--tls-cert", str(cert), "--tls-key", str(key)]
+            if self.tls.acl:
+                args += ["--acl", ",".join(self.names)]
+        return args + self.extra_args.get(name, [])
+
+    def pulse_command(self, name: str) -> list[str]:
+        """The ``mrcomm pulse`` arguments of a robot's trace-replaying pulse: it publishes
+        to its robot's agent and hears the world's clock on a session of its own, with
+        its robot's certificate (it runs on that robot)."""
+        s = self.settings
+        robot = self.pulses[name]
+        proto = s.zenoh.protocol
+        assert s.run.rssi_trace is not None
+        args = [
+            "pulse", "--trace", str(s.run.rssi_trace), "--robot", robot,
+            "--team", s.zenoh.team,
+            "--connect", f"{proto}/{self.address(robot)}:{self.ports[robot]}",
+            "--world-connect", f"{proto}/{self.address(WORLD_ID)}:{self.ports[WORLD_ID]}",
+            "--link-lease", f"{s.zenoh.link_lease:g}",
+        ]  # fmt: skip
+        if proto == "udp":
+            args += ["--protocol", "udp"]
+        if self.tls is not None:
+            ca, cert, key = self.tls.files(robot)
             args += ["--tls-ca", str(ca), "--tls-cert", str(cert), "--tls-key", str(key)]
             if self.tls.acl:
                 args += ["--acl", ",".join(self.names)]

@@ -45,7 +45,10 @@ def config_crc(run: RunConfig) -> int:
     """Fingerprint of what the team must agree on (every process gets the same run
     options; a mismatch would silently change the experiment)."""
     data = run.model_dump(mode="json")
+    # Files by name: each host may keep its copy elsewhere.
     data["scenario"] = Path(str(data["scenario"])).name
+    if data.get("rssi_trace") is not None:
+        data["rssi_trace"] = Path(str(data["rssi_trace"])).name
     return zlib.crc32(json.dumps(data, sort_keys=True).encode())
 
 

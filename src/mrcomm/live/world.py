@@ -8,7 +8,9 @@ tick of ``dt`` simulated seconds, paced at ``speed`` times wall-clock time:
 1. apply the base commands that arrived (in order, per robot and agent incarnation);
 2. advance every base by ``dt``;
 3. publish a :class:`~mrcomm.live.protocol.Tick`: the time and every base's state;
-4. record ground truth (trajectories, separations, link summaries, distance).
+4. record ground truth (trajectories, separations, link summaries, distance, and the
+   RSSI of every robot pair at 2 Hz where the threshold has one: ESD's trace, SSD's
+   model).
 
 It starts once every team member reports ready with the same run configuration, and
 ends the mission when every robot is done and the assigner has settled (after a short
@@ -75,16 +77,20 @@ class WorldProcess:
             for r in scenario.robots
         }
         self.node_ids = (*self.robot_ids, ASSIGNER_ID)
+        host = scenario.assigner.host
+        # As in simulation: a hosted assigner shares its robot's links (ESD's trace has
+        # no row for the assigner; it measures with its host's card).
+        aliases = {ASSIGNER_ID: host} if host else {}
         self.links = LinkModel(
             self.node_ids,
             scenario.grid,
             run.network,
-            build_threshold(run, self.world, self.node_ids),
+            build_threshold(run, self.world, tuple(n for n in self.node_ids if n not in aliases)),
             ah_range=run.ah_range,
+            aliases=aliases,
         )
-        host = scenario.assigner.host
         skip = {(ASSIGNER_ID, host), (host, ASSIGNER_ID)} if host else set()
-        self.link_recorder = LinkRecorder(self.node_ids, skip)
+        self.link_recorder = LinkRecorder(self.node_ids, len(self.robot_ids), skip)
         self.incarnation = incarnation
         self.team = team_processes(scenario)
         self.node = ZenohNode(settings.zenoh)
@@ -93,10 +99,6 @@ class WorldProcess:
         self._applied: dict[str, tuple[int, int]] = {}  # robot -> (incarnation, seq)
         self.states: dict[str, AgentState] = {}
         self.present: dict[str, set[int]] = {}
-        n = len(self.robot_ids)
-        self._min_sep = np.full(n, np.inf)
-        self._max_sep = np.zeros(n)
-        self._off_diagonal = ~np.eye(n, dtype=np.bool_)
         self.now = 0.0
         self._done_since: tuple[float, float] | None = None
         self._next_sample = 0.0
@@ -115,6 +117,8 @@ class WorldProcess:
             config = self.settings.run.model_dump(mode="json")
             # Collection may run elsewhere: name the scenario by its absolute path.
             config["scenario"] = str(self.settings.run.scenario.resolve())
+            if self.settings.run.rssi_trace is not None:
+                config["rssi_trace"] = str(self.settings.run.rssi_trace.resolve())
             self.journal.start(
                 process=WORLD_ID,
                 incarnation=self.incarnation,
@@ -286,14 +290,12 @@ class WorldProcess:
     def _record(self) -> None:
         positions = self._positions()
         links = self.links.update(positions, self.now)
-        self.link_recorder.record(links, self.settings.run.dt)
-        n = len(self.robot_ids)
-        if n >= 2:
-            d = links.distance[:n, :n]
-            closest = np.where(self._off_diagonal, d, np.inf).min(axis=1)
-            furthest = np.where(self._off_diagonal, d, -np.inf).max(axis=1)
-            np.minimum(self._min_sep, closest, out=self._min_sep)
-            np.maximum(self._max_sep, furthest, out=self._max_sep)
+        # The RSSI of every robot pair at the pulse rate (the threshold's: ESD's trace,
+        # SSD's model), as the simulation samples its ``rssi_series``.
+        samples = self.link_recorder.record(links, self.settings.run.dt, self.now)
+        if samples:
+            v = [[a, b, round(rssi, 3)] for a, b, rssi in samples]
+            self.journal.write("rssi", t=round(self.now, 3), v=v)
         if self.now >= self._next_sample:
             self._next_sample += TRAJECTORY_PERIOD
             points = {rid: [round(x, 3), round(y, 3)] for rid, (x, y) in self._true_xy()}
@@ -313,8 +315,8 @@ class WorldProcess:
         for i, (rid, base) in enumerate(self.bases.items()):
             truth[rid] = {
                 "distance": round(base.odometry_distance, 6),
-                "min_separation": _finite(self._min_sep[i]),
-                "max_separation": _finite(self._max_sep[i]),
+                "min_separation": _finite(self.link_recorder.min_separation[i]),
+                "max_separation": _finite(self.link_recorder.max_separation[i]),
                 "replans": base.replans,
                 "recoveries": base.recoveries,
             }

@@ -28,6 +28,8 @@ from mrcomm.net.network import AH_RANGE_M, NetworkType
 from mrcomm.net.thresholds import BoolArray, FloatArray, PairGeometry, PairLayout, Threshold
 from mrcomm.world.occupancy import OccupancyGrid
 
+RSSI_PERIOD = 0.5  # s between recorded RSSI samples (the pulse rate, 2 Hz)
+
 
 @dataclass(frozen=True)
 class LinkState:
@@ -157,13 +159,34 @@ class LinkModel:
 
 
 class LinkRecorder:
-    """Per ordered pair summaries over a run: minimum RSSI, time in warning, time
-    disconnected, minimum and maximum distance."""
+    """What a run's link states add up to — the ground truth recorded by the simulation
+    and by the live world alike:
 
-    def __init__(self, ids: tuple[str, ...], skip: set[tuple[str, str]] | None = None) -> None:
+    * per ordered pair: minimum RSSI, time in warning, warning onsets, time disconnected,
+      minimum and maximum distance (:meth:`summaries`);
+    * per robot (the first ``robots`` ids): its closest and furthest team mate over the
+      run (:attr:`min_separation`, :attr:`max_separation`);
+    * the RSSI of every robot pair at the pulse rate (2 Hz), where the threshold has one
+      (:attr:`rssi_series`)."""
+
+    def __init__(
+        self,
+        ids: tuple[str, ...],
+        robots: int,
+        skip: set[tuple[str, str]] | None = None,
+        rssi_period: float = RSSI_PERIOD,
+    ) -> None:
         self.ids = ids
         n = len(ids)
         self._skip = skip or set()
+        self.robots = robots
+        self.min_separation = np.full(robots, np.inf)
+        self.max_separation = np.zeros(robots)
+        self._off_robots = ~np.eye(robots, dtype=np.bool_)
+        self.rssi_period = rssi_period
+        self._next_rssi = 0.0
+        #: (time, from, to, rssi dBm) of robot pairs, sampled every ``rssi_period``.
+        self.rssi_series: list[tuple[float, str, str, float]] = []
         self.time_warning = np.zeros((n, n))
         self.time_disconnected = np.zeros((n, n))
         self.min_rssi = np.full((n, n), np.inf)
@@ -172,15 +195,37 @@ class LinkRecorder:
         self.warning_onsets = np.zeros((n, n), dtype=np.int64)
         self._prev_warning = np.zeros((n, n), dtype=np.bool_)
 
-    def record(self, state: LinkState, dt: float) -> None:
+    def record(self, state: LinkState, dt: float, now: float) -> list[tuple[str, str, float]]:
+        """Add one step of ``dt`` s; return the RSSI samples taken now (usually none)."""
         self.time_warning += dt * state.warning
         self.time_disconnected += dt * ~state.connected
         self.warning_onsets += state.warning & ~self._prev_warning
         self._prev_warning = state.warning
-        if state.rssi is not None:
-            np.fmin(self.min_rssi, state.rssi, out=self.min_rssi)
         np.fmin(self.min_distance, state.distance, out=self.min_distance)
         np.fmax(self.max_distance, state.distance, out=self.max_distance)
+        n = self.robots
+        if n >= 2:
+            d = state.distance[:n, :n]
+            closest = np.where(self._off_robots, d, np.inf).min(axis=1)
+            furthest = np.where(self._off_robots, d, -np.inf).max(axis=1)
+            np.minimum(self.min_separation, closest, out=self.min_separation)
+            np.maximum(self.max_separation, furthest, out=self.max_separation)
+        if state.rssi is None:
+            return []
+        np.fmin(self.min_rssi, state.rssi, out=self.min_rssi)
+        if now < self._next_rssi:
+            return []
+        self._next_rssi += self.rssi_period
+        rows = state.rssi[:n, :n].tolist()
+        ids = self.ids
+        samples = [
+            (ids[i], ids[j], rows[i][j])
+            for i in range(n)
+            for j in range(n)
+            if i != j and rows[i][j] == rows[i][j]  # NaN: no RSSI for this pair
+        ]
+        self.rssi_series.extend((now, a, b, v) for a, b, v in samples)
+        return samples
 
     def summaries(self) -> dict[str, dict[str, Any]]:
         out: dict[str, dict[str, Any]] = {}

@@ -8,6 +8,10 @@ publishes one :class:`~mrcomm.messaging.messages.RssiMsg` per known peer on
 ``TOPIC_RSSI``. Stations with unknown MAC addresses are skipped and counted (logged once
 per MAC); a failed poll or unparsable output is counted and the pulse carries on.
 
+A :class:`ReplayPulse` is the same pulse reading a recorded RSSI trace instead of the
+card (ESD in live mode on one host, stepped on the world's shared clock). A pulse
+publishes as :func:`pulse_id` ``(robot)`` = ``<robot>-pulse``.
+
 Also here: :func:`load_peers` (the MAC ↔ robot id file) and :func:`iw_poller` (the
 ``iw`` subprocess, checked at start-up).
 """
@@ -27,6 +31,7 @@ import yaml
 from mrcomm.errors import InputError
 from mrcomm.messaging.messages import TOPIC_RSSI, RssiMsg
 from mrcomm.net.signal.iw import IwParseError, normalise_mac, parse_station_dump
+from mrcomm.net.signal.trace import RssiTrace
 from mrcomm.ports import Bus
 
 log = logging.getLogger(__name__)
@@ -50,27 +55,31 @@ class PulseStats:
     unknown: dict[str, int] = field(default_factory=dict)  # MAC -> times seen
 
 
-class Pulse:
-    """Publishes the measured RSSI of every known peer at a fixed rate (stepped)."""
+#: A pulse publishes as ``<robot>-pulse``: one plain key chunk of the Zenoh key space
+#: ``mrcomm/<team>/<agent>/<topic>``, apart from its robot's own agent id (the pulse is
+#: not a team member and keeps running when the agent dies).
+PULSE_SUFFIX = "-pulse"
+
+
+def pulse_id(robot: str) -> str:
+    """The id (and key chunk) a robot's pulse publishes under."""
+    return f"{robot}{PULSE_SUFFIX}"
+
+
+Reading = tuple[str, float]  # (peer robot id, RSSI dBm)
+
+
+class PulseBase:
+    """Stepped at any rate, reads every ``period`` seconds and publishes one
+    :class:`RssiMsg` per reading; subclasses say where readings come from."""
 
     def __init__(
-        self,
-        bus: Bus,
-        robot_id: str,
-        peers: Mapping[str, str],
-        poll: Callable[[], str],
-        period: float = 0.5,
-        *,
-        incarnation: int = 0,
+        self, bus: Bus, robot_id: str, period: float = 0.5, *, incarnation: int = 0
     ) -> None:
         if not period > 0:
             raise ValueError("period must be positive")
         self.bus = bus
         self.robot_id = robot_id
-        # MAC -> robot id; our own entry (a team-wide peers file) never shows up in a
-        # station dump, so it is harmless to keep.
-        self.peers = {normalise_mac(m) or m.lower(): rid for m, rid in peers.items()}
-        self.poll = poll
         self.period = period
         self.incarnation = incarnation
         self.stats = PulseStats()
@@ -91,31 +100,16 @@ class Pulse:
         self._next_due = due if due > now else now + self.period
         return self._poll_once(now)
 
+    def _read(self, now: float) -> list[Reading] | None:
+        """The readings of one poll at ``now``; None when the poll failed (counted)."""
+        raise NotImplementedError
+
     def _poll_once(self, now: float) -> int:
         self.stats.polls += 1
-        try:
-            stations = parse_station_dump(self.poll())
-        except PollError as err:
-            self.stats.poll_errors += 1
-            log.warning("pulse %s: poll failed: %s", self.robot_id, err)
+        readings = self._read(now)
+        if not readings:
             return 0
-        except IwParseError as err:
-            self.stats.parse_errors += 1
-            log.warning("pulse %s: cannot parse iw output: %s", self.robot_id, err)
-            return 0
-        published = 0
-        for station in stations:
-            peer = self.peers.get(station.mac)
-            if peer is None:
-                seen = self.stats.unknown.get(station.mac, 0)
-                if seen == 0:
-                    log.warning("pulse %s: unknown station %s skipped", self.robot_id, station.mac)
-                self.stats.unknown[station.mac] = seen + 1
-                continue
-            rssi = station.rssi
-            if rssi is None:
-                self.stats.no_signal += 1
-                continue
+        for peer, rssi in readings:
             self._seq += 1
             message = RssiMsg(
                 sender=self.bus.owner,
@@ -127,9 +121,94 @@ class Pulse:
                 rssi=rssi,
             )
             self.bus.publish(TOPIC_RSSI, message)
-            published += 1
-        self.stats.published += published
-        return published
+        self.stats.published += len(readings)
+        return len(readings)
+
+
+class Pulse(PulseBase):
+    """Publishes the RSSI the wireless card measured of every known peer."""
+
+    def __init__(
+        self,
+        bus: Bus,
+        robot_id: str,
+        peers: Mapping[str, str],
+        poll: Callable[[], str],
+        period: float = 0.5,
+        *,
+        incarnation: int = 0,
+    ) -> None:
+        super().__init__(bus, robot_id, period, incarnation=incarnation)
+        # MAC -> robot id; our own entry (a team-wide peers file) never shows up in a
+        # station dump, so it is harmless to keep.
+        self.peers = {normalise_mac(m) or m.lower(): rid for m, rid in peers.items()}
+        self.poll = poll
+
+    def _read(self, now: float) -> list[Reading] | None:
+        try:
+            stations = parse_station_dump(self.poll())
+        except PollError as err:
+            self.stats.poll_errors += 1
+            log.warning("pulse %s: poll failed: %s", self.robot_id, err)
+            return None
+        except IwParseError as err:
+            self.stats.parse_errors += 1
+            log.warning("pulse %s: cannot parse iw output: %s", self.robot_id, err)
+            return None
+        readings: list[Reading] = []
+        for station in stations:
+            peer = self.peers.get(station.mac)
+            if peer is None:
+                seen = self.stats.unknown.get(station.mac, 0)
+                if seen == 0:
+                    log.warning("pulse %s: unknown station %s skipped", self.robot_id, station.mac)
+                self.stats.unknown[station.mac] = seen + 1
+                continue
+            if station.rssi is None:
+                self.stats.no_signal += 1
+                continue
+            readings.append((peer, station.rssi))
+        return readings
+
+
+class ReplayPulse(PulseBase):
+    """Replays what ``robot_id`` measured in a recorded trace, on the clock it is
+    stepped with (live mode: the world's shared clock), exactly as the simulation's
+    :class:`~mrcomm.sim.signals.TracePulse` hands it to the robot's sensor: the latest
+    reading of each peer at or before ``now``; nothing once the recording has ended."""
+
+    def __init__(
+        self,
+        bus: Bus,
+        robot_id: str,
+        trace: RssiTrace,
+        period: float = 0.5,
+        *,
+        incarnation: int = 0,
+        source: str | Path | None = None,
+    ) -> None:
+        super().__init__(bus, robot_id, period, incarnation=incarnation)
+        peers = sorted({b for a, b in trace.pairs if a == robot_id})
+        if not peers:
+            measuring = sorted({a for a, _ in trace.pairs})
+            raise InputError(
+                f"no readings measured by {robot_id!r} in the trace "
+                f"(measuring robots: {', '.join(measuring)})",
+                file=source,
+                field="--robot",
+            )
+        self.trace = trace
+        self.ids = (robot_id, *peers)
+
+    def _read(self, now: float) -> list[Reading] | None:
+        if now > self.trace.t1:
+            return []  # the recording has ended: the pulse reports nothing more
+        row = self.trace.matrix_at(now, self.ids)[0]
+        return [
+            (peer, float(row[j]))
+            for j, peer in enumerate(self.ids)
+            if j > 0 and row[j] == row[j]  # skip NaN: no reading yet
+        ]
 
 
 def load_peers(path: str | Path) -> dict[str, str]:

@@ -39,7 +39,6 @@ from mrcomm.sim.world import SimWorld
 from mrcomm.world.scenario import Scenario
 
 TRAJECTORY_PERIOD = 0.5  # s between recorded trajectory samples
-RSSI_PERIOD = 0.5  # s between recorded RSSI samples (the pulse rate, 2 Hz)
 
 
 @dataclass
@@ -103,7 +102,7 @@ class Mission:
             aliases=aliases,
         )
         skip = {(ASSIGNER_ID, host), (host, ASSIGNER_ID)} if host else set()
-        self.link_recorder = LinkRecorder(self.node_ids, skip)
+        self.link_recorder = LinkRecorder(self.node_ids, len(self.robot_ids), skip)
         self.bases = {
             r.id: SimBase(
                 r.id,
@@ -141,16 +140,10 @@ class Mission:
             scenario.tasks,
             use_aon=executor_class.uses_aon,
         )
-        n = len(self.robot_ids)
-        self._min_sep = np.full(n, np.inf)
-        self._max_sep = np.zeros(n)
-        self._off_diagonal = ~np.eye(n, dtype=np.bool_)
         self.trajectories: dict[str, list[tuple[float, float, float]]] = {
             rid: [] for rid in self.robot_ids
         }
         self._next_sample = 0.0
-        self._next_rssi = 0.0
-        self.rssi_series: list[tuple[float, str, str, float]] = []
         self.now = 0.0
         self.steps = 0
         self.finished = False
@@ -190,14 +183,10 @@ class Mission:
         for i, base in enumerate(self.bases.values()):
             others = truth[:i] + truth[i + 1 :]
             base.update(dt, now, others)
-        self.link_recorder.record(links, dt)
-        self._track_separation(links)
+        self.link_recorder.record(links, dt, now)
         if now >= self._next_sample:
             self._sample_trajectories(now)
             self._next_sample += TRAJECTORY_PERIOD
-        if links.rssi is not None and now >= self._next_rssi:
-            self._sample_rssi(now, links)
-            self._next_rssi += RSSI_PERIOD
         self.steps += 1
         self.now = round(now + dt, 9)
         if (
@@ -213,27 +202,6 @@ class Mission:
             dict(zip(self.robot_ids, robots, strict=True))
         )
         return np.array([*robots, assigner], dtype=np.float64)
-
-    def _track_separation(self, links: LinkState) -> None:
-        n = len(self.robot_ids)
-        if n < 2:
-            return
-        d = links.distance[:n, :n]
-        closest = np.where(self._off_diagonal, d, np.inf).min(axis=1)
-        furthest = np.where(self._off_diagonal, d, -np.inf).max(axis=1)
-        np.minimum(self._min_sep, closest, out=self._min_sep)
-        np.maximum(self._max_sep, furthest, out=self._max_sep)
-
-    def _sample_rssi(self, now: float, links: LinkState) -> None:
-        assert links.rssi is not None
-        n = len(self.robot_ids)
-        rows = links.rssi[:n, :n].tolist()
-        ids = self.robot_ids
-        for i in range(n):
-            for j in range(n):
-                value = rows[i][j]
-                if i != j and value == value:  # NaN: no RSSI for this pair
-                    self.rssi_series.append((now, ids[i], ids[j], value))
 
     def _sample_trajectories(self, now: float) -> None:
         for rid, base in self.bases.items():
@@ -251,8 +219,8 @@ class Mission:
         for i, rid in enumerate(self.robot_ids):
             facts = RobotFacts(
                 distance=round(self.bases[rid].odometry_distance, 6),
-                min_separation=_round(self._min_sep[i]),
-                max_separation=_round(self._max_sep[i]),
+                min_separation=_round(self.link_recorder.min_separation[i]),
+                max_separation=_round(self.link_recorder.max_separation[i]),
                 tasks_assigned=len(self.assigner.agenda[rid]),
                 tasks_failed=sum(1 for _, robot in failed_pairs if robot == rid),
             )
@@ -288,7 +256,9 @@ class Mission:
             timelines=self.timelines,
             trajectories=self.trajectories,
             scenario=self.world.scenario,
-            rssi_series=[(round(t, 3), a, b, round(v, 3)) for t, a, b, v in self.rssi_series],
+            rssi_series=[
+                (round(t, 3), a, b, round(v, 3)) for t, a, b, v in self.link_recorder.rssi_series
+            ],
         )
 
     def _aon_summary(self) -> dict[str, Any]:
