@@ -56,8 +56,11 @@ def reaches(
     from team ``member``; once every marker is in, count what came from ``key``."""
     got: list[bytes] = []
     marker = receiver.prefix + "/robot_2/marker"
-    for k in range(rounds):
-        sender.put(key, f"x{k}".encode(), Lane.CONTROL)
+    # Warm-up: once a marker lands, the receiver's subscription has reached the member
+    # (for the positive control, the sender itself), so no sample is put too early.
+    for k in range(-1, rounds):
+        if k >= 0:
+            sender.put(key, f"x{k}".encode(), Lane.CONTROL)
         want = f"m{k}".encode()
 
         def arrived(want: bytes = want) -> bool:
