@@ -187,12 +187,20 @@ def agent(
     join_timeout: Annotated[
         float, typer.Option(help="Wall s to reach the team before giving up.")
     ] = 20.0,
+    clock: Annotated[
+        str,
+        typer.Option(
+            help="What steps the agent: shared (the world's ticks) | host (every --dt "
+            "on this host's monotonic clock from the first tick; the world at --speed 1)."
+        ),
+    ] = "shared",
 ) -> None:
     """Run one robot's agent (task executor, and the assigner it hosts) over Zenoh."""
     from mrcomm.live.agent import check_agent_id, run_agent
-    from mrcomm.live.settings import LiveSettings, check_record_dir
+    from mrcomm.live.settings import LiveSettings, check_agent_clock, check_record_dir
     from mrcomm.world.scenario import load_scenario
 
+    check_agent_clock(clock, "--clock")
     run = _run_config(
         scenario=scenario, network=network, spl=spl, behaviour=behaviour,
         threshold=threshold, seed=seed, max_time=max_time, dt=dt, rssi_trace=rssi_trace,
@@ -215,6 +223,7 @@ def agent(
         world=world_options,
         lease=lease,
         join_timeout=join_timeout,
+        agent_clock=clock,
     )
     raise typer.Exit(run_agent(settings, robot))
 
@@ -244,13 +253,21 @@ def live(
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
     db: DbOpt = None,
     experiment: ExperimentOpt = None,
+    agent_clock: Annotated[
+        str,
+        typer.Option(
+            help="What steps the agents: shared (the world's ticks) | host (each its "
+            "host's monotonic clock, as on real robots; needs --speed 1)."
+        ),
+    ] = "shared",
 ) -> None:
     """Run one mission live: world and every agent as separate processes over Zenoh;
     with --db, store it in a results database (mode live)."""
     from mrcomm.live.collect import live_summary
     from mrcomm.live.launcher import TlsLayout, run_live
-    from mrcomm.live.settings import LiveSettings, check_record_dir
+    from mrcomm.live.settings import LiveSettings, check_agent_clock, check_record_dir
 
+    check_agent_clock(agent_clock, "--agent-clock", speed)
     run = _run_config(
         scenario=scenario, network=network, spl=spl, behaviour=behaviour,
         threshold=threshold, seed=seed, max_time=max_time, dt=dt, rssi_trace=rssi_trace,
@@ -268,7 +285,9 @@ def live(
     )
     if tls_dir is not None:
         zenoh = ZenohOptions(team=zenoh.team, protocol="tls")
-    settings = LiveSettings(run, zenoh, directory, speed=speed, lease=lease)
+    settings = LiveSettings(
+        run, zenoh, directory, speed=speed, lease=lease, agent_clock=agent_clock
+    )
     tls = TlsLayout(tls_dir, acl=acl) if tls_dir is not None else None
     result, report = run_live(settings, tls=tls)
     live_options = {
@@ -277,6 +296,7 @@ def live(
         "protocol": protocol if tls_dir is None else "tcp",  # --tls-dir implies TLS
         "tls_dir": tls_dir,
         "acl": acl,
+        "agent_clock": agent_clock,
     }
     stored = store_run(
         db,
@@ -315,7 +335,9 @@ def collect_cmd(
 
     check_db(db, experiment)
     result, report = collect(record_dir)
-    stored = store_run(db, experiment, result)
+    # The record says how its agents were clocked (the other live options it cannot).
+    host = any(p["host_clock"] for p in report["processes"].values())
+    stored = store_run(db, experiment, result, live_options={"agent_clock": "host"} if host else {})
     if as_json:
         summary = live_summary(result, report)
         if stored is not None:

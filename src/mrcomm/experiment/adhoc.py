@@ -48,6 +48,7 @@ LIVE_DEFAULTS: dict[str, Any] = {
     "protocol": "tcp",
     "tls_dir": None,
     "acl": False,
+    "agent_clock": "shared",
 }
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 _HEADER = (

@@ -12,7 +12,8 @@ base-station or virtual assigner on its own). The process:
    reports *ready* once it sees every team member;
 3. runs on the shared clock: Zenoh callbacks only queue; on this one thread, every
    queued message is dispatched (receiver-side perturbations, then the agents'
-   handlers) and every clock tick updates the base state and steps the agents;
+   handlers) and every clock tick updates the base state and steps the agents (with
+   ``--clock host``, ``live.host_clock`` steps them on the host's clock instead);
 4. records its own data as it goes (``live.journal``) and stops when the world
    announces the end of the mission (or on SIGTERM / SIGINT).
 
@@ -197,6 +198,7 @@ class AgentProcess:
         self.team = team_processes(self.scenario)
         self.present: dict[str, set[int]] = {}
         self.now = 0.0
+        self.tick_time = 0.0  # the latest clock tick's (the base state's) time
         self.first_tick: float | None = None
         self.ended = False
         self._ready = False
@@ -318,31 +320,40 @@ class AgentProcess:
 
     # -- the clock -----------------------------------------------------------------------
     def _on_tick(self, item: Incoming) -> None:
-        tick: Tick = item.value
-        if tick.time < self.now:
-            return  # a stale tick overtaken by a newer one
-        if item.sent_wall is not None:
-            self.max_lag = max(self.max_lag, time.time() - item.sent_wall)
+        tick = self._take_tick(item)
+        if tick is None:
+            return
         self.now = now = tick.time
         self.bus.now = now
-        if self.base is not None:
-            for state in tick.states:
-                if state.robot == self.agent:
-                    self.base.update(state)
-                    break
         if tick.end:
-            self._end(tick)
+            self._end(tick.end_time, tick.timed_out)
             return
         if self.first_tick is None:
-            self.first_tick = now
-            self.journal.write("first_tick", time=now, wall=time.time())
-            if now > LATE_JOIN and self.resync is not None:
-                self.resync.start(now)  # joined a running mission: catch up first
+            self._first_tick(now)
         self._step(now)
         if now >= self._next_snapshot:
             self._next_snapshot = now + SNAPSHOT_PERIOD
-            self._snapshot(item)
+            self._snapshot(wall=item.recv_wall, sent_wall=item.sent_wall)
         self.journal.flush()
+
+    def _take_tick(self, item: Incoming) -> Tick | None:
+        """Take a tick's state of this robot's base; None for a stale tick."""
+        tick: Tick = item.value
+        if tick.time < self.tick_time:
+            return None  # a stale tick overtaken by a newer one
+        if item.sent_wall is not None:
+            self.max_lag = max(self.max_lag, time.time() - item.sent_wall)
+        self.tick_time = tick.time
+        mine = next((state for state in tick.states if state.robot == self.agent), None)
+        if self.base is not None and mine is not None:
+            self.base.update(mine)
+        return tick
+
+    def _first_tick(self, now: float) -> None:
+        self.first_tick = now
+        self.journal.write("first_tick", time=now, wall=time.time())
+        if now > LATE_JOIN and self.resync is not None:
+            self.resync.start(now)  # joined a running mission: catch up first
 
     def _step(self, now: float) -> None:
         if self.resync is not None and self.executor is not None:
@@ -371,13 +382,12 @@ class AgentProcess:
         if self.tail is not None:
             self.tail.flush(now)
 
-    def _end(self, tick: Tick) -> None:
-        end = tick.end_time
+    def _end(self, end: float, timed_out: bool) -> None:
         if self.executor is not None:
             self.executor.timeline.close_all(end)
             assert self.tail is not None
             self.tail.flush(end)
-        self.journal.write("end", time=end, timed_out=tick.timed_out, wall=time.time())
+        self.journal.write("end", time=end, timed_out=timed_out, wall=time.time())
         self.ended = True
 
     # -- team ----------------------------------------------------------------------------
@@ -444,14 +454,8 @@ class AgentProcess:
         )
 
     # -- recording -----------------------------------------------------------------------
-    def _snapshot(self, item: Incoming) -> None:
-        self.journal.write(
-            "clock",
-            sim=self.now,
-            wall=item.recv_wall,
-            sent_wall=item.sent_wall,
-            lag=round(self.max_lag, 6),
-        )
+    def _snapshot(self, **clock: Any) -> None:  # wall: when our clock read self.now
+        self.journal.write("clock", sim=self.now, **clock, lag=round(self.max_lag, 6))
         self.recorder.counts()
         self._record_pulse()
 
@@ -488,5 +492,8 @@ def _restore_handlers(previous: dict[int, Any]) -> None:
 def run_agent(settings: LiveSettings, agent: str, incarnation: int | None = None) -> int:
     """Run one agent process to the end of the mission; returns the exit status."""
     inc = incarnation if incarnation is not None else time.time_ns() // 1_000_000
-    process = AgentProcess(settings, agent, inc)
-    return process.run()
+    if settings.agent_clock == "host":
+        from mrcomm.live.host_clock import HostClockAgent  # it extends AgentProcess
+
+        return HostClockAgent(settings, agent, inc).run()
+    return AgentProcess(settings, agent, inc).run()

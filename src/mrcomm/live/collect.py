@@ -12,7 +12,8 @@ simulated run, with ``config.mode = "live"``:
   world's ground truth.
 
 A ``live`` section adds what only a live run has: incarnations, pose latency
-(p50/p99), the agents' lag behind the clock and each host's clock offset.
+(p50/p99), the agents' lag behind the clock, each host's clock offset and, for agents
+stepped on their host's clock, how that clock fared (``host_clock``).
 """
 
 from __future__ import annotations
@@ -323,9 +324,11 @@ def _live_report(
             "finished": [j.last("end") is not None for j in js],
             "resynced": [j.last("resync") is not None for j in js],
             "max_lag_s": max(lags) if lags else None,
-            # Receipt of the clock on this host minus its send on the world's host:
-            # the hosts' clock offset plus the transport latency.
+            # When this host's agent clock read a time minus when the world's did: the
+            # hosts' clock offset plus the transport latency (shared clock: of each
+            # tick; host clock: of the first tick, which set the mission start).
             "clock_offset_s": round(float(np.median(offsets)), 6) if offsets else None,
+            "host_clock": _host_clock(js),
             # ESD: readings of the robot's own pulse that fed its sensor (all incarnations).
             "pulse_readings": _pulse_readings(js),
             "left_out": [
@@ -337,6 +340,24 @@ def _live_report(
     report: dict[str, Any] = {"processes": processes}
     report["pose_latency_ms"] = _percentiles(latency)
     return report
+
+
+def _host_clock(js: list[JournalData]) -> dict[str, Any] | None:
+    """An agent stepped on its host's clock (``live.host_clock``): steps skipped (ran
+    more than a step late), the worst lateness of a step, and how stale its base state
+    got (its time minus the latest world tick's); None for a shared-clock agent."""
+    lasts = []  # each incarnation's last host-clock line (its counters are cumulative)
+    for j in js:
+        lines = [c for c in j.of("clock") if "base_age" in c]
+        if lines:
+            lasts.append(lines[-1])
+    if not lasts:
+        return None
+    return {
+        "skipped_steps": sum(int(line["skipped"]) for line in lasts),
+        "max_late_s": max(float(line["late"]) for line in lasts),
+        "max_base_age_s": max(float(line["max_base_age"]) for line in lasts),
+    }
 
 
 def _pulse_readings(js: list[JournalData]) -> int | None:

@@ -9,8 +9,8 @@ current tick. What a robot records about itself:
   at each flush (``open``), so a killed incarnation's last activity can be closed;
 * its message log (``msg``: time, topic, sender, sequence, outcome) and cumulative
   counts (``counts``), AON statistics (``aon``);
-* the shared clock against its host's wall clock (``clock``), from which collection
-  estimates each host's clock offset;
+* its clock (the shared clock, or its host's: ``live.host_clock``) against its host's
+  wall clock (``clock``), from which collection estimates each host's clock offset;
 * for the task assigner: every task status it received (``status_rx``).
 """
 

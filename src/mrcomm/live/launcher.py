@@ -171,6 +171,8 @@ class LiveTeam:
             args += ["--join-timeout", f"{s.join_timeout:g}"]
             if s.lease is not None:
                 args += ["--lease", f"{s.lease:g}"]
+            if s.agent_clock != "shared":
+                args += ["--clock", s.agent_clock]
         if self.tls is not None:
             ca, cert, key = self.tls.files(name)
             args += ["--tls-ca", str(ca), "--tls-cert", str(cert), "--tls-key", str(key)]

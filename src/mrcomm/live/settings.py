@@ -1,6 +1,7 @@
 """Settings shared by the live processes (world, agents, launcher): the run's
 configuration (the same model as ``mrcomm run``), how to join the Zenoh network,
-where to record, and the live-only knobs (speed, AON lease, time-outs)."""
+where to record, and the live-only knobs (speed, AON lease, time-outs, the agents'
+clock)."""
 
 from __future__ import annotations
 
@@ -9,9 +10,13 @@ import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
-from mrcomm.errors import InputError
+from mrcomm.errors import InputError, did_you_mean
 from mrcomm.net.zenoh_config import ZenohOptions
 from mrcomm.sim.config import RunConfig
+
+#: What steps an agent: the world's ticks (``shared``, as Stage's ``use_sim_time``) or
+#: its own host's monotonic clock (``host``, as on a real robot; ``live.host_clock``).
+AGENT_CLOCKS = ("shared", "host")
 
 
 @dataclass(frozen=True)
@@ -31,6 +36,8 @@ class LiveSettings:
     join_timeout: float = 20.0
     #: Wall seconds the world waits for every agent to be ready.
     start_timeout: float = 60.0
+    #: One of :data:`AGENT_CLOCKS`; ``host`` needs ``speed`` 1 (host time is real time).
+    agent_clock: str = "shared"
 
     def __post_init__(self) -> None:
         if self.speed <= 0.0:
@@ -39,6 +46,21 @@ class LiveSettings:
             raise InputError("must be positive", field="--lease")
         if self.join_timeout <= 0.0:
             raise InputError("must be positive", field="--join-timeout")
+        check_agent_clock(self.agent_clock, "--agent-clock", self.speed)
+
+
+def check_agent_clock(clock: str, option: str, speed: float = 1.0) -> str:
+    """``clock`` must be one of :data:`AGENT_CLOCKS`; a host clock runs in real seconds,
+    so the world (``speed``) must too."""
+    if clock not in AGENT_CLOCKS:
+        hint = did_you_mean(clock, AGENT_CLOCKS)
+        raise InputError(f"unknown clock {clock!r}{hint}; choose shared or host", field=option)
+    if clock == "host" and speed != 1.0:
+        raise InputError(
+            f"agents on their host's clock step in real seconds: needs --speed 1, not {speed:g}",
+            field=option,
+        )
+    return clock
 
 
 def config_crc(run: RunConfig) -> int:
