@@ -1,12 +1,16 @@
-"""Helpers of the live tests: Zenoh peers on loopback, waiting on conditions."""
+"""Helpers of the live tests: Zenoh peers on loopback, waiting on conditions, S1-based
+short scenarios, reading a process's journal."""
 
 from __future__ import annotations
 
+import json
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import TypeVar
+from typing import Any, TypeVar
+
+import yaml
 
 from mrcomm.live.launcher import free_port
 from mrcomm.net.zenoh_bus import Incoming, ZenohNode
@@ -72,3 +76,29 @@ def drain(
         if item is not None:
             items.append(item)
     return items
+
+
+def s1_variant(directory: Path, name: str, tasks: list[dict[str, Any]]) -> Path:
+    """S1's map, team and start with other tasks (written next to the scenario)."""
+    (directory / f"{name}_tasks.yaml").write_text(yaml.safe_dump(tasks))
+    scenario = yaml.safe_load(S1.read_text())
+    scenario.update(
+        name=name,
+        map=str((ROOT / "data" / "maps" / "office.yaml").resolve()),
+        tasks=f"{name}_tasks.yaml",
+    )
+    path = directory / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(scenario))
+    return path
+
+
+def journal(record_dir: Path, process: str) -> list[dict[str, Any]]:
+    """Every complete line of a process's journals (all incarnations, in order)."""
+    lines: list[dict[str, Any]] = []
+    for path in sorted(record_dir.glob(f"{process}.*.jsonl")):
+        for raw in path.read_text().splitlines():
+            try:
+                lines.append(json.loads(raw))
+            except json.JSONDecodeError:
+                break  # a line being written
+    return lines

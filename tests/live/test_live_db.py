@@ -48,12 +48,14 @@ def test_live_and_collect_store_the_run_with_mode_live(tmp_path: Path) -> None:
         "SELECT run_id, mode, label, seed, status, total_distance, tasks_completed "
         "FROM runs ORDER BY mode, repetition"
     ).fetchall()
-    options_json = con.execute(
+    options_row = con.execute(
         "SELECT options FROM configs WHERE config_id = ?", [stored["config_id"]]
-    ).fetchone()[0]
-    counts = con.execute(
+    ).fetchone()
+    counts_row = con.execute(
         "SELECT count(*) FROM intervals WHERE run_id = ?", [stored["run_id"]]
-    ).fetchone()[0]
+    ).fetchone()
+    assert options_row is not None and counts_row is not None
+    options_json, counts = options_row[0], counts_row[0]
     con.close()
     assert [r[:5] for r in rows] == [
         (stored["run_id"], "live", "WLAN_NB_SPL0_LIVE", 4, "ok"),

@@ -10,7 +10,6 @@
 
 from __future__ import annotations
 
-import json
 import signal
 from pathlib import Path
 
@@ -21,28 +20,17 @@ from mrcomm.live.settings import LiveSettings
 from mrcomm.net.zenoh_config import make_options
 from mrcomm.sim.config import make_config
 
-from .helpers import S1, wait_for
+from .helpers import S1, journal, wait_for
 
 pytestmark = pytest.mark.slow
 
 SPEED = 20.0
 
 
-def journal_lines(record_dir: Path, process: str) -> list[dict[str, object]]:
-    lines: list[dict[str, object]] = []
-    for path in sorted(record_dir.glob(f"{process}.*.jsonl")):
-        for raw in path.read_text().splitlines():
-            try:
-                lines.append(json.loads(raw))
-            except json.JSONDecodeError:
-                break  # a line being written
-    return lines
-
-
 def completed(record_dir: Path, robot: str) -> list[str]:
     return [
-        str(line["data"]["task_id"])  # type: ignore[index]
-        for line in journal_lines(record_dir, robot)
+        str(line["data"]["task_id"])
+        for line in journal(record_dir, robot)
         if line.get("k") == "ev" and line.get("label") == "task_completed"
     ]
 
@@ -95,7 +83,7 @@ def test_restarted_robot_resyncs_and_does_not_redo_known_tasks(tmp_path: Path) -
     assert process["finished"] == [False, True]
     assert result.mission["successful"] is True and result.mission["timed_out"] is False
     assert sorted(completed(tmp_path, "robot_1")) == ["1", "4", "7"]  # task 1 only once
-    resync = [x for x in journal_lines(tmp_path, "robot_1") if x.get("k") == "resync"]
+    resync = [x for x in journal(tmp_path, "robot_1") if x.get("k") == "resync"]
     assert resync and resync[0]["skipped"] == ["1"]
 
 
@@ -111,7 +99,7 @@ def test_lease_leaves_a_silent_member_out_and_updates_it_when_it_returns(
             return [
                 x
                 for r in ("robot_1", "robot_2")
-                for x in journal_lines(tmp_path, r)
+                for x in journal(tmp_path, r)
                 if x.get("k") == "left_out"
             ]
 

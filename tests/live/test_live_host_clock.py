@@ -23,7 +23,6 @@ from typing import Any
 
 import duckdb
 import pytest
-import yaml
 
 from mrcomm.errors import InputError
 from mrcomm.live.collect import _host_clock, read_journals
@@ -34,7 +33,7 @@ from mrcomm.net.zenoh_config import make_options
 from mrcomm.sim.config import make_config
 from mrcomm.sim.mission import run_mission
 
-from .helpers import ROOT, S1, wait_for
+from .helpers import S1, journal, s1_variant, wait_for
 
 CODE = "from mrcomm.cli.main import app; app()"
 
@@ -146,27 +145,7 @@ def near_scenario(directory: Path) -> Path:
         }
         for i, (x, y) in enumerate(spots, start=1)
     ]
-    (directory / "near_tasks.yaml").write_text(yaml.safe_dump(tasks))
-    scenario = yaml.safe_load(S1.read_text())
-    scenario.update(
-        name="S1-near3",
-        map=str((ROOT / "data" / "maps" / "office.yaml").resolve()),
-        tasks="near_tasks.yaml",
-    )
-    path = directory / "s1_near3.yaml"
-    path.write_text(yaml.safe_dump(scenario))
-    return path
-
-
-def journal(record_dir: Path, process: str) -> list[dict[str, Any]]:
-    lines: list[dict[str, Any]] = []
-    for path in sorted(record_dir.glob(f"{process}.*.jsonl")):
-        for raw in path.read_text().splitlines():
-            try:
-                lines.append(json.loads(raw))
-            except json.JSONDecodeError:
-                break  # a line being written
-    return lines
+    return s1_variant(directory, "S1-near3", tasks)
 
 
 def clock_lines(record_dir: Path, process: str) -> list[dict[str, Any]]:

@@ -29,7 +29,7 @@ from mrcomm.live.settings import LiveSettings
 from mrcomm.net.zenoh_config import make_options
 from mrcomm.sim.config import make_config
 
-from .helpers import ROOT, S1, wait_for
+from .helpers import ROOT, S1, s1_variant, wait_for
 from .netns import Netns, skip_unless_possible
 
 pytestmark = pytest.mark.slow
@@ -49,16 +49,7 @@ def short_scenario(directory: Path) -> Path:
     tasks = [t for t in yaml.safe_load((S1.parent / "s1_tasks.yaml").read_text())]
     near = [t for t in tasks if t["task_id"] in ("3", "6")]
     near.append({**near[0], "task_id": "8", "location": {"x": 27.5, "y": 11.0}})
-    (directory / "tasks.yaml").write_text(yaml.safe_dump(near))
-    scenario = yaml.safe_load(S1.read_text())
-    scenario.update(
-        name="S1-near",
-        map=str((ROOT / "data" / "maps" / "office.yaml").resolve()),
-        tasks="tasks.yaml",
-    )
-    path = directory / "s1_near.yaml"
-    path.write_text(yaml.safe_dump(scenario))
-    return path
+    return s1_variant(directory, "S1-near", near)
 
 
 @pytest.mark.parametrize(("loss", "speed", "outage"), [(20, 4.0, True), (30, 2.0, False)])
