@@ -77,6 +77,18 @@ def test_nothing_is_written_when_a_figure_fails(
     assert not out.exists()
 
 
+def test_a_report_over_an_older_one_keeps_only_its_own_figures(
+    study: Any, tmp_path: Path
+) -> None:
+    out = tmp_path / "out"
+    first = rp.build_report(study, out, metrics=["delay_time", "idle_time"], svg=True)
+    assert (out / "figures" / "metric_idle_time.svg").is_file()
+    second = rp.build_report(study, out, metrics=["delay_time"], svg=False)
+    on_disk = sorted(p.name for p in (out / "figures").iterdir())
+    assert on_disk == sorted(f"{fid}.png" for fid in second.figures)
+    assert "metric_idle_time" in first.figures and "metric_idle_time" not in second.figures
+
+
 def test_timeline_runs_are_checked(study: Any) -> None:
     run_id = str(study.runs["run_id"].iloc[0])
     assert fr.pick_timeline_runs(study.runs, [run_id]) == [run_id]

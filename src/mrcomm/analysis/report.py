@@ -341,12 +341,20 @@ def build_report(
     (out_dir / "figures").mkdir(exist_ok=True)
     (out_dir / "tables").mkdir(exist_ok=True)
     report = Report(out_dir=out_dir, html=out_dir / "report.html")
+    written: set[str] = set()
     for section in figures.values():
         for f in section:
             _write(out_dir / "figures" / f"{f.id}.png", f.png)
+            written.add(f"{f.id}.png")
             if f.svg is not None:
                 _write(out_dir / "figures" / f"{f.id}.svg", f.svg)
+                written.add(f"{f.id}.svg")
             report.figures.append(f.id)
+    # Written over an older report: its figures that this one does not have would be
+    # taken for part of it. figures/ holds only what reports write.
+    for old in (out_dir / "figures").glob("*"):
+        if old.suffix in (".png", ".svg") and old.name not in written:
+            old.unlink()
     for name in st.TABLE_NAMES:
         _write(out_dir / "tables" / f"{name}.csv", tables.get(name).to_csv(index=False).encode())
         report.tables.append(name)
