@@ -77,9 +77,7 @@ def test_nothing_is_written_when_a_figure_fails(
     assert not out.exists()
 
 
-def test_a_report_over_an_older_one_keeps_only_its_own_figures(
-    study: Any, tmp_path: Path
-) -> None:
+def test_a_report_over_an_older_one_keeps_only_its_own_figures(study: Any, tmp_path: Path) -> None:
     out = tmp_path / "out"
     first = rp.build_report(study, out, metrics=["delay_time", "idle_time"], svg=True)
     assert (out / "figures" / "metric_idle_time.svg").is_file()
