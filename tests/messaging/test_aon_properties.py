@@ -136,19 +136,32 @@ def test_everything_finishes_everywhere_and_nothing_is_finished_early(case: Scen
 def test_lease_leaves_out_a_crashed_member_by_name_then_catches_it_up(
     n: int, seed: int, loss: float, sends: list[tuple[float, int]], down_for: float
 ) -> None:
-    """The last member is silent from the start for ``down_for`` s (lease 5 s): the others
-    report every message finished naming only it, then bring it up to date."""
+    """The last member is silent from the start (lease 5 s) until ``down_for`` s after the
+    survivors had time to finish: they report every message finished naming only it,
+    then bring it up to date when it returns."""
     lease = 5.0
     names = [f"r{i}" for i in range(n)]
     dead = names[-1]
     what = f"seed={seed} n={n} loss={loss} sends={sends} down_for={down_for}"
-    net = FakeNet(names, seed, loss=loss, dup=0.1, max_delay=3, cuts=[Cut(dead, None, 0, down_for)])
+    # The last send is at 10 s at most; under heavy loss the survivors' own exchanges
+    # take a while (a round trip gets through with probability (1 - loss)^2).
+    finish_by = 10.0 + liveness_bound(loss)
+    back_at = finish_by + down_for
+    net = FakeNet(names, seed, loss=loss, dup=0.1, max_delay=3, cuts=[Cut(dead, None, 0, back_at)])
     team = AonTeam(net, lease=lease, beacons=True, label=what)
     survivors = [m for m in names if m != dead]
     for at, sender in sorted(sends):
         net.run(at)
         team.send(survivors[sender % len(survivors)])
-    net.run(down_for - 1.0)
+
+    def survivors_done() -> bool:
+        return all(
+            team.endpoints[m].pending_ids() == ()
+            and {r.msg_id for r in team.reports[m]} == set(team.sent)
+            for m in survivors
+        )
+
+    net.run(finish_by, stop=survivors_done)
     assert not team.violations, f"{what}: {team.violations[:3]}"
     for member in survivors:
         endpoint = team.endpoints[member]
@@ -156,7 +169,7 @@ def test_lease_leaves_out_a_crashed_member_by_name_then_catches_it_up(
         for report in team.reports[member]:
             assert set(report.left_out) <= {dead}, f"{what}: {report}"
         assert {r.msg_id for r in team.reports[member]} == set(team.sent), what
-    deadline = down_for + liveness_bound(loss)
+    deadline = back_at + liveness_bound(loss)
     net.run(deadline, stop=team.all_done)
     check_done(team, deadline, what)
 
