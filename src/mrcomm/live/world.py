@@ -43,11 +43,8 @@ from mrcomm.live.protocol import (
     encoder,
 )
 from mrcomm.live.settings import LiveSettings, config_crc
-from mrcomm.net.links import LinkModel, LinkRecorder
 from mrcomm.net.zenoh_bus import Incoming, Lane, ZenohNode
-from mrcomm.robot.base import SimBase
-from mrcomm.seeding import stream
-from mrcomm.sim.signals import build_threshold
+from mrcomm.sim.ground_truth import make_bases, make_links
 from mrcomm.sim.world import SimWorld
 
 TRAJECTORY_PERIOD = 0.5  # simulated s between trajectory samples
@@ -65,32 +62,9 @@ class WorldProcess:
         self.world = SimWorld.load(run.scenario)
         scenario = self.world.scenario
         self.robot_ids = tuple(r.id for r in scenario.robots)
-        self.bases = {
-            r.id: SimBase(
-                r.id,
-                scenario.grid,
-                self.world.planner,
-                r.pose,
-                self.world.robot_params,
-                stream(run.seed, "robot", r.id),
-            )
-            for r in scenario.robots
-        }
+        self.bases = make_bases(self.world, run.seed)
         self.node_ids = (*self.robot_ids, ASSIGNER_ID)
-        host = scenario.assigner.host
-        # As in simulation: a hosted assigner shares its robot's links (ESD's trace has
-        # no row for the assigner; it measures with its host's card).
-        aliases = {ASSIGNER_ID: host} if host else {}
-        self.links = LinkModel(
-            self.node_ids,
-            scenario.grid,
-            run.network,
-            build_threshold(run, self.world, tuple(n for n in self.node_ids if n not in aliases)),
-            ah_range=run.ah_range,
-            aliases=aliases,
-        )
-        skip = {(ASSIGNER_ID, host), (host, ASSIGNER_ID)} if host else set()
-        self.link_recorder = LinkRecorder(self.node_ids, len(self.robot_ids), skip)
+        self.links, self.link_recorder = make_links(self.world, run)
         self.incarnation = incarnation
         self.team = team_processes(scenario)
         self.node = ZenohNode(settings.zenoh)

@@ -30,11 +30,11 @@ from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robo
 from mrcomm.metrics.timeline import Timeline
 from mrcomm.net.inprocess import InProcessNetwork
 from mrcomm.net.link_sensors import MeasuredSensor
-from mrcomm.net.links import LinkModel, LinkRecorder, LinkState
-from mrcomm.robot.base import SimBase
+from mrcomm.net.links import LinkState
 from mrcomm.seeding import stream
 from mrcomm.sim.config import RunConfig
-from mrcomm.sim.signals import TracePulse, build_link_sensor, build_threshold
+from mrcomm.sim.ground_truth import make_bases, make_links
+from mrcomm.sim.signals import TracePulse, build_link_sensor
 from mrcomm.sim.world import SimWorld
 from mrcomm.world.scenario import Scenario
 
@@ -89,31 +89,8 @@ class Mission:
             loss_percent=config.spl,
             loss_rngs={a: stream(seed, "loss", a) for a in self.node_ids},
         )
-        host = scenario.assigner.host
-        # A hosted assigner shares its robot's position: links are evaluated once.
-        aliases = {ASSIGNER_ID: host} if host else {}
-        evaluated = tuple(n for n in self.node_ids if n not in aliases)
-        self.links = LinkModel(
-            self.node_ids,
-            scenario.grid,
-            config.network,
-            build_threshold(config, self.world, evaluated),
-            ah_range=config.ah_range,
-            aliases=aliases,
-        )
-        skip = {(ASSIGNER_ID, host), (host, ASSIGNER_ID)} if host else set()
-        self.link_recorder = LinkRecorder(self.node_ids, len(self.robot_ids), skip)
-        self.bases = {
-            r.id: SimBase(
-                r.id,
-                scenario.grid,
-                self.world.planner,
-                r.pose,
-                self.world.robot_params,
-                stream(seed, "robot", r.id),
-            )
-            for r in scenario.robots
-        }
+        self.links, self.link_recorder = make_links(self.world, config)
+        self.bases = make_bases(self.world, seed)
         self.timelines = {rid: Timeline(rid) for rid in self.robot_ids}
         ranks = stream(seed, "tie-break").permutation(len(self.robot_ids))
         rank_of = {rid: float(ranks[i]) for i, rid in enumerate(self.robot_ids)}
