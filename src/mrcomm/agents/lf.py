@@ -29,13 +29,19 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass
 from typing import Any
 
 from transitions.extensions import HierarchicalMachine
 
 from mrcomm.agents.behaviours import register_behaviour
-from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS, TaskExecutor
+from mrcomm.agents.executor import TaskExecutor
+from mrcomm.agents.lf_machine import (
+    ACTIVITY_OF_FULL_STATE,
+    LF_STATES,
+    LF_TRANSITIONS,
+    ROLE_OF_TOP_STATE,
+    LfParams,
+)
 from mrcomm.agents.utility import UtilityInputs, utility_function
 from mrcomm.messaging.aon import AonEndpoint, MessageId
 from mrcomm.messaging.messages import (
@@ -54,92 +60,6 @@ from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ROLE
 from mrcomm.ports import NavStatus
 from mrcomm.world.geometry import Pose
-
-_DRIVE = [
-    {"trigger": "arrive", "source": "navigating", "dest": "executing"},
-    {"trigger": "conflict", "source": "navigating", "dest": "avoiding"},
-    {"trigger": "resume", "source": "avoiding", "dest": "navigating"},
-    {"trigger": "nav_fail", "source": "navigating", "dest": "retrying"},
-    {"trigger": "retry", "source": "retrying", "dest": "navigating"},
-]
-LF_STATES: list[Any] = [
-    {"name": "na", "children": NB_STATES, "initial": "unassigned", "transitions": NB_TRANSITIONS},
-    "assigning",
-    {
-        "name": "leader",
-        "children": ["navigating", "avoiding", "executing", "retrying", "holding"],
-        "initial": "navigating",
-        "transitions": [
-            *_DRIVE,
-            {"trigger": "hold", "source": "navigating", "dest": "holding"},
-            {"trigger": "release", "source": "holding", "dest": "navigating"},
-        ],
-    },
-    {
-        "name": "follower",
-        "children": ["following", "avoiding", "waiting", "clearing"],
-        "initial": "following",
-        "transitions": [
-            {"trigger": "conflict", "source": "following", "dest": "avoiding"},
-            {"trigger": "resume", "source": "avoiding", "dest": "following"},
-            {"trigger": "reach", "source": "following", "dest": "waiting"},
-            {"trigger": "follow", "source": "waiting", "dest": "following"},
-            {"trigger": "make_way", "source": ["following", "waiting"], "dest": "clearing"},
-            {"trigger": "cleared", "source": "clearing", "dest": "following"},
-        ],
-    },
-    "regrouping",
-]
-LF_TRANSITIONS: list[dict[str, Any]] = [
-    {
-        "trigger": "disconnect",
-        "source": ["na", "leader", "follower", "regrouping"],
-        "dest": "assigning",
-    },
-    {"trigger": "become_leader", "source": "assigning", "dest": "leader"},
-    {"trigger": "become_follower", "source": "assigning", "dest": "follower"},
-    {"trigger": "regroup", "source": "assigning", "dest": "regrouping"},
-    {
-        "trigger": "dissolve",
-        "source": ["leader", "follower", "assigning", "regrouping"],
-        "dest": "na",
-    },
-]
-
-_ACTIVITY_OF_FULL_STATE = {
-    "assigning": L.ROLE_ASSIGNMENT,
-    "leader_holding": L.LEADER_DISCONNECT,
-    "follower_following": L.MOVING,
-    "follower_waiting": L.FOLLOWER_WAITING,
-    "follower_clearing": L.MOVING,
-    "regrouping": L.MOVING,
-}
-_ROLE_OF_TOP_STATE = {
-    "na": L.ROLE_NA,
-    "assigning": L.ROLE_ASSIGNING,
-    "leader": L.ROLE_LEADER,
-    "follower": L.ROLE_FOLLOWER,
-    "regrouping": L.ROLE_REGROUPING,
-}
-
-
-@dataclass(frozen=True)
-class LfParams:
-    utility: str = "original"
-    announce_period: float = 0.25  # utilities and roles at 4 Hz
-    assign_timeout: float = 6.0  # decide with what was collected after this long
-    roles_timeout: float = 3.0  # stop collecting roles after this long
-    follow_distance: float = 1.2  # a follower stops this close to the leader
-    refollow_distance: float = 1.7  # and moves again when the leader is this far
-    refresh_period_near: float = 1.0  # follower goal refresh when the leader is near
-    refresh_period_far: float = 0.4  # ... and when it is beyond the warning threshold
-    lost_timeout: float = 60.0  # a follower silent this long no longer holds the leader
-    route_check_step: float = 0.5  # m between the route points a follower checks
-    direct_hop: float = 1.5  # m per hop of a direct route to the leader
-    #: AON: a member silent this long (no pose, no AON traffic) is reported as left out
-    #: of pending messages by name instead of being waited for; it is brought up to date
-    #: when heard again. None waits forever.
-    aon_lease: float | None = 60.0
 
 
 @register_behaviour("lf")
@@ -486,7 +406,7 @@ class LeaderFollowerExecutor(TaskExecutor):
             self._next_refresh = self._now
 
     def current_role(self) -> str:
-        return _ROLE_OF_TOP_STATE.get(self.state.split("_", 1)[0], "")
+        return ROLE_OF_TOP_STATE.get(self.state.split("_", 1)[0], "")
 
     def current_leader(self) -> str:
         return (self.leader or "") if self.state.startswith("follower") else ""
@@ -609,14 +529,14 @@ class LeaderFollowerExecutor(TaskExecutor):
 
     # -- timeline ------------------------------------------------------------------------
     def activity_of(self, state: str) -> str | None:
-        return _ACTIVITY_OF_FULL_STATE.get(state) or super().activity_of(state)
+        return ACTIVITY_OF_FULL_STATE.get(state) or super().activity_of(state)
 
     def on_state_change(self) -> None:
         top = self.state.split("_", 1)[0]
         if top != self._top_state:
             self._top_state = top
             self._state_since_role = self._now
-        self.timeline.set_state(ROLE, _ROLE_OF_TOP_STATE.get(top), self._now)
+        self.timeline.set_state(ROLE, ROLE_OF_TOP_STATE.get(top), self._now)
         if top == "regrouping":
             self._follow_target = None
 

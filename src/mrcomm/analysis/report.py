@@ -31,6 +31,7 @@ from mrcomm.analysis.figures_report import (
     pick_timeline_runs,
 )
 from mrcomm.errors import InputError
+from mrcomm.experiment.tables import RUN_MODES
 from mrcomm.fileio import atomic_write_bytes
 
 TABLE_TITLES = {
@@ -171,12 +172,8 @@ def to_latex(name: str, frame: pd.DataFrame) -> str:
 # ---- loading ------------------------------------------------------------------------------
 
 
-#: Run modes a study can be restricted to (``--mode``).
-MODES = ("sim", "live")
-
-
-def check_mode(mode: str | None) -> None:
-    if mode is not None and mode not in MODES:
+def _check_mode(mode: str | None) -> None:
+    if mode is not None and mode not in RUN_MODES:
         raise InputError(f"unknown mode {mode!r}; choose sim or live", field="--mode")
 
 
@@ -187,7 +184,7 @@ def load_study(db_path: Path, experiment: str | None = None, mode: str | None = 
     Simulated and live runs are never pooled: the statistics group runs by scenario,
     network, threshold, behaviour and SPL, which both modes share. A database holding
     both is refused unless ``mode`` picks one."""
-    check_mode(mode)
+    _check_mode(mode)
     if not db_path.is_file():
         raise InputError("no such results database", file=db_path, field="--db")
     from mrcomm.experiment.api import load_results

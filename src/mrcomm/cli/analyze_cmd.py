@@ -56,8 +56,7 @@ def analyze(
         raise InputError(f"must be between 0 and 1, got {alpha:g}", field="--alpha")
     names = _tables(table)
     st.resolve_metrics(metric)  # unknown metric: fail before loading anything
-    rp.check_mode(mode)
-    data = rp.load_study(db, experiment, mode)
+    data = rp.load_study(db, experiment, mode)  # checks --mode before loading
     runs = data.runs
     rp.check_runs(runs, db)
     tables = st.study_tables(runs, metrics_with_data(runs, metric), alpha)

@@ -13,16 +13,14 @@ team's Zenoh network; bad input is a one-line error with exit status 2.
 
 from __future__ import annotations
 
-import json
 import tempfile
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
-from rich.console import Console
 
-from mrcomm.cli.db_option import DbOpt, ExperimentOpt, check_db, store_run, stored_json
-from mrcomm.cli.run_cmd import print_result
+from mrcomm.cli.db_option import DbOpt, ExperimentOpt, check_db, store_run
+from mrcomm.cli.run_cmd import show_result
 from mrcomm.errors import InputError
 from mrcomm.net.network import NetworkType
 from mrcomm.net.zenoh_config import ZenohOptions, make_options
@@ -306,21 +304,12 @@ def live(
         if_lost=f"the records stay in {directory}: store them with mrcomm collect "
         f"{directory} --db ...",
     )
-    if as_json:
-        summary = live_summary(result, report)
-        if stored is not None:
-            summary["stored"] = stored_json(stored)
-        typer.echo(json.dumps(summary, indent=2))
-        return
-    console = Console()
-    print_result(result, console)
-    if stored is not None:
-        console.print(stored.describe(), markup=False)
     latency = report.get("pose_latency_ms", {})
-    console.print(
+    footer = (
         f"live: records in {directory}; pose latency p50 {latency.get('p50', '-')} ms, "
         f"p99 {latency.get('p99', '-')} ms"
     )
+    show_result(result, live_summary(result, report), stored, as_json, footer)
 
 
 def collect_cmd(
@@ -338,13 +327,4 @@ def collect_cmd(
     # The record says how its agents were clocked (the other live options it cannot).
     host = any(p["host_clock"] for p in report["processes"].values())
     stored = store_run(db, experiment, result, live_options={"agent_clock": "host"} if host else {})
-    if as_json:
-        summary = live_summary(result, report)
-        if stored is not None:
-            summary["stored"] = stored_json(stored)
-        typer.echo(json.dumps(summary, indent=2))
-    else:
-        console = Console()
-        print_result(result, console)
-        if stored is not None:
-            console.print(stored.describe(), markup=False)
+    show_result(result, live_summary(result, report), stored, as_json)

@@ -50,8 +50,7 @@ def report(
     if not parent.is_dir():
         raise InputError(f"directory {parent} does not exist", file=out, field="--out")
     st.resolve_metrics(metric)  # unknown metric: fail before loading anything
-    rp.check_mode(mode)
-    data = rp.load_study(db, experiment, mode)
+    data = rp.load_study(db, experiment, mode)  # checks --mode before loading
     result = rp.build_report(
         data, out, db_path=db, metrics=metric, timeline_runs=timeline, svg=svg, alpha=alpha
     )

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.console import Console
@@ -17,6 +17,9 @@ from mrcomm.errors import InputError
 from mrcomm.net.network import NetworkType
 from mrcomm.sim.config import make_config
 from mrcomm.sim.mission import MissionResult, run_mission
+
+if TYPE_CHECKING:
+    from mrcomm.experiment.adhoc import StoredRun
 
 
 def run(
@@ -80,16 +83,29 @@ def run(
     stored = store_run(
         db, experiment, result, if_lost="the run is deterministic: run the command again"
     )
+    show_result(result, result.summary(), stored, as_json)
+
+
+def show_result(
+    result: MissionResult,
+    summary: dict[str, Any],
+    stored: StoredRun | None,
+    as_json: bool,
+    footer: str = "",
+) -> None:
+    """What ``run``, ``live`` and ``collect`` print: ``summary`` as one JSON object
+    (with where the run was stored), or the tables, where it was stored and ``footer``."""
     if as_json:
-        summary = result.summary()
         if stored is not None:
-            summary["stored"] = stored_json(stored)
+            summary = {**summary, "stored": stored_json(stored)}
         typer.echo(json.dumps(summary, indent=2))
-    else:
-        console = Console()
-        print_result(result, console)
-        if stored is not None:
-            console.print(stored.describe(), markup=False)
+        return
+    console = Console()
+    print_result(result, console)
+    if stored is not None:
+        console.print(stored.describe(), markup=False)
+    if footer:
+        console.print(footer)
 
 
 def print_result(result: MissionResult, console: Console) -> None:

@@ -32,13 +32,13 @@ from mrcomm.experiment.rows import result_rows
 from mrcomm.experiment.schema import PATH_FIELDS, Configuration, Experiment, RunSpec
 from mrcomm.experiment.seeds import make_config_id, make_run_id
 from mrcomm.experiment.store import ResultStore, inspect_database
+from mrcomm.experiment.tables import RUN_MODES
 from mrcomm.sim.config import RunConfig, make_config
 from mrcomm.sim.mission import MissionResult
 
 #: ``experiments.schema_path`` of an ad-hoc experiment (sweeps hold their schema file).
 ADHOC_SOURCE = "mrcomm:adhoc"
 DEFAULT_EXPERIMENT = "adhoc"
-MODES = ("sim", "live")
 #: Options of a live run beyond RunConfig, with their defaults: a default is left out
 #: of the configuration's id, so ``collect`` (which sees only the record) and ``live``
 #: give the same id to the same default run.
@@ -106,7 +106,7 @@ def store_result(
     (:data:`LIVE_DEFAULTS`; a live result's recorded speed is taken from it)."""
     check_target(db_path, experiment)
     mode = str(result.config.get("mode", "sim"))
-    if mode not in MODES:
+    if mode not in RUN_MODES:
         raise ValueError(f"unknown mode {mode!r}")
     config = _absolute(_run_config(result))
     extra = _extra_options(mode, result, live_options or {})

@@ -13,6 +13,9 @@ SCHEMA_VERSION = "1"
 
 Columns = tuple[tuple[str, str], ...]
 
+#: Values of ``runs.mode``: a simulated run, or a live one (every agent its own process).
+RUN_MODES = ("sim", "live")
+
 META: Columns = (("key", "TEXT PRIMARY KEY"), ("value", "TEXT"))
 
 #: One row per experiment ever swept into the database (several may share one file).

@@ -20,11 +20,8 @@ the agents have gone. It is not a team member: a crash of any agent leaves it ru
 
 from __future__ import annotations
 
-import math
 import time
 from typing import Any
-
-import numpy as np
 
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.errors import InputError
@@ -280,17 +277,18 @@ class WorldProcess:
     def _true_xy(self) -> list[tuple[str, tuple[float, float]]]:
         return [(rid, b.true_xy) for rid, b in self.bases.items()]
 
-    def _positions(self) -> np.ndarray:
+    def _positions(self) -> list[tuple[float, float]]:
         robots = {rid: b.true_xy for rid, b in self.bases.items()}
-        return np.array([*robots.values(), self.world.scenario.assigner.locate(robots)])
+        return [*robots.values(), self.world.scenario.assigner.locate(robots)]
 
     def _write_truth(self, end: float, timed_out: bool) -> None:
         truth: dict[str, Any] = {}
         for i, (rid, base) in enumerate(self.bases.items()):
+            closest, furthest = self.link_recorder.separation(i)
             truth[rid] = {
                 "distance": round(base.odometry_distance, 6),
-                "min_separation": _finite(self.link_recorder.min_separation[i]),
-                "max_separation": _finite(self.link_recorder.max_separation[i]),
+                "min_separation": closest,
+                "max_separation": furthest,
                 "replans": base.replans,
                 "recoveries": base.recoveries,
             }
@@ -304,10 +302,6 @@ class WorldProcess:
             robots=truth,
             links=self.link_recorder.summaries(),
         )
-
-
-def _finite(value: float) -> float | None:
-    return round(float(value), 6) if math.isfinite(value) else None
 
 
 def run_world(settings: LiveSettings, incarnation: int | None = None) -> int:

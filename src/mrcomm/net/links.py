@@ -227,6 +227,14 @@ class LinkRecorder:
         self.rssi_series.extend((now, a, b, v) for a, b, v in samples)
         return samples
 
+    def separation(self, robot: int) -> tuple[float | None, float | None]:
+        """Robot ``robot``'s closest and furthest team mate over the run, m (6
+        decimals; None without a team mate)."""
+        return (
+            _rounded(self.min_separation[robot]),
+            _rounded(self.max_separation[robot]),
+        )
+
     def summaries(self) -> dict[str, dict[str, Any]]:
         out: dict[str, dict[str, Any]] = {}
         for i, a in enumerate(self.ids):
@@ -246,3 +254,7 @@ class LinkRecorder:
 
 def _finite(value: float) -> float | None:
     return float(value) if np.isfinite(value) else None
+
+
+def _rounded(value: float) -> float | None:
+    return round(float(value), 6) if math.isfinite(value) else None

@@ -31,7 +31,6 @@ class PairLayout:
     into the symmetric (n, n) matrix in one gather."""
 
     def __init__(self, n: int) -> None:
-        self.n = n
         self.pairs = [(a, b) for a in range(n) for b in range(a + 1, n)]
         # Index n*(n-1)/2 is the diagonal's value, appended by :meth:`matrix`.
         gather = np.full((n, n), len(self.pairs), dtype=np.intp)

@@ -15,12 +15,9 @@ assembled once by :meth:`Mission.result`.
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass
 from typing import Any
-
-import numpy as np
 
 from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
 from mrcomm.agents.behaviours import behaviour_class
@@ -174,11 +171,12 @@ class Mission:
             self.finished = True
 
     # -- per-step bookkeeping ------------------------------------------------------------
-    def _node_positions(self, robots: list[tuple[float, float]]) -> np.ndarray:
+    def _node_positions(self, robots: list[tuple[float, float]]) -> list[tuple[float, float]]:
+        # Plain tuples: the link model works on them directly (no array round trip).
         assigner = self.world.scenario.assigner.locate(
             dict(zip(self.robot_ids, robots, strict=True))
         )
-        return np.array([*robots, assigner], dtype=np.float64)
+        return [*robots, assigner]
 
     def _sample_trajectories(self, now: float) -> None:
         for rid, base in self.bases.items():
@@ -194,10 +192,11 @@ class Mission:
         failed_pairs = self.assigner.failed()
         robots: dict[str, dict[str, Any]] = {}
         for i, rid in enumerate(self.robot_ids):
+            closest, furthest = self.link_recorder.separation(i)
             facts = RobotFacts(
                 distance=round(self.bases[rid].odometry_distance, 6),
-                min_separation=_round(self.link_recorder.min_separation[i]),
-                max_separation=_round(self.link_recorder.max_separation[i]),
+                min_separation=closest,
+                max_separation=furthest,
                 tasks_assigned=len(self.assigner.agenda[rid]),
                 tasks_failed=sum(1 for _, robot in failed_pairs if robot == rid),
             )
@@ -279,10 +278,6 @@ class Mission:
 def run_mission(config: RunConfig, world: SimWorld | None = None) -> MissionResult:
     """Simulate one mission to its end and return its results."""
     return Mission(config, world).run()
-
-
-def _round(value: float) -> float | None:
-    return round(float(value), 6) if math.isfinite(value) else None
 
 
 def _rounded(metrics: dict[str, Any]) -> dict[str, Any]:
