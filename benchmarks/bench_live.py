@@ -43,7 +43,7 @@ def loopback(speed: float, max_time: float, behaviour: str) -> None:
     from mrcomm.live.launcher import LiveTeam
     from mrcomm.live.settings import LiveSettings
     from mrcomm.net.zenoh_config import make_options
-    from mrcomm.sim.config import make_config
+    from mrcomm.run.config import make_config
 
     run = make_config(None, scenario=S1, behaviour=behaviour, max_time=max_time)
     with tempfile.TemporaryDirectory(prefix="bench-live-") as tmp:

@@ -16,9 +16,9 @@ from collections import defaultdict
 from pathlib import Path
 from typing import Any
 
-from mrcomm.sim.config import make_config
+from mrcomm.run.config import make_config
+from mrcomm.run.resources import ScenarioResources
 from mrcomm.sim.mission import run_mission
-from mrcomm.sim.world import SimWorld
 
 ROOT = Path(__file__).resolve().parents[1]
 S1 = ROOT / "data" / "scenarios" / "s1.yaml"
@@ -30,7 +30,7 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--json", type=Path)
     args = parser.parse_args()
-    world = SimWorld.load(S1)
+    world = ScenarioResources.load(S1)
     rows: list[dict[str, Any]] = []
     for network, threshold in COMBINATIONS:
         for spl in (0, 25, 50, 75):

@@ -16,9 +16,9 @@ import statistics
 import time
 from pathlib import Path
 
-from mrcomm.sim.config import make_config
+from mrcomm.run.config import make_config
+from mrcomm.run.resources import ScenarioResources
 from mrcomm.sim.mission import run_mission
-from mrcomm.sim.world import SimWorld
 
 ROOT = Path(__file__).resolve().parents[1]
 S1 = ROOT / "data" / "scenarios" / "s1.yaml"
@@ -42,7 +42,7 @@ def main() -> None:
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
     started = time.perf_counter()
-    world = SimWorld.load(S1)
+    world = ScenarioResources.load(S1)
     load_s = time.perf_counter() - started
     print(
         f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from mrcomm.net.signal.csvio import write_csv
-from mrcomm.sim.config import make_config
+from mrcomm.run.config import make_config
 from mrcomm.sim.mission import run_mission
 
 ROOT = Path(__file__).resolve().parents[1]

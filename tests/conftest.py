@@ -24,7 +24,7 @@ S1_PATH = ROOT / "data" / "scenarios" / "s1.yaml"
 
 
 @pytest.fixture(scope="session")
-def s1_world():  # type: ignore[no-untyped-def]
-    from mrcomm.sim.world import SimWorld
+def s1_resources():  # type: ignore[no-untyped-def]
+    from mrcomm.run.resources import ScenarioResources
 
-    return SimWorld.load(S1_PATH)
+    return ScenarioResources.load(S1_PATH)

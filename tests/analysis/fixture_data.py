@@ -11,9 +11,10 @@ from typing import Any
 
 import pandas as pd
 
-from mrcomm.sim.config import make_config
-from mrcomm.sim.mission import MissionResult, run_mission
-from mrcomm.sim.world import SimWorld
+from mrcomm.run.config import make_config
+from mrcomm.run.resources import ScenarioResources
+from mrcomm.run.result import MissionResult
+from mrcomm.sim.mission import run_mission
 
 LF_KEYS = (
     "na_movement_time",
@@ -129,7 +130,7 @@ def frames_from_results(results: list[tuple[MissionResult, int]]) -> Frames:
 
 
 def run_study(
-    world: SimWorld,
+    world: ScenarioResources,
     scenario: Path,
     reps: int,
     network: str = "ah",

@@ -222,12 +222,12 @@ def test_figures_of_a_real_study_render(study: Any, tmp_path: Any) -> None:
     assert heights == pytest.approx(sorted(means), rel=1e-9)
 
 
-def test_rssi_of_a_real_ssd_mission(s1_world: Any) -> None:
+def test_rssi_of_a_real_ssd_mission(s1_resources: Any) -> None:
     from tests.analysis.fixture_data import run_study
     from tests.conftest import S1_PATH
 
     frames = run_study(
-        s1_world, S1_PATH, reps=1, threshold="ssd", spls=(0,), behaviours=("lf",), max_time=120
+        s1_resources, S1_PATH, reps=1, threshold="ssd", spls=(0,), behaviours=("lf",), max_time=120
     )
     run_id = str(frames.runs["run_id"].iloc[0])
     assert not frames.rssi.empty

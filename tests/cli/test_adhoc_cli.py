@@ -14,7 +14,7 @@ import pandas as pd
 import pytest
 
 from mrcomm.experiment.adhoc import store_result
-from mrcomm.sim.config import make_config
+from mrcomm.run.config import make_config
 from mrcomm.sim.mission import run_mission
 from tests.cli.test_report_cli import Outcome, in_process
 from tests.conftest import S1_PATH
@@ -34,7 +34,7 @@ def test_run_db_then_report_and_mode_selection(
     tmp_path: Path,
     capsys: pytest.CaptureFixture[str],
     monkeypatch: pytest.MonkeyPatch,
-    s1_world: object,
+    s1_resources: object,
 ) -> None:
     db = tmp_path / "r.duckdb"
     stored = []
@@ -64,7 +64,7 @@ def test_run_db_then_report_and_mode_selection(
 
     # A live run joins the database: sim and live must not be pooled.
     config = make_config(None, scenario=S1_PATH, network="ah", threshold="slt", max_time=40)
-    sim = run_mission(config, s1_world)  # type: ignore[arg-type]
+    sim = run_mission(config, s1_resources)  # type: ignore[arg-type]
     live = dataclasses.replace(sim, config={**sim.config, "mode": "live", "speed": 10.0})
     store_result(db, live)
     for command in ("report", "analyze"):

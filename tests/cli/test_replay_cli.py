@@ -12,8 +12,8 @@ from typing import Any
 import pytest
 
 from mrcomm.experiment.recording import run_and_record
-from mrcomm.sim.config import make_config
-from mrcomm.sim.mission import MissionResult
+from mrcomm.run.config import make_config
+from mrcomm.run.result import MissionResult
 from tests.conftest import ROOT, S1_PATH
 
 MRCOMM = [sys.executable, "-c", "from mrcomm.cli.main import app; app()"]
@@ -24,10 +24,12 @@ def mrcomm(*args: str) -> subprocess.CompletedProcess[str]:
 
 
 @pytest.fixture(scope="module")
-def recorded(s1_world: Any, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, MissionResult]:
+def recorded(
+    s1_resources: Any, tmp_path_factory: pytest.TempPathFactory
+) -> tuple[Path, MissionResult]:
     path = tmp_path_factory.mktemp("replay") / "s1.mcap"
     config = make_config(None, scenario=S1_PATH, spl=50, seed=5, max_time=30)
-    return path, run_and_record(config, s1_world, path)
+    return path, run_and_record(config, s1_resources, path)
 
 
 def test_replay_json_reports_channels_result_and_outcomes(

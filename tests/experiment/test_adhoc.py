@@ -22,19 +22,20 @@ from mrcomm.experiment.api import load_results
 from mrcomm.experiment.runner import execute_sweep, plan_sweep
 from mrcomm.experiment.schema import load_experiment
 from mrcomm.experiment.store import inspect_database
-from mrcomm.sim.config import make_config
-from mrcomm.sim.mission import MissionResult, run_mission
+from mrcomm.run.config import make_config
+from mrcomm.run.result import MissionResult
+from mrcomm.sim.mission import run_mission
 from tests.conftest import S1_PATH
 from tests.experiment.helpers import MINI, fake_ok, snapshot, write_schema
 
 
 @pytest.fixture(scope="module")
-def sim(s1_world: Any) -> MissionResult:
+def sim(s1_resources: Any) -> MissionResult:
     """A short real LF mission (every table gets rows)."""
     config = make_config(
         None, scenario=S1_PATH, network="ah", threshold="slt", behaviour="lf", seed=7, max_time=20
     )
-    return run_mission(config, s1_world)
+    return run_mission(config, s1_resources)
 
 
 def as_live(result: MissionResult, **extra: Any) -> MissionResult:

@@ -25,8 +25,9 @@ from mrcomm.experiment.recording_schemas import (
     scene_update_schema,
 )
 from mrcomm.net.links import LinkState
-from mrcomm.sim.config import RunConfig, make_config
-from mrcomm.sim.mission import Mission, MissionResult, run_mission
+from mrcomm.run.config import RunConfig, make_config
+from mrcomm.run.result import MissionResult
+from mrcomm.sim.mission import Mission, run_mission
 from mrcomm.world.geometry import Pose
 from mrcomm.world.occupancy import OccupancyGrid
 from tests.conftest import S1_PATH
@@ -82,16 +83,16 @@ LF_FIELDS["seed"] = 3
 
 
 @pytest.fixture(scope="module")
-def nb_recording(s1_world: Any, tmp_path_factory: pytest.TempPathFactory) -> Recording:
+def nb_recording(s1_resources: Any, tmp_path_factory: pytest.TempPathFactory) -> Recording:
     path = tmp_path_factory.mktemp("rec") / "nb.mcap"
-    return Recording(path, run_and_record(_config(**NB_FIELDS), s1_world, path))
+    return Recording(path, run_and_record(_config(**NB_FIELDS), s1_resources, path))
 
 
 @pytest.fixture(scope="module")
-def lf_recording(s1_world: Any, tmp_path_factory: pytest.TempPathFactory) -> Recording:
+def lf_recording(s1_resources: Any, tmp_path_factory: pytest.TempPathFactory) -> Recording:
     """A whole LF mission on AH with SLT (it finishes; links do cross the warning)."""
     path = tmp_path_factory.mktemp("rec") / "lf.mcap"
-    return Recording(path, run_and_record(_config(**LF_FIELDS), s1_world, path))
+    return Recording(path, run_and_record(_config(**LF_FIELDS), s1_resources, path))
 
 
 def _without_wall_time(summary: dict[str, Any]) -> dict[str, Any]:
@@ -165,8 +166,8 @@ def test_scene_poses_and_links_at_the_scene_rate(nb_recording: Recording) -> Non
     assert np.array(links["distance"]).shape == (4, 4)
 
 
-def test_map_is_the_scenario_grid(nb_recording: Recording, s1_world: Any) -> None:
-    grid = s1_world.scenario.grid
+def test_map_is_the_scenario_grid(nb_recording: Recording, s1_resources: Any) -> None:
+    grid = s1_resources.scenario.grid
     (t, msg), *rest = nb_recording.messages["/map"]
     assert t == 0.0 and rest == []
     assert msg["column_count"] == grid.width
@@ -202,10 +203,10 @@ def test_result_and_events(nb_recording: Recording, lf_recording: Recording) -> 
 # -- determinism -------------------------------------------------------------------------
 @pytest.mark.parametrize("fields", [NB_FIELDS, LF_FIELDS], ids=["nb", "lf"])
 def test_recording_does_not_change_the_mission(
-    fields: dict[str, Any], s1_world: Any, nb_recording: Recording, lf_recording: Recording
+    fields: dict[str, Any], s1_resources: Any, nb_recording: Recording, lf_recording: Recording
 ) -> None:
     rec = nb_recording if fields is NB_FIELDS else lf_recording
-    plain = run_mission(_config(**fields), s1_world)
+    plain = run_mission(_config(**fields), s1_resources)
     assert _without_wall_time(rec.result.summary()) == _without_wall_time(plain.summary())
     (recorded,) = rec.payloads("/result")
     assert _without_wall_time(recorded) == json.loads(
@@ -213,15 +214,15 @@ def test_recording_does_not_change_the_mission(
     )
 
 
-def test_ssd_recording_carries_rssi_and_line_of_sight(s1_world: Any, tmp_path: Path) -> None:
+def test_ssd_recording_carries_rssi_and_line_of_sight(s1_resources: Any, tmp_path: Path) -> None:
     fields = {**LF_FIELDS, "threshold": "ssd", "max_time": 60}
     try:
         config = _config(**fields)
     except InputError:
         pytest.skip("the SSD threshold is not available yet")
     path = tmp_path / "ssd.mcap"
-    rec = Recording(path, run_and_record(config, s1_world, path))
-    plain = run_mission(config, s1_world)
+    rec = Recording(path, run_and_record(config, s1_resources, path))
+    plain = run_mission(config, s1_resources)
     assert _without_wall_time(rec.result.summary()) == _without_wall_time(plain.summary())
     links = rec.payloads("/links")
     assert all(m["rssi"] is not None and m["line_of_sight"] is not None for m in links)
@@ -360,10 +361,10 @@ def test_grid_rows_start_at_the_map_origin() -> None:
 
 
 # -- options and failures ---------------------------------------------------------------------
-def test_scene_period_sets_the_scene_rate(s1_world: Any, tmp_path: Path) -> None:
+def test_scene_period_sets_the_scene_rate(s1_resources: Any, tmp_path: Path) -> None:
     path = tmp_path / "slow.mcap"
     result = run_and_record(
-        _config(**{**NB_FIELDS, "max_time": 20}), s1_world, path, scene_period=1.0
+        _config(**{**NB_FIELDS, "max_time": 20}), s1_resources, path, scene_period=1.0
     )
     summary = read_recording(path)
     scenes = summary.channel("/scene")
@@ -372,13 +373,13 @@ def test_scene_period_sets_the_scene_rate(s1_world: Any, tmp_path: Path) -> None
     assert summary.result["sim_time_s"] == result.sim_time_s == 20.0
 
 
-def test_missing_directory_is_an_input_error(s1_world: Any, tmp_path: Path) -> None:
+def test_missing_directory_is_an_input_error(s1_resources: Any, tmp_path: Path) -> None:
     with pytest.raises(InputError, match="does not exist"):
-        run_and_record(_config(**NB_FIELDS), s1_world, tmp_path / "no" / "x.mcap")
+        run_and_record(_config(**NB_FIELDS), s1_resources, tmp_path / "no" / "x.mcap")
 
 
 def test_nothing_is_left_behind_when_the_run_fails(
-    s1_world: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    s1_resources: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     calls = 0
     original = Mission.step
@@ -393,5 +394,5 @@ def test_nothing_is_left_behind_when_the_run_fails(
     monkeypatch.setattr(Mission, "step", failing_step)
     path = tmp_path / "x.mcap"
     with pytest.raises(RuntimeError, match="boom"):
-        run_and_record(_config(**NB_FIELDS), s1_world, path)
+        run_and_record(_config(**NB_FIELDS), s1_resources, path)
     assert list(tmp_path.iterdir()) == []

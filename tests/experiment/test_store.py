@@ -26,10 +26,10 @@ def _fingerprint(path: Path) -> tuple[str, float]:
     return hashlib.sha256(path.read_bytes()).hexdigest(), path.stat().st_mtime
 
 
-def test_a_run_round_trips_into_every_table(tmp_path: Path, s1_world) -> None:  # type: ignore[no-untyped-def]
+def test_a_run_round_trips_into_every_table(tmp_path: Path, s1_resources) -> None:  # type: ignore[no-untyped-def]
     exp = load_experiment(write_schema(tmp_path))
     spec = next(s for s in exp.runs() if s.config.behaviour == "lf")
-    result = run_mission(spec.config, s1_world)
+    result = run_mission(spec.config, s1_resources)
     rows = result_rows(spec, result, 0.5)
     db = tmp_path / "r.duckdb"
     store = ResultStore.open(db)

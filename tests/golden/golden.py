@@ -71,7 +71,7 @@ def comparable(result: Any) -> dict[str, Any]:
 
 
 def run_case(case: dict[str, Any], world: Any = None) -> dict[str, Any]:
-    from mrcomm.sim.config import make_config
+    from mrcomm.run.config import make_config
     from mrcomm.sim.mission import run_mission
 
     options = dict(case)

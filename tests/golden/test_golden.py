@@ -19,8 +19,8 @@ HERE = Path(__file__).parent
 
 @pytest.mark.slow
 @pytest.mark.parametrize("case", cases(), ids=case_key)
-def test_s1_run_is_identical_to_the_recorded_one(case: dict[str, Any], s1_world) -> None:  # type: ignore[no-untyped-def]
-    assert run_case(case, s1_world) == GOLDEN[case_key(case)]
+def test_s1_run_is_identical_to_the_recorded_one(case: dict[str, Any], s1_resources) -> None:  # type: ignore[no-untyped-def]
+    assert run_case(case, s1_resources) == GOLDEN[case_key(case)]
 
 
 def test_every_case_has_a_reference() -> None:
@@ -47,9 +47,9 @@ def test_live_merged_result_is_identical_to_the_recorded_one(tmp_path: Path) -> 
     assert json.loads(json.dumps(summary, sort_keys=True)) == expected
 
 
-def test_comparable_sees_a_changed_metric(s1_world) -> None:  # type: ignore[no-untyped-def]
+def test_comparable_sees_a_changed_metric(s1_resources) -> None:  # type: ignore[no-untyped-def]
     """The digest is sensitive: a different seed gives a different comparable output."""
     case = cases()[0]
     other = {**case, "seed": 7}
-    assert run_case(other, s1_world) != GOLDEN[case_key(case)]
-    assert "hidden_sha256" in run_case(case, s1_world)
+    assert run_case(other, s1_resources) != GOLDEN[case_key(case)]
+    assert "hidden_sha256" in run_case(case, s1_resources)

@@ -13,7 +13,7 @@ from typing import Any
 
 import pytest
 
-from mrcomm.sim.config import make_config
+from mrcomm.run.config import make_config
 from mrcomm.sim.mission import run_mission
 
 from .helpers import S1

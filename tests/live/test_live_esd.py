@@ -20,7 +20,7 @@ from mrcomm.live.settings import LiveSettings
 from mrcomm.messaging.messages import TOPIC_RSSI, RssiMsg, decode
 from mrcomm.net.zenoh_bus import Incoming, ZenohNode
 from mrcomm.net.zenoh_config import ZenohOptions, make_options
-from mrcomm.sim.config import make_config
+from mrcomm.run.config import make_config
 from mrcomm.sim.mission import run_mission
 from mrcomm.world.geometry import Pose
 

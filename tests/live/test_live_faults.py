@@ -18,7 +18,7 @@ import pytest
 from mrcomm.live.launcher import LiveTeam
 from mrcomm.live.settings import LiveSettings
 from mrcomm.net.zenoh_config import make_options
-from mrcomm.sim.config import make_config
+from mrcomm.run.config import make_config
 
 from .helpers import S1, journal, wait_for
 

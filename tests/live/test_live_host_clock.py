@@ -30,7 +30,7 @@ from mrcomm.live.host_clock import HostClock, check_world_speed
 from mrcomm.live.launcher import LiveTeam
 from mrcomm.live.settings import LiveSettings
 from mrcomm.net.zenoh_config import make_options
-from mrcomm.sim.config import make_config
+from mrcomm.run.config import make_config
 from mrcomm.sim.mission import run_mission
 
 from .helpers import S1, journal, s1_variant, wait_for

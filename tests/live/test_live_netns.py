@@ -27,7 +27,7 @@ import yaml
 from mrcomm.live.launcher import LiveTeam
 from mrcomm.live.settings import LiveSettings
 from mrcomm.net.zenoh_config import make_options
-from mrcomm.sim.config import make_config
+from mrcomm.run.config import make_config
 
 from .helpers import ROOT, S1, s1_variant, wait_for
 from .netns import Netns, skip_unless_possible

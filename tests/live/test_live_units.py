@@ -49,9 +49,9 @@ def test_remote_base_reports_the_latest_command_until_the_world_acknowledges_it(
     assert base.make_plan(1.0, 1.0) is None  # no planner: cannot tell
 
 
-def test_remote_base_plans_on_its_own_map(s1_world: Any) -> None:
-    start = s1_world.scenario.robots[0].pose
-    base = RemoteBase("robot_1", 1, start, lambda c: None, s1_world.planner)
+def test_remote_base_plans_on_its_own_map(s1_resources: Any) -> None:
+    start = s1_resources.scenario.robots[0].pose
+    base = RemoteBase("robot_1", 1, start, lambda c: None, s1_resources.planner)
     route = base.make_plan(22.2, 13.8)
     assert route is not None and len(route) >= 2
     assert abs(route[-1][0] - 22.2) < 0.5 and abs(route[-1][1] - 13.8) < 0.5

@@ -15,7 +15,7 @@ from mrcomm.net.network import NetworkType
 from mrcomm.net.signal.bundled import default_model
 from mrcomm.net.signal.table import RssiTable
 from mrcomm.net.signal_thresholds import ModelThreshold
-from mrcomm.sim.config import make_config
+from mrcomm.run.config import make_config
 from mrcomm.sim.mission import run_mission
 from mrcomm.world.geometry import Pose
 from mrcomm.world.occupancy import OccupancyGrid
@@ -84,11 +84,11 @@ def test_measured_rssi_goes_stale() -> None:
     ids=["ah-slt", "wlan-slt", "ah-ssd", "ah-esd"],
 )
 def test_nb_missions_record_warnings_deterministically(
-    s1_world, options: dict[str, object]
+    s1_resources, options: dict[str, object]
 ) -> None:  # type: ignore[no-untyped-def]
     def run(seed: int) -> dict[str, object]:
         config = make_config(None, scenario=S1_PATH, behaviour="nb", spl=25, seed=seed, **options)
-        summary = run_mission(config, s1_world).summary()
+        summary = run_mission(config, s1_resources).summary()
         summary.pop("wall_time_s")
         return summary
 
@@ -108,9 +108,9 @@ def test_nb_missions_record_warnings_deterministically(
         assert all(v["time_disconnected"] == 0 for v in links.values())
 
 
-def test_slt_warning_time_matches_the_distance_record(s1_world) -> None:  # type: ignore[no-untyped-def]
+def test_slt_warning_time_matches_the_distance_record(s1_resources) -> None:  # type: ignore[no-untyped-def]
     result = run_mission(
-        make_config(None, scenario=S1_PATH, network="ah", threshold="slt", seed=2), s1_world
+        make_config(None, scenario=S1_PATH, network="ah", threshold="slt", seed=2), s1_resources
     )
     for pair, summary in result.links.items():
         if summary["max_distance"] is not None and summary["max_distance"] <= 4.0:

@@ -168,7 +168,7 @@ def test_replay_pulse_publishes_what_the_simulated_pulse_hands_the_sensor() -> N
     """Live ESD on one host replays the trace exactly as the simulation does."""
     from mrcomm.net.link_sensors import MeasuredSensor
     from mrcomm.net.signal.trace import RssiTrace
-    from mrcomm.sim.signals import TracePulse
+    from mrcomm.run.wiring import TracePulse
 
     trace = RssiTrace.from_readings(
         [0.0, 0.0, 0.7, 1.0, 1.2, 2.0],

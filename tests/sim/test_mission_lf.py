@@ -7,8 +7,9 @@ import statistics
 
 import pytest
 
-from mrcomm.sim.config import make_config
-from mrcomm.sim.mission import MissionResult, run_mission
+from mrcomm.run.config import make_config
+from mrcomm.run.result import MissionResult
+from mrcomm.sim.mission import run_mission
 from tests.conftest import S1_PATH
 
 
@@ -18,8 +19,10 @@ def _run(world, **options) -> MissionResult:  # type: ignore[no-untyped-def]
 
 @pytest.mark.parametrize("spl", [0, 25, 50, 75])
 @pytest.mark.parametrize(("network", "threshold"), [("wlan", "slt"), ("ah", "slt"), ("ah", "ssd")])
-def test_lf_missions_succeed(s1_world, network: str, threshold: str, spl: int) -> None:  # type: ignore[no-untyped-def]
-    result = _run(s1_world, network=network, threshold=threshold, behaviour="lf", spl=spl, seed=7)
+def test_lf_missions_succeed(s1_resources, network: str, threshold: str, spl: int) -> None:  # type: ignore[no-untyped-def]
+    result = _run(
+        s1_resources, network=network, threshold=threshold, behaviour="lf", spl=spl, seed=7
+    )
     m = result.mission
     assert m["successful"], (m["failed_tasks"], m["timed_out"])
     assert m["failed_tasks"] == [] and m["tasks_completed"] == 7
@@ -32,11 +35,11 @@ def test_lf_missions_succeed(s1_world, network: str, threshold: str, spl: int) -
     assert roles > 0 and m["leader_movement_time"] > 0 and m["follower_movement_time"] > 0
 
 
-def test_lf_keeps_the_team_together_at_a_movement_cost(s1_world) -> None:  # type: ignore[no-untyped-def]
+def test_lf_keeps_the_team_together_at_a_movement_cost(s1_resources) -> None:  # type: ignore[no-untyped-def]
     lf_sep, nb_sep, lf_move, nb_move = [], [], [], []
     for seed in (1, 2, 3):
-        lf = _run(s1_world, network="ah", threshold="slt", behaviour="lf", spl=25, seed=seed)
-        nb = _run(s1_world, network="ah", threshold="slt", behaviour="nb", spl=25, seed=seed)
+        lf = _run(s1_resources, network="ah", threshold="slt", behaviour="lf", spl=25, seed=seed)
+        nb = _run(s1_resources, network="ah", threshold="slt", behaviour="nb", spl=25, seed=seed)
         lf_sep.append(lf.mission["max_separation"])
         nb_sep.append(nb.mission["max_separation"])
         lf_move.append(lf.mission["total_movement_time"])
@@ -45,8 +48,8 @@ def test_lf_keeps_the_team_together_at_a_movement_cost(s1_world) -> None:  # typ
     assert statistics.mean(lf_move) > 1.3 * statistics.mean(nb_move)
 
 
-def test_role_split_movement_adds_up_and_aon_reaches_the_assigner(s1_world) -> None:  # type: ignore[no-untyped-def]
-    result = _run(s1_world, network="ah", threshold="slt", behaviour="lf", spl=50, seed=3)
+def test_role_split_movement_adds_up_and_aon_reaches_the_assigner(s1_resources) -> None:  # type: ignore[no-untyped-def]
+    result = _run(s1_resources, network="ah", threshold="slt", behaviour="lf", spl=50, seed=3)
     for robot, r in result.robots.items():
         split = (
             r["na_movement_time"]
@@ -61,17 +64,17 @@ def test_role_split_movement_adds_up_and_aon_reaches_the_assigner(s1_world) -> N
     assert result.messages["aon"]["dropped_loss"] > 0  # AON overcame real losses
 
 
-def test_without_a_threshold_lf_never_switches(s1_world) -> None:  # type: ignore[no-untyped-def]
-    result = _run(s1_world, network="wlan", threshold="none", behaviour="lf", spl=0, seed=1)
+def test_without_a_threshold_lf_never_switches(s1_resources) -> None:  # type: ignore[no-untyped-def]
+    result = _run(s1_resources, network="wlan", threshold="none", behaviour="lf", spl=0, seed=1)
     assert result.mission["successful"]
     assert all(r["roles_assigned"] == 0 for r in result.robots.values())
     assert result.mission["leader_movement_time"] == 0
 
 
-def test_lf_is_deterministic(s1_world) -> None:  # type: ignore[no-untyped-def]
+def test_lf_is_deterministic(s1_resources) -> None:  # type: ignore[no-untyped-def]
     def run(seed: int) -> str:
         summary = _run(
-            s1_world, network="ah", threshold="slt", behaviour="lf", spl=50, seed=seed
+            s1_resources, network="ah", threshold="slt", behaviour="lf", spl=50, seed=seed
         ).summary()
         summary.pop("wall_time_s")
         return json.dumps(summary, sort_keys=True)
@@ -80,13 +83,13 @@ def test_lf_is_deterministic(s1_world) -> None:  # type: ignore[no-untyped-def]
     assert run(5) != run(6)
 
 
-def test_a_route_leaving_the_connection_area_is_detected(s1_world) -> None:  # type: ignore[no-untyped-def]
+def test_a_route_leaving_the_connection_area_is_detected(s1_resources) -> None:  # type: ignore[no-untyped-def]
     from mrcomm.agents.lf import LeaderFollowerExecutor
     from mrcomm.sim.mission import Mission
 
     mission = Mission(
         make_config(None, scenario=S1_PATH, network="ah", threshold="slt", behaviour="lf"),
-        s1_world,
+        s1_resources,
     )
     follower = mission.executors["robot_1"]
     assert isinstance(follower, LeaderFollowerExecutor)
@@ -97,8 +100,8 @@ def test_a_route_leaving_the_connection_area_is_detected(s1_world) -> None:  # t
     assert not follower._route_leaves_connection(((17.0, 16.0), (18.5, 17.0), (19.0, 16.0)), leader)
 
 
-def test_ssd_followers_take_direct_routes_and_missions_succeed(s1_world) -> None:  # type: ignore[no-untyped-def]
-    result = _run(s1_world, network="ah", threshold="ssd", behaviour="lf", spl=25, seed=3)
+def test_ssd_followers_take_direct_routes_and_missions_succeed(s1_resources) -> None:  # type: ignore[no-untyped-def]
+    result = _run(s1_resources, network="ah", threshold="ssd", behaviour="lf", spl=25, seed=3)
     assert result.mission["successful"]
     direct = sum(
         1 for tl in result.timelines.values() for e in tl.events if e.label == "direct_route"
@@ -125,13 +128,13 @@ def _first_leader(world):  # type: ignore[no-untyped-def]
     raise AssertionError("no leader with followers in the whole mission")
 
 
-def test_a_leader_waits_for_its_own_followers_only(s1_world) -> None:  # type: ignore[no-untyped-def]
+def test_a_leader_waits_for_its_own_followers_only(s1_resources) -> None:  # type: ignore[no-untyped-def]
     # Under heavy real loss a round can end with two leaders (each decided on the
     # utilities it had at its time-out); leaders holding for each other would wait for
     # ever. A leader holds only for mates whose poses say they follow it.
     from mrcomm.messaging.messages import PoseMsg
 
-    _, leader = _first_leader(s1_world)
+    _, leader = _first_leader(s1_resources)
     mate = leader.team[0]
     pose = leader.base.pose
     far = dict(x=pose.x + 7.0, y=pose.y, theta=0.0)  # SLT: in warning beyond 4 m

@@ -7,8 +7,9 @@ import json
 
 import pytest
 
-from mrcomm.sim.config import make_config
-from mrcomm.sim.mission import MissionResult, run_mission
+from mrcomm.run.config import make_config
+from mrcomm.run.result import MissionResult
+from mrcomm.sim.mission import run_mission
 from tests.conftest import S1_PATH
 
 
@@ -17,8 +18,8 @@ def _run(world, **options) -> MissionResult:  # type: ignore[no-untyped-def]
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3, 4])
-def test_wlan_spl0_nb_reaches_and_communicates_every_task(s1_world, seed: int) -> None:  # type: ignore[no-untyped-def]
-    result = _run(s1_world, network="wlan", spl=0, behaviour="nb", seed=seed)
+def test_wlan_spl0_nb_reaches_and_communicates_every_task(s1_resources, seed: int) -> None:  # type: ignore[no-untyped-def]
+    result = _run(s1_resources, network="wlan", spl=0, behaviour="nb", seed=seed)
     m = result.mission
     assert m["tasks_completed"] == 7
     assert m["failed_tasks"] == []
@@ -29,11 +30,11 @@ def test_wlan_spl0_nb_reaches_and_communicates_every_task(s1_world, seed: int) -
     assert m["execution_phase_time"] > 0 and m["total_distance"] > 20
 
 
-def test_wlan_spl50_nb_fails_tasks_and_drops_half_the_messages(s1_world) -> None:  # type: ignore[no-untyped-def]
+def test_wlan_spl50_nb_fails_tasks_and_drops_half_the_messages(s1_resources) -> None:  # type: ignore[no-untyped-def]
     failures = 0
     dropped = delivered = 0
     for seed in range(1, 7):
-        result = _run(s1_world, network="wlan", spl=50, behaviour="nb", seed=seed)
+        result = _run(s1_resources, network="wlan", spl=50, behaviour="nb", seed=seed)
         assert result.mission["tasks_completed"] == 7  # robots still do the work
         failures += bool(result.mission["failed_tasks"])
         for topic in ("pose", "task_status"):
@@ -47,10 +48,10 @@ def test_wlan_spl50_nb_fails_tasks_and_drops_half_the_messages(s1_world) -> None
     assert abs(rate - 0.5) < 4 * (0.25 / n) ** 0.5 + 1e-3, rate
 
 
-def test_ah_spl0_nb_robots_leave_range_and_some_statuses_fail(s1_world) -> None:  # type: ignore[no-untyped-def]
+def test_ah_spl0_nb_robots_leave_range_and_some_statuses_fail(s1_resources) -> None:  # type: ignore[no-untyped-def]
     failed_any = 0
     for seed in (1, 2, 3):
-        result = _run(s1_world, network="ah", spl=0, behaviour="nb", seed=seed)
+        result = _run(s1_resources, network="ah", spl=0, behaviour="nb", seed=seed)
         assert result.mission["max_separation"] > 12.0
         assert result.messages["pose"]["dropped_range"] > 0
         assert result.messages["pose"]["dropped_loss"] == 0
@@ -64,16 +65,16 @@ def _comparable(result: MissionResult) -> str:
     return json.dumps(summary, sort_keys=True)
 
 
-def test_same_seed_same_json_and_different_seeds_differ(s1_world) -> None:  # type: ignore[no-untyped-def]
-    a = _run(s1_world, network="ah", spl=25, behaviour="nb", seed=11)
-    b = _run(s1_world, network="ah", spl=25, behaviour="nb", seed=11)
-    c = _run(s1_world, network="ah", spl=25, behaviour="nb", seed=12)
+def test_same_seed_same_json_and_different_seeds_differ(s1_resources) -> None:  # type: ignore[no-untyped-def]
+    a = _run(s1_resources, network="ah", spl=25, behaviour="nb", seed=11)
+    b = _run(s1_resources, network="ah", spl=25, behaviour="nb", seed=11)
+    c = _run(s1_resources, network="ah", spl=25, behaviour="nb", seed=12)
     assert _comparable(a) == _comparable(b)
     assert _comparable(a) != _comparable(c)
 
 
-def test_timelines_cover_the_run_without_overlap(s1_world) -> None:  # type: ignore[no-untyped-def]
-    result = _run(s1_world, network="wlan", spl=25, behaviour="nb", seed=5)
+def test_timelines_cover_the_run_without_overlap(s1_resources) -> None:  # type: ignore[no-untyped-def]
+    result = _run(s1_resources, network="wlan", spl=25, behaviour="nb", seed=5)
     for robot, timeline in result.timelines.items():
         activity = sorted(
             (i for i in timeline.intervals if i.track == "activity"), key=lambda i: i.start

@@ -15,7 +15,7 @@ import numpy as np
 from mrcomm.metrics import labels as L
 
 if TYPE_CHECKING:
-    from mrcomm.sim.mission import MissionResult
+    from mrcomm.run.result import MissionResult
 
 _COLOURS = plt.get_cmap("tab10")
 

@@ -15,7 +15,7 @@ from mrcomm.errors import InputError
 
 if TYPE_CHECKING:
     from mrcomm.experiment.adhoc import StoredRun
-    from mrcomm.sim.mission import MissionResult
+    from mrcomm.run.result import MissionResult
 
 DbOpt = Annotated[
     Path | None,

@@ -24,7 +24,7 @@ from mrcomm.cli.run_cmd import show_result
 from mrcomm.errors import InputError
 from mrcomm.net.network import NetworkType
 from mrcomm.net.zenoh_config import ZenohOptions, make_options
-from mrcomm.sim.config import RunConfig, make_config
+from mrcomm.run.config import RunConfig, make_config
 
 ScenarioArg = Annotated[Path, typer.Argument(help="Scenario YAML (e.g. data/scenarios/s1.yaml).")]
 NetworkOpt = Annotated[str, typer.Option(help="Network type: wlan | ah.")]

@@ -15,8 +15,9 @@ from mrcomm.cli.display import fmt
 from mrcomm.cli.files import check_writable, write_atomically
 from mrcomm.errors import InputError
 from mrcomm.net.network import NetworkType
-from mrcomm.sim.config import make_config
-from mrcomm.sim.mission import MissionResult, run_mission
+from mrcomm.run.config import make_config
+from mrcomm.run.result import MissionResult
+from mrcomm.sim.mission import run_mission
 
 if TYPE_CHECKING:
     from mrcomm.experiment.adhoc import StoredRun

@@ -33,8 +33,8 @@ from mrcomm.experiment.schema import PATH_FIELDS, Configuration, Experiment, Run
 from mrcomm.experiment.seeds import make_config_id, make_run_id
 from mrcomm.experiment.store import ResultStore, inspect_database
 from mrcomm.experiment.tables import RUN_MODES
-from mrcomm.sim.config import RunConfig, make_config
-from mrcomm.sim.mission import MissionResult
+from mrcomm.run.config import RunConfig, make_config
+from mrcomm.run.result import MissionResult
 
 #: ``experiments.schema_path`` of an ad-hoc experiment (sweeps hold their schema file).
 ADHOC_SOURCE = "mrcomm:adhoc"

@@ -49,9 +49,10 @@ from mrcomm.experiment.recording_schemas import (
 from mrcomm.fileio import atomic_write
 from mrcomm.messaging.messages import Message
 from mrcomm.metrics.timeline import ROLE
-from mrcomm.sim.config import RunConfig
-from mrcomm.sim.mission import Mission, MissionResult
-from mrcomm.sim.world import SimWorld
+from mrcomm.run.config import RunConfig
+from mrcomm.run.resources import ScenarioResources
+from mrcomm.run.result import MissionResult
+from mrcomm.sim.mission import Mission
 from mrcomm.world.geometry import Pose
 
 TOPIC_MAP = "/map"
@@ -291,7 +292,7 @@ class MissionRecorder:
 
 def run_and_record(
     config: RunConfig,
-    world: SimWorld | None,
+    world: ScenarioResources | None,
     path: Path,
     *,
     scene_period: float = 0.2,

@@ -14,7 +14,7 @@ from typing import Any
 
 from mrcomm.experiment.schema import RunSpec
 from mrcomm.experiment.tables import RUN_AON_COLUMNS, RUN_METRIC_COLUMNS, RUN_TABLES
-from mrcomm.sim.mission import MissionResult
+from mrcomm.run.result import MissionResult
 
 #: table name -> rows (tuples in the table's column order).
 Rows = dict[str, list[tuple[Any, ...]]]

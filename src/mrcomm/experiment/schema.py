@@ -16,7 +16,7 @@ number of repetitions::
     exclude:                          # optional: drop combinations matching all keys
       - {network: wlan, threshold: ssd}
 
-Factors and options are any :class:`~mrcomm.sim.config.RunConfig` field except
+Factors and options are any :class:`~mrcomm.run.config.RunConfig` field except
 ``scenario`` and ``seed``. Everything is checked here, before any database is opened:
 unknown keys (with "did you mean"), empty factors, and every value, by building the
 RunConfig of every configuration.
@@ -37,7 +37,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from mrcomm.errors import InputError, did_you_mean
 from mrcomm.experiment.seeds import make_config_id, make_run_id, run_seed
-from mrcomm.sim.config import RunConfig, make_config
+from mrcomm.run.config import RunConfig, make_config
 from mrcomm.world.scenario import load_scenario
 from mrcomm.world.yamlfile import read_yaml, validation_error
 

@@ -3,7 +3,7 @@
 :func:`run_one` is a pure function of its :class:`RunTask` (configuration, repetition,
 seed) and never raises for a run that goes wrong: a crash becomes an ``error`` outcome
 with the exception and its traceback, a run over its wall-clock limit a ``timeout``
-outcome. Each worker process (or thread) loads a scenario's :class:`SimWorld` once and
+outcome. Each worker process (or thread) loads a scenario's :class:`ScenarioResources` once and
 reuses it for every run on that scenario.
 """
 
@@ -22,9 +22,10 @@ from types import FrameType
 
 from mrcomm.experiment.rows import Rows, failure_rows, result_rows
 from mrcomm.experiment.schema import RunSpec
-from mrcomm.sim.config import RunConfig
-from mrcomm.sim.mission import Mission, MissionResult
-from mrcomm.sim.world import SimWorld
+from mrcomm.run.config import RunConfig
+from mrcomm.run.resources import ScenarioResources
+from mrcomm.run.result import MissionResult
+from mrcomm.sim.mission import Mission
 
 #: Steps between two looks at the wall clock (a step is ~0.1-1 ms).
 _CLOCK_EVERY = 50
@@ -64,9 +65,9 @@ class RunOutcome:
 
 
 @functools.lru_cache(maxsize=8)
-def _world(scenario: str) -> SimWorld:
-    # One SimWorld per scenario per worker: the planner's cost grid is built once.
-    return SimWorld.load(Path(scenario))
+def _world(scenario: str) -> ScenarioResources:
+    # One ScenarioResources per scenario per worker: the planner's cost grid is built once.
+    return ScenarioResources.load(Path(scenario))
 
 
 def failed_outcome(task: RunTask, status: str, error: str, wall: float | None) -> RunOutcome:
@@ -99,7 +100,7 @@ def run_one(task: RunTask) -> RunOutcome:
         return failed_outcome(task, "error", f"{text}\n{traceback.format_exc()}", wall)
 
 
-def _simulate(config: RunConfig, world: SimWorld, deadline: float | None) -> MissionResult:
+def _simulate(config: RunConfig, world: ScenarioResources, deadline: float | None) -> MissionResult:
     mission = Mission(config, world)
     start = time.perf_counter()
     while not mission.done:
@@ -116,7 +117,7 @@ def _simulate(config: RunConfig, world: SimWorld, deadline: float | None) -> Mis
 
 
 def _record(
-    config: RunConfig, world: SimWorld, path: Path, deadline: float | None
+    config: RunConfig, world: ScenarioResources, path: Path, deadline: float | None
 ) -> MissionResult:
     # run_and_record writes to a temporary name and renames when complete, so a killed
     # or failed run never leaves a truncated recording under the run's name.

@@ -69,9 +69,9 @@ from mrcomm.net.zenoh_bus import (
     ZenohNode,
 )
 from mrcomm.net.zenoh_config import check_key_chunk
+from mrcomm.run.resources import ScenarioResources
+from mrcomm.run.wiring import build_link_sensor
 from mrcomm.seeding import stream
-from mrcomm.sim.signals import build_link_sensor
-from mrcomm.sim.world import SimWorld
 from mrcomm.world.scenario import Scenario
 
 HEARTBEAT_PERIOD = 0.25  # wall s between heartbeats (and at once on a change)
@@ -118,7 +118,7 @@ class AgentProcess:
     def __init__(self, settings: LiveSettings, agent: str, incarnation: int) -> None:
         self.settings = settings
         run = settings.run
-        self.world = SimWorld.load(run.scenario)
+        self.world = ScenarioResources.load(run.scenario)
         self.scenario = self.world.scenario
         check_agent_id(self.scenario, agent)
         self.agent = agent

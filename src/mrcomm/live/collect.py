@@ -33,8 +33,8 @@ from mrcomm.errors import InputError
 from mrcomm.live.protocol import WORLD_ID
 from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robot_metrics
 from mrcomm.metrics.timeline import Event, Interval, Timeline
-from mrcomm.sim.config import make_config
-from mrcomm.sim.mission import MissionResult
+from mrcomm.run.config import make_config
+from mrcomm.run.result import MissionResult
 from mrcomm.world.scenario import load_scenario
 
 

@@ -32,7 +32,7 @@ from mrcomm.live.protocol import WORLD_ID
 from mrcomm.live.settings import LiveSettings
 from mrcomm.net.pulse import pulse_id
 from mrcomm.net.signal.trace import RssiTrace
-from mrcomm.sim.mission import MissionResult
+from mrcomm.run.result import MissionResult
 from mrcomm.world.scenario import load_scenario
 
 _CLI = "from mrcomm.cli.main import app; app()"

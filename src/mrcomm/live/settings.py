@@ -12,7 +12,7 @@ from pathlib import Path
 
 from mrcomm.errors import InputError, did_you_mean
 from mrcomm.net.zenoh_config import ZenohOptions
-from mrcomm.sim.config import RunConfig
+from mrcomm.run.config import RunConfig
 
 #: What steps an agent: the world's ticks (``shared``, as Stage's ``use_sim_time``) or
 #: its own host's monotonic clock (``host``, as on a real robot; ``live.host_clock``).

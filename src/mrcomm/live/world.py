@@ -41,8 +41,8 @@ from mrcomm.live.protocol import (
 )
 from mrcomm.live.settings import LiveSettings, config_crc
 from mrcomm.net.zenoh_bus import Incoming, Lane, ZenohNode
-from mrcomm.sim.ground_truth import make_bases, make_links
-from mrcomm.sim.world import SimWorld
+from mrcomm.run.resources import ScenarioResources
+from mrcomm.run.wiring import make_bases, make_links
 
 TRAJECTORY_PERIOD = 0.5  # simulated s between trajectory samples
 END_GRACE_SIM = 1.0  # simulated s everyone must stay done before the mission ends ...
@@ -56,7 +56,7 @@ class WorldProcess:
     def __init__(self, settings: LiveSettings, incarnation: int) -> None:
         self.settings = settings
         run = settings.run
-        self.world = SimWorld.load(run.scenario)
+        self.world = ScenarioResources.load(run.scenario)
         scenario = self.world.scenario
         self.robot_ids = tuple(r.id for r in scenario.robots)
         self.bases = make_bases(self.world, run.seed)

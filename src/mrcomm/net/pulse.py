@@ -174,7 +174,7 @@ class Pulse(PulseBase):
 class ReplayPulse(PulseBase):
     """Replays what ``robot_id`` measured in a recorded trace, on the clock it is
     stepped with (live mode: the world's shared clock), exactly as the simulation's
-    :class:`~mrcomm.sim.signals.TracePulse` hands it to the robot's sensor: the latest
+    :class:`~mrcomm.run.wiring.TracePulse` hands it to the robot's sensor: the latest
     reading of each peer at or before ``now``; nothing once the recording has ended."""
 
     def __init__(

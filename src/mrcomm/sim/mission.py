@@ -16,7 +16,6 @@ assembled once by :meth:`Mission.result`.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 from typing import Any
 
 from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
@@ -28,55 +27,21 @@ from mrcomm.metrics.timeline import Timeline
 from mrcomm.net.inprocess import InProcessNetwork
 from mrcomm.net.link_sensors import MeasuredSensor
 from mrcomm.net.links import LinkState
+from mrcomm.run.config import RunConfig
+from mrcomm.run.resources import ScenarioResources
+from mrcomm.run.result import MissionResult
+from mrcomm.run.wiring import TracePulse, build_link_sensor, make_bases, make_links
 from mrcomm.seeding import stream
-from mrcomm.sim.config import RunConfig
-from mrcomm.sim.ground_truth import make_bases, make_links
-from mrcomm.sim.signals import TracePulse, build_link_sensor
-from mrcomm.sim.world import SimWorld
-from mrcomm.world.scenario import Scenario
 
 TRAJECTORY_PERIOD = 0.5  # s between recorded trajectory samples
-
-
-@dataclass
-class MissionResult:
-    """Everything a run produced. ``summary()`` is the JSON of ``mrcomm run --json``."""
-
-    config: dict[str, Any]
-    mission: dict[str, Any]
-    robots: dict[str, dict[str, Any]]
-    messages: dict[str, dict[str, int]]
-    messages_by_agent: dict[str, dict[str, dict[str, int]]]
-    aon: dict[str, Any]
-    links: dict[str, dict[str, Any]]
-    sim_time_s: float
-    wall_time_s: float
-    timelines: dict[str, Timeline]
-    trajectories: dict[str, list[tuple[float, float, float]]]
-    scenario: Scenario
-    #: (time, from, to, rssi dBm) for robot pairs at 2 Hz, when the threshold has RSSI.
-    rssi_series: list[tuple[float, str, str, float]]
-
-    def summary(self) -> dict[str, Any]:
-        return {
-            "config": self.config,
-            "mission": self.mission,
-            "robots": self.robots,
-            "messages": self.messages,
-            "messages_by_agent": self.messages_by_agent,
-            "aon": self.aon,
-            "links": self.links,
-            "sim_time_s": self.sim_time_s,
-            "wall_time_s": self.wall_time_s,
-        }
 
 
 class Mission:
     """A mission being simulated; drive it with :meth:`run` or :meth:`step`."""
 
-    def __init__(self, config: RunConfig, world: SimWorld | None = None) -> None:
+    def __init__(self, config: RunConfig, world: ScenarioResources | None = None) -> None:
         self.config = config
-        self.world = world or SimWorld.load(config.scenario)
+        self.world = world or ScenarioResources.load(config.scenario)
         scenario = self.world.scenario
         self.robot_ids = tuple(r.id for r in scenario.robots)
         self.node_ids = (*self.robot_ids, ASSIGNER_ID)
@@ -275,7 +240,7 @@ class Mission:
         return {"total": total, "agents": per_agent}
 
 
-def run_mission(config: RunConfig, world: SimWorld | None = None) -> MissionResult:
+def run_mission(config: RunConfig, world: ScenarioResources | None = None) -> MissionResult:
     """Simulate one mission to its end and return its results."""
     return Mission(config, world).run()
 

@@ -16,7 +16,7 @@ from mrcomm.world.scenario import Scenario, load_scenario
 
 
 @dataclass(frozen=True, eq=False)
-class SimWorld:
+class ScenarioResources:
     scenario: Scenario
     robot_params: RobotParams
     planner: GridPlanner
@@ -24,7 +24,9 @@ class SimWorld:
     _traces: dict[Path, RssiTrace] = field(default_factory=dict, repr=False)
 
     @classmethod
-    def load(cls, scenario_path: Path, robot_params: RobotParams | None = None) -> SimWorld:
+    def load(
+        cls, scenario_path: Path, robot_params: RobotParams | None = None
+    ) -> ScenarioResources:
         scenario = load_scenario(scenario_path)
         params = robot_params or RobotParams()
         return cls(scenario, params, GridPlanner(scenario.grid, params))

@@ -1,0 +1,43 @@
+"""The result of one run, the same for every mode: metrics per mission and robot,
+message counts, AON statistics, link summaries, timelines and trajectories."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from mrcomm.metrics.timeline import Timeline
+from mrcomm.world.scenario import Scenario
+
+
+@dataclass
+class MissionResult:
+    """Everything a run produced. ``summary()`` is the JSON of ``mrcomm run --json``."""
+
+    config: dict[str, Any]
+    mission: dict[str, Any]
+    robots: dict[str, dict[str, Any]]
+    messages: dict[str, dict[str, int]]
+    messages_by_agent: dict[str, dict[str, dict[str, int]]]
+    aon: dict[str, Any]
+    links: dict[str, dict[str, Any]]
+    sim_time_s: float
+    wall_time_s: float
+    timelines: dict[str, Timeline]
+    trajectories: dict[str, list[tuple[float, float, float]]]
+    scenario: Scenario
+    #: (time, from, to, rssi dBm) for robot pairs at 2 Hz, when the threshold has RSSI.
+    rssi_series: list[tuple[float, str, str, float]]
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "config": self.config,
+            "mission": self.mission,
+            "robots": self.robots,
+            "messages": self.messages,
+            "messages_by_agent": self.messages_by_agent,
+            "aon": self.aon,
+            "links": self.links,
+            "sim_time_s": self.sim_time_s,
+            "wall_time_s": self.wall_time_s,
+        }
