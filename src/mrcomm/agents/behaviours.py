@@ -1,37 +1,58 @@
-"""Registry of team behaviours: name -> executor class (SPEC §4).
+"""The built-in team behaviours as registered variants (kind ``behaviour``).
 
-Adding a behaviour is one module with a class registered by name::
-
-    @register_behaviour("mine")
-    class MyExecutor(TaskExecutor): ...
+A behaviour is an executor class (a stepped state machine acting through the Bus and
+Base ports) with a pydantic model of its parameters (the class's ``Params``). Its spec
+names both, the network models it works with, the topics it publishes, the metrics it
+adds and whether its statuses go with AON. The classes are imported on first use.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from typing import TYPE_CHECKING
 
-from mrcomm.agents.executor import TaskExecutor
-from mrcomm.registry import Registry
+from mrcomm.specs import VariantSpec, get_spec, variant_names
 
+if TYPE_CHECKING:
+    from mrcomm.agents.executor import TaskExecutor
 
-def _load_builtin() -> None:
-    # Behaviour modules register themselves on import; import them on first use.
-    from mrcomm.agents import lf  # noqa: F401
-
-
-BEHAVIOURS: Registry[type[TaskExecutor]] = Registry("behaviour", "behaviour", _load_builtin)
-
-
-def register_behaviour(name: str) -> Callable[[type[TaskExecutor]], type[TaskExecutor]]:
-    return BEHAVIOURS.register(name)
+NB_SPEC = VariantSpec(
+    kind="behaviour",
+    name="nb",
+    entry="mrcomm.agents.executor:TaskExecutor",
+    params="mrcomm.agents.executor:ExecutorParams",
+    summary="NB, no behaviour: each robot goes to its closest task and reports it once "
+    "(plain publish); it ignores link quality",
+    topics=("pose", "task_status"),
+)
+LF_SPEC = VariantSpec(
+    kind="behaviour",
+    name="lf",
+    entry="mrcomm.agents.lf:LeaderFollowerExecutor",
+    params="mrcomm.agents.lf_machine:LfParams",
+    summary="LF, leader-follower: robots whose link warns elect a leader by utility; "
+    "followers keep within the threshold; statuses go with AON",
+    topics=("pose", "task_status", "utility", "role", "aon"),
+    metrics=(
+        "na_movement_time",
+        "leader_movement_time",
+        "follower_movement_time",
+        "regrouping_movement_time",
+        "leader_disconnect_time",
+        "follower_waiting_time",
+        "switching_time",
+        "role_assignment_time",
+        "disconnects_detected",
+        "roles_assigned",
+        "times_leader",
+    ),
+    uses_aon=True,
+)
 
 
 def behaviour_names() -> list[str]:
-    return BEHAVIOURS.names()
+    return variant_names("behaviour")
 
 
 def behaviour_class(name: str) -> type[TaskExecutor]:
-    return BEHAVIOURS.get(name)
-
-
-register_behaviour("nb")(TaskExecutor)
+    cls: type[TaskExecutor] = get_spec("behaviour", name).load()
+    return cls

@@ -16,14 +16,17 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from pydantic import BaseModel, ConfigDict
+
 from mrcomm.world.geometry import Pose, wrap_angle
 
 DANGER_ZONE = "danger_zone"
 EVENT_HORIZON = "event_horizon"
 
 
-@dataclass(frozen=True)
-class CollisionParams:
+class CollisionParams(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
     danger_radius: float = 1.0
     event_horizon: float = 0.5  # centre-to-centre distance (footprint radius 0.18 m each)
     same_direction_deg: float = 45.0

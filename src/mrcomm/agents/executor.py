@@ -18,9 +18,9 @@ import logging
 import math
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
 from typing import Any
 
+from pydantic import BaseModel, ConfigDict, Field
 from transitions import Machine
 
 from mrcomm.agents.collision import CollisionParams, MateState, classify, has_right_of_way
@@ -76,10 +76,11 @@ _ACTIVITY_OF_STATE = {
 }
 
 
-@dataclass(frozen=True)
-class ExecutorParams:
+class ExecutorParams(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
     pose_period: float = 0.2  # 5 Hz
-    collision: CollisionParams = field(default_factory=CollisionParams)
+    collision: CollisionParams = Field(default_factory=CollisionParams)
     collision_pause: float = 1.0  # both robots pause at least this long
     give_way_timeout: float = 10.0  # the yielding robot waits at most this long
     clear_time: float = 0.5  # the conflict must be gone this long before resuming
@@ -116,6 +117,7 @@ class TaskExecutor:
     transitions: list[dict[str, Any]] = NB_TRANSITIONS
     initial = "unassigned"
     machine_class: type[Machine] = Machine
+    Params: type[ExecutorParams] = ExecutorParams
     state: str
     trigger: Callable[..., bool]
 

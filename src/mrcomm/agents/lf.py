@@ -33,7 +33,6 @@ from typing import Any
 
 from transitions.extensions import HierarchicalMachine
 
-from mrcomm.agents.behaviours import register_behaviour
 from mrcomm.agents.executor import TaskExecutor
 from mrcomm.agents.lf_machine import (
     ACTIVITY_OF_FULL_STATE,
@@ -62,7 +61,6 @@ from mrcomm.ports import NavStatus
 from mrcomm.world.geometry import Pose
 
 
-@register_behaviour("lf")
 class LeaderFollowerExecutor(TaskExecutor):
     """LF task executor (see the module docstring)."""
 
@@ -71,9 +69,12 @@ class LeaderFollowerExecutor(TaskExecutor):
     initial = "na"
     machine_class = HierarchicalMachine
     uses_aon = True
-    lf = LfParams()
+    Params = LfParams
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
+        params = kwargs.get("params")
+        self.lf: LfParams = params if isinstance(params, LfParams) else LfParams()
+        kwargs["params"] = self.lf
         self._utility = utility_function(self.lf.utility)
         self.aon: AonEndpoint | None = None
         self._round = 0

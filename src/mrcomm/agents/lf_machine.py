@@ -5,10 +5,9 @@ machine from these tables."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
-from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS
+from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS, ExecutorParams
 from mrcomm.metrics import labels as L
 
 _DRIVE = [
@@ -79,8 +78,7 @@ ROLE_OF_TOP_STATE = {
 }
 
 
-@dataclass(frozen=True)
-class LfParams:
+class LfParams(ExecutorParams):
     utility: str = "original"
     announce_period: float = 0.25  # utilities and roles at 4 Hz
     assign_timeout: float = 6.0  # decide with what was collected after this long

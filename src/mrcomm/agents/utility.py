@@ -5,6 +5,9 @@ The robot with the highest utility leads. The original's utility is
 current goal``, ``n_incomplete`` the robot's tasks not yet completed and
 ``rec_complete = 0.5`` right after completing a task (else 1.0). An idle robot (agenda
 complete) always has utility 0, so it follows.
+
+Each function is a registered variant (kind ``utility``), selected by LF's parameter
+``behaviour.utility``; a plugin adds one with a spec whose entry is its function.
 """
 
 from __future__ import annotations
@@ -12,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from mrcomm.registry import Registry
+from mrcomm.specs import VariantSpec, get_spec, variant_names
 
 
 @dataclass(frozen=True)
@@ -23,22 +26,17 @@ class UtilityInputs:
 
 
 UtilityFunction = Callable[[UtilityInputs], float]
-UTILITIES: Registry[UtilityFunction] = Registry("utility", "utility")
-
-
-def register_utility(name: str) -> Callable[[UtilityFunction], UtilityFunction]:
-    return UTILITIES.register(name)
 
 
 def utility_function(name: str) -> UtilityFunction:
-    return UTILITIES.get(name)
+    function: UtilityFunction = get_spec("utility", name).load()
+    return function
 
 
 def utility_names() -> list[str]:
-    return UTILITIES.names()
+    return variant_names("utility")
 
 
-@register_utility("original")
 def original_utility(inputs: UtilityInputs) -> float:
     """The original's product: closer goal, more work left, not just rewarded."""
     if inputs.n_incomplete == 0 or inputs.goal_distance is None:
@@ -48,9 +46,22 @@ def original_utility(inputs: UtilityInputs) -> float:
     return d_score * inputs.n_incomplete * rec_complete
 
 
-@register_utility("greedy")
 def greedy_utility(inputs: UtilityInputs) -> float:
     """Whoever is closest to its goal leads, whatever its workload."""
     if inputs.n_incomplete == 0 or inputs.goal_distance is None:
         return 0.0
     return 1.0 / max(inputs.goal_distance, 0.1)
+
+
+ORIGINAL_SPEC = VariantSpec(
+    kind="utility",
+    name="original",
+    entry=original_utility,
+    summary="the original study's d_score x n_incomplete x rec_complete",
+)
+GREEDY_SPEC = VariantSpec(
+    kind="utility",
+    name="greedy",
+    entry=greedy_utility,
+    summary="1 / distance to the current goal: the closest robot leads",
+)

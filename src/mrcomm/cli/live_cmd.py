@@ -15,25 +15,29 @@ from __future__ import annotations
 
 import tempfile
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import typer
 
 from mrcomm.cli.db_option import DbOpt, ExperimentOpt, check_db, store_run
 from mrcomm.cli.run_cmd import show_result
+from mrcomm.cli.run_options import (
+    BehaviourOpt,
+    DtOpt,
+    MaxTimeOpt,
+    NetworkOpt,
+    RssiTraceOpt,
+    ScenarioArg,
+    SeedOpt,
+    SetOpt,
+    SignalModelOpt,
+    SplOpt,
+    ThresholdOpt,
+    run_config,
+)
 from mrcomm.errors import InputError
-from mrcomm.net.network import NetworkType
 from mrcomm.net.zenoh_config import ZenohOptions, make_options
-from mrcomm.run.config import RunConfig, make_config
 
-ScenarioArg = Annotated[Path, typer.Argument(help="Scenario YAML (e.g. data/scenarios/s1.yaml).")]
-NetworkOpt = Annotated[str, typer.Option(help="Network type: wlan | ah.")]
-SplOpt = Annotated[float, typer.Option(help="Simulated packet loss, percent (0-100).")]
-BehaviourOpt = Annotated[str, typer.Option(help="Team behaviour: nb | lf.")]
-ThresholdOpt = Annotated[str, typer.Option(help="Signal threshold: none | slt | ssd | esd.")]
-SeedOpt = Annotated[int, typer.Option(help="Random seed of the run.")]
-MaxTimeOpt = Annotated[float, typer.Option(help="Mission time limit, simulated s.")]
-DtOpt = Annotated[float, typer.Option(help="Clock tick, simulated s.")]
 TeamOpt = Annotated[str, typer.Option(help="Team name: the key space mrcomm/<team>/.")]
 ListenOpt = Annotated[
     list[str] | None, typer.Option("--listen", help="Endpoint to listen on (repeatable).")
@@ -59,20 +63,6 @@ SpeedOpt = Annotated[float, typer.Option(help="Simulated seconds per wall-clock 
 LeaseOpt = Annotated[
     float | None, typer.Option(help="AON lease, simulated s: silent members are left out.")
 ]
-RssiTraceOpt = Annotated[
-    Path | None,
-    typer.Option(
-        help="Recorded RSSI trace CSV (time,from,to,rssi) for ESD: replayed by one pulse "
-        "process per robot (live) and as the world's ground truth; every process gets it."
-    ),
-]
-
-
-def _run_config(**values: Any) -> RunConfig:
-    network = values["network"]
-    if network not in {n.value for n in NetworkType}:
-        raise InputError(f"unknown network {network!r}; choose wlan or ah", field="--network")
-    return make_config(None, **values)
 
 
 def zenoh_options(
@@ -115,6 +105,8 @@ def world(
     max_time: MaxTimeOpt = 1800.0,
     dt: DtOpt = 0.1,
     rssi_trace: RssiTraceOpt = None,
+    signal_model: SignalModelOpt = None,
+    sets: SetOpt = None,
     speed: SpeedOpt = 1.0,
     team: TeamOpt = "team",
     listen: ListenOpt = None,
@@ -136,9 +128,10 @@ def world(
     from mrcomm.live.settings import LiveSettings, check_record_dir
     from mrcomm.live.world import run_world
 
-    run = _run_config(
+    run = run_config(
         scenario=scenario, network=network, spl=spl, behaviour=behaviour,
         threshold=threshold, seed=seed, max_time=max_time, dt=dt, rssi_trace=rssi_trace,
+        signal_model=signal_model, sets=sets,
     )  # fmt: skip
     zenoh = zenoh_options(
         team, listen, connect, multicast, protocol, tls_ca, tls_cert, tls_key, acl,
@@ -161,6 +154,8 @@ def agent(
     max_time: MaxTimeOpt = 1800.0,
     dt: DtOpt = 0.1,
     rssi_trace: RssiTraceOpt = None,
+    signal_model: SignalModelOpt = None,
+    sets: SetOpt = None,
     team: TeamOpt = "team",
     listen: ListenOpt = None,
     connect: ConnectOpt = None,
@@ -199,9 +194,10 @@ def agent(
     from mrcomm.world.scenario import load_scenario
 
     check_agent_clock(clock, "--clock")
-    run = _run_config(
+    run = run_config(
         scenario=scenario, network=network, spl=spl, behaviour=behaviour,
         threshold=threshold, seed=seed, max_time=max_time, dt=dt, rssi_trace=rssi_trace,
+        signal_model=signal_model, sets=sets,
     )  # fmt: skip
     check_agent_id(load_scenario(run.scenario), robot)
     zenoh = zenoh_options(
@@ -236,6 +232,8 @@ def live(
     max_time: MaxTimeOpt = 1800.0,
     dt: DtOpt = 0.1,
     rssi_trace: RssiTraceOpt = None,
+    signal_model: SignalModelOpt = None,
+    sets: SetOpt = None,
     speed: SpeedOpt = 1.0,
     team: TeamOpt = "team",
     protocol: ProtocolOpt = "tcp",
@@ -266,9 +264,10 @@ def live(
     from mrcomm.live.settings import LiveSettings, check_agent_clock, check_record_dir
 
     check_agent_clock(agent_clock, "--agent-clock", speed)
-    run = _run_config(
+    run = run_config(
         scenario=scenario, network=network, spl=spl, behaviour=behaviour,
         threshold=threshold, seed=seed, max_time=max_time, dt=dt, rssi_trace=rssi_trace,
+        signal_model=signal_model, sets=sets,
     )  # fmt: skip
     if tls_dir is not None and not (tls_dir / "ca.pem").is_file():
         raise InputError("no ca.pem in the TLS directory", file=tls_dir, field="--tls-dir")

@@ -17,6 +17,7 @@ from mrcomm.cli.report_cmd import report
 from mrcomm.cli.run_cmd import run
 from mrcomm.cli.signal_cmd import signal_app
 from mrcomm.cli.sweep_cmd import export, sweep
+from mrcomm.cli.variants_cmd import variants
 from mrcomm.errors import InputError
 
 cli = typer.Typer(
@@ -47,6 +48,7 @@ cli.add_typer(signal_app, name="signal")
 cli.command("pulse")(pulse)
 cli.command("analyze")(analyze)
 cli.command("report")(report)
+cli.command("variants")(variants)
 
 
 def app() -> None:

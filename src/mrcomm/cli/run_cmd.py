@@ -13,9 +13,20 @@ from rich.table import Table
 from mrcomm.cli.db_option import DbOpt, ExperimentOpt, check_db, store_run, stored_json
 from mrcomm.cli.display import fmt
 from mrcomm.cli.files import check_writable, write_atomically
-from mrcomm.errors import InputError
-from mrcomm.net.network import NetworkType
-from mrcomm.run.config import make_config
+from mrcomm.cli.run_options import (
+    BehaviourOpt,
+    DtOpt,
+    MaxTimeOpt,
+    NetworkOpt,
+    RssiTraceOpt,
+    ScenarioArg,
+    SeedOpt,
+    SetOpt,
+    SignalModelOpt,
+    SplOpt,
+    ThresholdOpt,
+    run_config,
+)
 from mrcomm.run.result import MissionResult
 from mrcomm.sim.mission import run_mission
 
@@ -24,22 +35,17 @@ if TYPE_CHECKING:
 
 
 def run(
-    scenario: Annotated[Path, typer.Argument(help="Scenario YAML (e.g. data/scenarios/s1.yaml).")],
-    network: Annotated[str, typer.Option(help="Network type: wlan | ah.")] = "wlan",
-    spl: Annotated[float, typer.Option(help="Simulated packet loss, percent (0-100).")] = 0.0,
-    behaviour: Annotated[str, typer.Option(help="Team behaviour: nb | lf.")] = "nb",
-    threshold: Annotated[str, typer.Option(help="Signal threshold: none | slt | ssd | esd.")] = (
-        "none"
-    ),
-    seed: Annotated[int, typer.Option(help="Random seed of the run.")] = 1,
-    max_time: Annotated[float, typer.Option(help="Mission time limit, simulated s.")] = 1800.0,
-    dt: Annotated[float, typer.Option(help="Simulation step, s.")] = 0.1,
-    rssi_trace: Annotated[
-        Path | None, typer.Option(help="Recorded RSSI trace CSV (time,from,to,rssi) for ESD.")
-    ] = None,
-    signal_model: Annotated[
-        Path | None, typer.Option(help="SSD signal model JSON (default: bundled).")
-    ] = None,
+    scenario: ScenarioArg,
+    network: NetworkOpt = "wlan",
+    spl: SplOpt = 0.0,
+    behaviour: BehaviourOpt = "nb",
+    threshold: ThresholdOpt = "none",
+    seed: SeedOpt = 1,
+    max_time: MaxTimeOpt = 1800.0,
+    dt: DtOpt = 0.1,
+    rssi_trace: RssiTraceOpt = None,
+    signal_model: SignalModelOpt = None,
+    sets: SetOpt = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
     plot: Annotated[Path | None, typer.Option(help="Write a map/trajectory figure (PNG/SVG).")] = (
         None
@@ -52,10 +58,7 @@ def run(
 ) -> None:
     """Run one mission in simulation (faster than real time); with --db, store it in a
     results database (mode sim)."""
-    if network not in {n.value for n in NetworkType}:
-        raise InputError(f"unknown network {network!r}; choose wlan or ah", field="--network")
-    config = make_config(
-        None,
+    config = run_config(
         scenario=scenario,
         network=network,
         spl=spl,
@@ -64,6 +67,7 @@ def run(
         seed=seed,
         max_time=max_time,
         dt=dt,
+        sets=sets,
         rssi_trace=rssi_trace,
         signal_model=signal_model,
     )

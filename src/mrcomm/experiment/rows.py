@@ -28,7 +28,7 @@ def _config_part(spec: RunSpec, status: str, error: str | None) -> tuple[Any, ..
         spec.experiment,
         spec.label,
         spec.scenario_name,
-        c.network.value,
+        c.network,
         float(c.spl),
         c.threshold,
         c.behaviour,

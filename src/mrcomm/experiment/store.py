@@ -239,7 +239,7 @@ class ResultStore:
                 c.experiment,
                 c.label,
                 c.scenario_name,
-                c.config.network.value,
+                c.config.network,
                 float(c.config.spl),
                 c.config.threshold,
                 c.config.behaviour,

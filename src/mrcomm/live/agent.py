@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import signal
 import time
-from dataclasses import replace
 from types import FrameType
 from typing import Any
 
@@ -70,7 +69,7 @@ from mrcomm.net.zenoh_bus import (
 )
 from mrcomm.net.zenoh_config import check_key_chunk
 from mrcomm.run.resources import ScenarioResources
-from mrcomm.run.wiring import build_link_sensor
+from mrcomm.run.wiring import build_link_sensor, build_network
 from mrcomm.seeding import stream
 from mrcomm.world.scenario import Scenario
 
@@ -144,7 +143,7 @@ class AgentProcess:
             positions.fixed[ASSIGNER_ID] = (spec.position[0], spec.position[1])
         self.bus = ZenohBus(
             self.node,
-            LinkRules(network=run.network, loss_percent=run.spl, ah_range=run.ah_range),
+            LinkRules(network=build_network(run), loss_percent=run.spl),
             positions,
         )
         self.journal = Journal(journal_path(settings.record_dir, agent, incarnation))
@@ -181,7 +180,7 @@ class AgentProcess:
             if settings.lease is not None and hasattr(self.executor, "lf"):
                 # The LF executor reads its AON lease when its assignment arrives.
                 lf: Any = self.executor
-                lf.lf = replace(lf.lf, aon_lease=settings.lease)
+                lf.lf = lf.params = lf.lf.model_copy(update={"aon_lease": settings.lease})
             self.tail = TimelineTail(timeline, self.journal)
             self.resync = Resync(self.executor, endpoint, self._request_sync, wait=SYNC_WAIT)
         self.assigner: TaskAssigner | None = None

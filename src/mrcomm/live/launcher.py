@@ -32,7 +32,9 @@ from mrcomm.live.protocol import WORLD_ID
 from mrcomm.live.settings import LiveSettings
 from mrcomm.net.pulse import pulse_id
 from mrcomm.net.signal.trace import RssiTrace
+from mrcomm.run.config import param_assignments
 from mrcomm.run.result import MissionResult
+from mrcomm.run.wiring import esd_trace_path
 from mrcomm.world.scenario import load_scenario
 
 _CLI = "from mrcomm.cli.main import app; app()"
@@ -90,8 +92,9 @@ class LiveTeam:
         #: trace (pulse id -> robot); a robot without readings never warns, as in sim.
         self.pulses: dict[str, str] = {}
         run = settings.run
-        if run.threshold == "esd" and run.rssi_trace is not None:
-            measuring = {a for a, _ in RssiTrace.load(run.rssi_trace).pairs}
+        trace = esd_trace_path(run)
+        if trace is not None:
+            measuring = {a for a, _ in RssiTrace.load(trace).pairs}
             self.pulses = {pulse_id(r): r for r in self.robots if r in measuring}
         self.ports: dict[str, int] = {}
         self.children: dict[str, Child] = {}
@@ -140,14 +143,14 @@ class LiveTeam:
         if name != WORLD_ID:
             args += ["--robot", name]
         args += [
-            "--network", run.network.value,
+            "--network", run.network,
             "--spl", f"{run.spl:g}",
             "--behaviour", run.behaviour,
             "--threshold", run.threshold,
             "--seed", str(run.seed),
             "--max-time", f"{run.max_time:g}",
             "--dt", f"{run.dt:g}",
-            *(["--rssi-trace", str(run.rssi_trace)] if run.rssi_trace is not None else []),
+            *(arg for item in param_assignments(run) for arg in ("--set", item)),
             "--team", s.zenoh.team,
             "--record-dir", str(s.record_dir),
             "--listen", f"{proto}/{self.address(name)}:{self.ports[name]}",
@@ -187,9 +190,10 @@ class LiveTeam:
         s = self.settings
         robot = self.pulses[name]
         proto = s.zenoh.protocol
-        assert s.run.rssi_trace is not None
+        trace = esd_trace_path(s.run)
+        assert trace is not None
         args = [
-            "pulse", "--trace", str(s.run.rssi_trace), "--robot", robot,
+            "pulse", "--trace", str(trace), "--robot", robot,
             "--team", s.zenoh.team,
             "--connect", f"{proto}/{self.address(robot)}:{self.ports[robot]}",
             "--world-connect", f"{proto}/{self.address(WORLD_ID)}:{self.ports[WORLD_ID]}",

@@ -42,7 +42,7 @@ from mrcomm.live.protocol import (
 from mrcomm.live.settings import LiveSettings, config_crc
 from mrcomm.net.zenoh_bus import Incoming, Lane, ZenohNode
 from mrcomm.run.resources import ScenarioResources
-from mrcomm.run.wiring import make_bases, make_links
+from mrcomm.run.wiring import esd_trace_path, make_bases, make_links
 
 TRAJECTORY_PERIOD = 0.5  # simulated s between trajectory samples
 END_GRACE_SIM = 1.0  # simulated s everyone must stay done before the mission ends ...
@@ -88,8 +88,9 @@ class WorldProcess:
             config = self.settings.run.model_dump(mode="json")
             # Collection may run elsewhere: name the scenario by its absolute path.
             config["scenario"] = str(self.settings.run.scenario.resolve())
-            if self.settings.run.rssi_trace is not None:
-                config["rssi_trace"] = str(self.settings.run.rssi_trace.resolve())
+            trace = esd_trace_path(self.settings.run)
+            if trace is not None:
+                config["params"]["threshold"]["trace"] = str(trace.resolve())
             self.journal.start(
                 process=WORLD_ID,
                 incarnation=self.incarnation,

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mrcomm.net.network import AH_RANGE_M, NetworkType
+from mrcomm.net.network import NetworkModel
 from mrcomm.net.thresholds import BoolArray, FloatArray, PairGeometry, PairLayout, Threshold
 from mrcomm.world.occupancy import OccupancyGrid
 
@@ -51,10 +51,9 @@ class LinkModel:
         self,
         ids: tuple[str, ...],
         grid: OccupancyGrid,
-        network: NetworkType,
+        network: NetworkModel,
         threshold: Threshold,
         *,
-        ah_range: float = AH_RANGE_M,
         los_refresh: float = 0.25,
         aliases: Mapping[str, str] | None = None,
     ) -> None:
@@ -67,7 +66,6 @@ class LinkModel:
         self.grid = grid
         self.network = network
         self.threshold = threshold
-        self.ah_range = ah_range
         aliases = dict(aliases or {})
         self.evaluated_ids = tuple(node for node in ids if node not in aliases)
         self._evaluated = [ids.index(node) for node in self.evaluated_ids]
@@ -116,10 +114,7 @@ class LinkModel:
             distance, warning = distance.take(e), warning.take(e)
             line_of_sight = None if line_of_sight is None else line_of_sight.take(e)
             rssi = None if rssi is None else rssi.take(e)
-        if self.network is NetworkType.AH:
-            connected = ~(distance > self.ah_range)  # NaN (virtual) stays connected
-        else:
-            connected = np.ones(distance.shape, dtype=np.bool_)
+        connected = self.network.connected(distance)
         return LinkState(self.ids, distance, line_of_sight, rssi, warning, connected)
 
     def _sight_matrix(self, sight: list[bool]) -> BoolArray:
@@ -133,7 +128,7 @@ class LinkModel:
     def _line_of_sight(self, xy: Sequence[Sequence[float]], distance: list[float]) -> list[bool]:
         # Only pairs within the network's reach matter for signal (beyond the AH limit
         # nothing is delivered anyway): farther pairs count as obstructed, unrayed.
-        reach = self.ah_range if self.network is NetworkType.AH else math.inf
+        reach = self.network.reach_m
         hypot = math.hypot
         cast_from, cast_value, cast_slack = self._cast_from, self._cast_value, self._cast_slack
         sight: list[bool] = []

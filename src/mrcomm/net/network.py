@@ -1,15 +1,108 @@
-"""Network types (SPEC §3): infrastructure WLAN (no distance cut) and ad-hoc AH (hard
-range limit, 8.0 m by default)."""
+"""Network models: which links can carry a message at all.
+
+* ``wlan`` — infrastructure (access points): coverage of the operating area is complete
+  and uniform, distance never cuts a link.
+* ``ah`` — ad-hoc, peer to peer: a hard communication limit (8.0 m by default) between
+  two nodes; beyond it nothing is delivered, and a node that comes back into range
+  rejoins by itself.
+
+Each is a registered variant (:data:`WLAN_SPEC`, :data:`AH_SPEC`); a new model is a
+:class:`NetworkModel` subclass with its parameter model and spec, in one module.
+"""
 
 from __future__ import annotations
 
+import math
 from enum import StrEnum
+from typing import ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field
+
+from mrcomm.specs import NoParams, VariantSpec
+
+#: Hard communication limit of the ad-hoc network, metres.
+AH_RANGE_M = 8.0
 
 
 class NetworkType(StrEnum):
+    """The built-in network models' names."""
+
     WLAN = "wlan"
     AH = "ah"
 
 
-#: Hard communication limit of the ad-hoc network, metres (SPEC §3).
-AH_RANGE_M = 8.0
+class NetworkModel:
+    """Decides which node pairs are connected, from their distances."""
+
+    name: ClassVar[str] = ""
+    #: Beyond this distance nothing is delivered (inf: no distance limit).
+    reach_m: float = math.inf
+
+    def connected(self, distance: NDArray[np.float64]) -> NDArray[np.bool_]:
+        """(n, n) connectivity from the (n, n) distances (NaN: a node without a
+        position, e.g. a virtual task assigner, is always connected)."""
+        return np.ones(distance.shape, dtype=np.bool_)
+
+    def in_range(self, distance: float) -> bool:
+        """Whether one link of this length can carry a message."""
+        return True
+
+    def describe(self) -> dict[str, float | str]:
+        return {"network": self.name}
+
+
+class Wlan(NetworkModel):
+    """Infrastructure WLAN: every link connected."""
+
+    name = "wlan"
+
+    def __init__(self, params: BaseModel | None = None) -> None:
+        pass
+
+
+class AdHocParams(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    range_m: float = Field(
+        AH_RANGE_M,
+        gt=0.0,
+        allow_inf_nan=False,
+        description="communication limit between two nodes (m)",
+        json_schema_extra={"unit": "m"},
+    )
+
+
+class AdHoc(NetworkModel):
+    """Ad-hoc network with a hard range limit."""
+
+    name = "ah"
+
+    def __init__(self, params: AdHocParams | None = None) -> None:
+        self.reach_m = (params if params is not None else AdHocParams.model_validate({})).range_m
+
+    def connected(self, distance: NDArray[np.float64]) -> NDArray[np.bool_]:
+        return ~(distance > self.reach_m)  # NaN (virtual) stays connected
+
+    def in_range(self, distance: float) -> bool:
+        return distance <= self.reach_m
+
+    def describe(self) -> dict[str, float | str]:
+        return {"network": self.name, "range_m": self.reach_m}
+
+
+WLAN_SPEC = VariantSpec(
+    kind="network",
+    name="wlan",
+    entry=Wlan,
+    params=NoParams,
+    summary="infrastructure WLAN: complete, uniform coverage; distance never cuts a link",
+)
+AH_SPEC = VariantSpec(
+    kind="network",
+    name="ah",
+    entry=AdHoc,
+    params=AdHocParams,
+    summary="ad-hoc, peer to peer: nothing is delivered beyond range_m",
+)

@@ -14,28 +14,58 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
 
-from mrcomm.net.link_sensors import STALE_AFTER_S
+from mrcomm.net.link_sensors import STALE_AFTER_S, MeasuredSensor, ModelSensor
 from mrcomm.net.signal.table import RssiTable
 from mrcomm.net.signal.trace import RssiTrace
 from mrcomm.net.thresholds import (
     BoolArray,
     FloatArray,
     PairGeometry,
+    SignalResources,
     Threshold,
-    register_threshold,
 )
+from mrcomm.specs import VariantSpec
+
+if TYPE_CHECKING:
+    from mrcomm.ports import LinkSensor
 
 
-@register_threshold("ssd")
+class SsdParams(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    warning_dbm: float = Field(
+        -42.0,
+        allow_inf_nan=False,
+        description="a link warns below this predicted RSSI (dBm)",
+        json_schema_extra={"unit": "dBm"},
+    )
+    model: Path | None = Field(
+        None, description="SSD signal model JSON (`mrcomm signal fit`); default: bundled"
+    )
+
+
 class ModelThreshold(Threshold):
     """SSD: RSSI from the signal model's lookup table."""
 
+    name = "ssd"
     needs_line_of_sight = True
-    network_types = frozenset({"ah"})
+
+    @classmethod
+    def build(cls, params: BaseModel, resources: SignalResources, ids: Sequence[str]) -> Threshold:
+        assert isinstance(params, SsdParams)
+        return cls(resources.signal_table(params.model), params.warning_dbm)
+
+    @classmethod
+    def sensor(cls, params: BaseModel, resources: SignalResources) -> LinkSensor:
+        assert isinstance(params, SsdParams)
+        table = resources.signal_table(params.model)
+        return ModelSensor(resources.scenario.grid, table, params.warning_dbm)
 
     def __init__(self, table: RssiTable, warning_dbm: float = -42.0) -> None:
         self.table = table
@@ -62,9 +92,36 @@ class ModelThreshold(Threshold):
         return {"threshold": self.name, "warning_dbm": self.warning_dbm}
 
 
-@register_threshold("esd")
+class EsdParams(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    warning_dbm: float = Field(
+        -41.0,
+        allow_inf_nan=False,
+        description="a link warns below this measured RSSI (dBm)",
+        json_schema_extra={"unit": "dBm"},
+    )
+    trace: Path | None = Field(
+        None,
+        description="recorded RSSI trace CSV (time,from,to,rssi) replayed by the pulses; "
+        "needed in simulation",
+    )
+
+
 class MeasuredThreshold(Threshold):
     """ESD: measured RSSI replayed from a trace (time, from, to, rssi)."""
+
+    name = "esd"
+
+    @classmethod
+    def build(cls, params: BaseModel, resources: SignalResources, ids: Sequence[str]) -> Threshold:
+        assert isinstance(params, EsdParams) and params.trace is not None
+        return cls(resources.rssi_trace(params.trace), ids, params.warning_dbm)
+
+    @classmethod
+    def sensor(cls, params: BaseModel, resources: SignalResources) -> LinkSensor:
+        assert isinstance(params, EsdParams)
+        return MeasuredSensor(params.warning_dbm)
 
     def __init__(self, trace: RssiTrace, ids: Sequence[str], warning_dbm: float = -41.0) -> None:
         self.trace = trace
@@ -80,3 +137,20 @@ class MeasuredThreshold(Threshold):
 
     def describe(self) -> dict[str, Any]:
         return {"threshold": self.name, "warning_dbm": self.warning_dbm}
+
+
+SSD_SPEC = VariantSpec(
+    kind="threshold",
+    name="ssd",
+    entry=ModelThreshold,
+    params=SsdParams,
+    summary="SSD, simulated signal degradation: RSSI predicted by the SVR signal model",
+    network_types=frozenset({"ah"}),
+)
+ESD_SPEC = VariantSpec(
+    kind="threshold",
+    name="esd",
+    entry=MeasuredThreshold,
+    params=EsdParams,
+    summary="ESD, effective signal degradation: RSSI measured by each robot's pulse",
+)

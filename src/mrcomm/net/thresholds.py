@@ -1,26 +1,35 @@
 """Signal thresholds — the second perturbation of SPEC §3 — as a registry.
 
 A threshold turns the geometry of every link (distance, line of sight) into an RSSI
-estimate (where it has one) and a *warning* flag: the link is about to break. Adding a
-threshold is one class registered by name::
+estimate (where it has one) and a *warning* flag: the link is about to break. Each
+threshold also makes the agent-side :class:`~mrcomm.ports.LinkSensor` with which a
+robot judges its own links (:meth:`Threshold.sensor`).
 
-    @register_threshold("mine")
-    class Mine(Threshold): ...
-
-Built in: ``none``, ``slt`` (distance stands in for signal strength); ``ssd`` and
-``esd`` live in :mod:`mrcomm.net.signal_thresholds`.
+A threshold is a registered variant: a :class:`Threshold` subclass with a pydantic
+model of its parameters and a :class:`~mrcomm.specs.VariantSpec` naming both. Built in:
+``none``, ``slt`` (distance stands in for signal strength) here; ``ssd`` and ``esd`` in
+:mod:`mrcomm.net.signal_thresholds`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field
 
-from mrcomm.registry import Registry
+from mrcomm.net.link_sensors import DistanceSensor, NoSensor
+from mrcomm.specs import NoParams, VariantSpec
+
+if TYPE_CHECKING:
+    from mrcomm.net.signal.table import RssiTable
+    from mrcomm.net.signal.trace import RssiTrace
+    from mrcomm.ports import LinkSensor
+    from mrcomm.world.scenario import Scenario
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -57,8 +66,20 @@ class PairGeometry:
     pair_sight: list[bool] | None = None
 
 
+class SignalResources(Protocol):
+    """What a threshold may take from the run's shared per-scenario resources."""
+
+    @property
+    def scenario(self) -> Scenario: ...
+
+    def signal_table(self, model_path: Path | None) -> RssiTable: ...
+
+    def rssi_trace(self, path: Path) -> RssiTrace: ...
+
+
 class Threshold:
-    """Base class: evaluates RSSI and warnings for all pairs at once."""
+    """Base class: evaluates RSSI and warnings for all pairs at once (network side),
+    and makes each robot's link sensor (agent side)."""
 
     name: ClassVar[str] = ""
     #: Whether :meth:`evaluate` needs the line-of-sight matrix (costly: ray casts).
@@ -73,43 +94,61 @@ class Threshold:
     def describe(self) -> dict[str, Any]:
         return {"threshold": self.name}
 
+    @classmethod
+    def build(cls, params: BaseModel, resources: SignalResources, ids: Sequence[str]) -> Threshold:
+        """The network-side threshold for the nodes ``ids`` (in link-model order)."""
+        raise NotImplementedError
 
-def _load_builtin() -> None:
-    # Signal-model thresholds import their lookup tables' modules; load them on demand.
-    from mrcomm.net import signal_thresholds  # noqa: F401
-
-
-THRESHOLDS: Registry[type[Threshold]] = Registry("threshold", "threshold", _load_builtin)
-
-
-def register_threshold(name: str) -> Callable[[type[Threshold]], type[Threshold]]:
-    def decorate(cls: type[Threshold]) -> type[Threshold]:
-        cls.name = name
-        return THRESHOLDS.register(name)(cls)
-
-    return decorate
+    @classmethod
+    def sensor(cls, params: BaseModel, resources: SignalResources) -> LinkSensor:
+        """A new link sensor for one robot's agent."""
+        raise NotImplementedError
 
 
-def threshold_names() -> list[str]:
-    return THRESHOLDS.names()
-
-
-def threshold_class(name: str) -> type[Threshold]:
-    return THRESHOLDS.get(name)
-
-
-@register_threshold("none")
 class NoThreshold(Threshold):
     """No threshold: links never warn."""
+
+    name = "none"
+
+    @classmethod
+    def build(cls, params: BaseModel, resources: SignalResources, ids: Sequence[str]) -> Threshold:
+        return cls()
+
+    @classmethod
+    def sensor(cls, params: BaseModel, resources: SignalResources) -> LinkSensor:
+        return NoSensor()
 
     def evaluate(self, pairs: PairGeometry, now: float) -> tuple[FloatArray | None, BoolArray]:
         return None, np.zeros(pairs.distance.shape, dtype=np.bool_)
 
 
-@register_threshold("slt")
+class SltParams(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    warning_m: float = Field(
+        4.0,
+        gt=0.0,
+        allow_inf_nan=False,
+        description="a link warns beyond this distance (m)",
+        json_schema_extra={"unit": "m"},
+    )
+
+
 class DistanceThreshold(Threshold):
     """SLT — simulated loss threshold: distance stands in for signal strength
     (warning beyond 4.0 m by default; the limit is the network's range)."""
+
+    name = "slt"
+
+    @classmethod
+    def build(cls, params: BaseModel, resources: SignalResources, ids: Sequence[str]) -> Threshold:
+        assert isinstance(params, SltParams)
+        return cls(params.warning_m)
+
+    @classmethod
+    def sensor(cls, params: BaseModel, resources: SignalResources) -> LinkSensor:
+        assert isinstance(params, SltParams)
+        return DistanceSensor(params.warning_m)
 
     def __init__(self, warning_m: float = 4.0) -> None:
         self.warning_m = warning_m
@@ -119,3 +158,19 @@ class DistanceThreshold(Threshold):
 
     def describe(self) -> dict[str, Any]:
         return {"threshold": self.name, "warning_m": self.warning_m}
+
+
+NONE_SPEC = VariantSpec(
+    kind="threshold",
+    name="none",
+    entry=NoThreshold,
+    params=NoParams,
+    summary="no signal threshold: links never warn",
+)
+SLT_SPEC = VariantSpec(
+    kind="threshold",
+    name="slt",
+    entry=DistanceThreshold,
+    params=SltParams,
+    summary="SLT, simulated loss threshold: distance stands in for signal strength",
+)

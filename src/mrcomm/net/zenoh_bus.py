@@ -52,7 +52,7 @@ from mrcomm.messaging.messages import (
     encode,
 )
 from mrcomm.net.inprocess import DeliveryObserver, TopicCounts
-from mrcomm.net.network import AH_RANGE_M, NetworkType
+from mrcomm.net.network import NetworkModel, Wlan
 from mrcomm.net.zenoh_config import ALL_TOPICS, Lane, ZenohOptions, build_config, lane_of
 from mrcomm.ports import Handler
 
@@ -313,9 +313,8 @@ def _open_error(err: BaseException) -> str:
 class LinkRules:
     """The receiver-side network model of a run (as in simulation)."""
 
-    network: NetworkType = NetworkType.WLAN
+    network: NetworkModel = field(default_factory=Wlan)
     loss_percent: float = 0.0
-    ah_range: float = AH_RANGE_M
     lossy_topics: frozenset[str] = LOSSY_TOPICS
     exempt_topics: frozenset[str] = frozenset({TOPIC_ASSIGNMENT})
 
@@ -483,7 +482,7 @@ class ZenohBus:
         rules = self.rules
         if topic in rules.exempt_topics:
             return "received"
-        if rules.network is NetworkType.AH and not self._in_range(sender, receiver.owner):
+        if not self._in_range(sender, receiver.owner):
             return "dropped_range"
         lossy = rules.loss_percent > 0.0 and topic in rules.lossy_topics
         if lossy and receiver._loss.draw() < rules.loss_percent / 100.0:
@@ -495,7 +494,7 @@ class ZenohBus:
         b = self.positions.position(receiver)
         if a is None or b is None:
             return True
-        return math.hypot(a[0] - b[0], a[1] - b[1]) <= self.rules.ah_range
+        return self.rules.network.in_range(math.hypot(a[0] - b[0], a[1] - b[1]))
 
     def counts_by_agent(self) -> dict[str, dict[str, dict[str, int]]]:
         return {owner: ep.counts_dict() for owner, ep in self.endpoints.items()}

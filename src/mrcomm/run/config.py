@@ -1,17 +1,38 @@
-"""Configuration of one mission run (a point of the experiment design, SPEC §7), as a
-frozen, validated model shared by ``mrcomm run``, sweeps and live mode."""
+"""Configuration of one mission run (a point of the experiment design), as a frozen,
+validated model shared by ``mrcomm run``, sweeps and live mode.
+
+The variants — network model, threshold, behaviour — are chosen by name from the spec
+registry (:mod:`mrcomm.specs`); each one's parameters sit in ``params`` under its kind
+(``params = {"behaviour": {"utility": "greedy"}}``), validated against the variant's
+parameter model. Only values that differ from the defaults are kept, so a configuration
+that sets nothing is the same configuration it always was.
+"""
 
 from __future__ import annotations
 
+import json
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from mrcomm.agents.behaviours import behaviour_class
 from mrcomm.errors import InputError, did_you_mean
-from mrcomm.net.network import AH_RANGE_M, NetworkType
-from mrcomm.net.thresholds import threshold_class
+from mrcomm.specs import Kind, VariantSpec, get_spec
+
+#: The kinds a run chooses one variant of, in the order of its label.
+RUN_KINDS: tuple[Kind, ...] = ("network", "behaviour", "threshold")
+
+#: Options of earlier versions that are now a variant's parameter: option ->
+#: (kind, variant, parameter). Still accepted (old journals, schemas, scripts).
+LEGACY_OPTIONS: dict[str, tuple[Kind, str, str]] = {
+    "ah_range": ("network", "ah", "range_m"),
+    "slt_warning": ("threshold", "slt", "warning_m"),
+    "ssd_warning": ("threshold", "ssd", "warning_dbm"),
+    "esd_warning": ("threshold", "esd", "warning_dbm"),
+    "signal_model": ("threshold", "ssd", "model"),
+    "rssi_trace": ("threshold", "esd", "trace"),
+}
 
 
 class RunConfig(BaseModel):
@@ -20,42 +41,72 @@ class RunConfig(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
     scenario: Path
-    network: NetworkType = NetworkType.WLAN
+    network: str = "wlan"
     spl: float = Field(0.0, ge=0.0, le=100.0, description="simulated packet loss, %")
     threshold: str = "none"
     behaviour: str = "nb"
     seed: int = Field(1, ge=0)
     max_time: float = Field(1800.0, gt=0.0, description="mission time limit, simulated s")
     dt: float = Field(0.1, gt=0.0, le=0.5, description="simulation step, s")
-    ah_range: float = Field(AH_RANGE_M, gt=0.0)
-    slt_warning: float = Field(4.0, gt=0.0, description="SLT warning distance, m")
-    ssd_warning: float = Field(-42.0, description="SSD warning RSSI, dBm")
-    esd_warning: float = Field(-41.0, description="ESD warning RSSI, dBm")
-    signal_model: Path | None = None
-    rssi_trace: Path | None = None
+    #: Parameters of the chosen variants by kind, as given (non-default values only).
+    params: dict[str, dict[str, Any]] = Field(default_factory=dict)
 
     @model_validator(mode="after")
     def _combinations(self) -> RunConfig:
-        # Registry look-ups raise InputError with a "did you mean" hint.
-        threshold_class(self.threshold)
-        behaviour_class(self.behaviour)
-        if self.threshold == "ssd" and self.network is not NetworkType.AH:
-            raise ValueError("threshold 'ssd' needs network 'ah' (SSD is ad-hoc only)")
-        if self.threshold == "esd" and self.rssi_trace is None:
+        unknown = set(self.params) - set(RUN_KINDS)
+        if unknown:
+            kind = sorted(unknown)[0]
+            raise InputError(
+                f"unknown parameter section {kind!r}{did_you_mean(kind, RUN_KINDS)}; "
+                f"sections: {', '.join(RUN_KINDS)}",
+                field=f"params.{kind}",
+            )
+        # Spec look-ups raise InputError with a "did you mean" hint; so do parameters.
+        normalised = {kind: self._check_params(kind) for kind in RUN_KINDS}
+        object.__setattr__(self, "params", {k: v for k, v in normalised.items() if v})
+        checked: tuple[Kind, ...] = ("threshold", "behaviour")
+        for kind in checked:
+            spec = self.spec(kind)
+            if spec.network_types is not None and self.network not in spec.network_types:
+                raise ValueError(
+                    f"{kind} {spec.name!r} needs network "
+                    f"{' or '.join(repr(n) for n in sorted(spec.network_types))}"
+                )
+        if self.threshold == "esd" and self.variant_params("threshold").trace is None:
             raise ValueError("threshold 'esd' in simulation needs --rssi-trace CSV")
         return self
+
+    def _check_params(self, kind: Kind) -> dict[str, Any]:  # only given, non-default values
+        spec = self.spec(kind)
+        model = spec.make_params(self.params.get(kind, {}))
+        dumped: dict[str, Any] = model.model_dump(mode="json", exclude_defaults=True)
+        return dumped
+
+    def spec(self, kind: Kind) -> VariantSpec:
+        """The spec of the chosen variant of ``kind``."""
+        return get_spec(kind, str(getattr(self, kind)))
+
+    def variant_params(self, kind: Kind) -> Any:
+        """The chosen variant's validated parameters (its parameter model)."""
+        return self.spec(kind).make_params(self.params.get(kind, {}))
+
+    def variants(self) -> dict[str, str]:
+        """kind -> ``name-vN`` of every chosen variant (recorded with each run)."""
+        return {kind: self.spec(kind).versioned for kind in RUN_KINDS}
 
     def label(self) -> str:
         """Short configuration label, e.g. ``AH_NB_SPL25_SSD``."""
         spl = f"{self.spl:g}"
-        parts = [self.network.value.upper(), self.behaviour.upper(), f"SPL{spl}"]
+        parts = [self.network.upper(), self.behaviour.upper(), f"SPL{spl}"]
         if self.threshold != "none":
             parts.append(self.threshold.upper())
         return "_".join(parts)
 
 
-def make_config(source: str | None = None, **values: Any) -> RunConfig:
-    """Build a RunConfig, turning validation errors into a one-line InputError."""
+def make_config(source: str | Path | None = None, **values: Any) -> RunConfig:
+    """Build a RunConfig, turning validation errors into a one-line InputError.
+    Options of earlier versions (:data:`LEGACY_OPTIONS`) become parameters."""
+    values = fold_legacy_options(values, source)
     try:
         return RunConfig(**values)
     except ValidationError as err:
@@ -63,5 +114,54 @@ def make_config(source: str | None = None, **values: Any) -> RunConfig:
         loc = ".".join(str(p) for p in first["loc"]) or None
         message = first["msg"]
         if first["type"] == "extra_forbidden" and loc:
-            message = f"unknown option{did_you_mean(loc, RunConfig.model_fields)}"
+            known = [*RunConfig.model_fields, *LEGACY_OPTIONS]
+            message = f"unknown option{did_you_mean(loc, known)}"
         raise InputError(message.removeprefix("Value error, "), file=source, field=loc) from None
+    except InputError as err:
+        if err.file is None and source is not None:
+            raise InputError(err.message, file=source, field=err.field) from None
+        raise
+
+
+def fold_legacy_options(values: Mapping[str, Any], source: str | Path | None) -> dict[str, Any]:
+    """Move legacy options into ``params``: the one that applies to the chosen variant
+    becomes its parameter; one that applies to another variant must be unset (None or
+    that variant's default), else it would be ignored in silence."""
+    out = dict(values)
+    legacy = {k: out.pop(k) for k in list(out) if k in LEGACY_OPTIONS}
+    if not legacy:
+        return out
+    params = {kind: dict(section) for kind, section in dict(out.get("params") or {}).items()}
+    defaults = {"network": "wlan", "threshold": "none", "behaviour": "nb"}
+    for option, value in legacy.items():
+        kind, variant, parameter = LEGACY_OPTIONS[option]
+        chosen = str(out.get(kind, defaults[kind]))
+        if chosen == variant:
+            params.setdefault(kind, {}).setdefault(parameter, value)
+            continue
+        default = get_spec(kind, variant).params_model().model_fields[parameter].default
+        if value is not None and value != default:
+            raise InputError(
+                f"applies to {kind} {variant!r} only (this run's {kind} is {chosen!r})",
+                file=source,
+                field=option,
+            )
+    out["params"] = params
+    return out
+
+
+def param_assignments(config: RunConfig) -> list[str]:
+    """The run's parameters as ``kind.key=value`` assignments (what ``--set`` takes),
+    nested models flattened to dotted keys."""
+    out: list[str] = []
+
+    def walk(prefix: str, values: Mapping[str, Any]) -> None:
+        for key, value in values.items():
+            if isinstance(value, Mapping):
+                walk(f"{prefix}{key}.", value)
+            else:
+                out.append(f"{prefix}{key}={json.dumps(value)}")
+
+    for kind, section in config.params.items():
+        walk(f"{kind}.", section)
+    return out

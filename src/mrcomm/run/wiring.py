@@ -6,45 +6,86 @@ simulated run's."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 from mrcomm.agents.assigner import ASSIGNER_ID
-from mrcomm.net.link_sensors import DistanceSensor, MeasuredSensor, ModelSensor, NoSensor
+from mrcomm.net.link_sensors import MeasuredSensor
 from mrcomm.net.links import LinkModel, LinkRecorder
+from mrcomm.net.network import NetworkModel
 from mrcomm.net.signal.trace import RssiTrace
-from mrcomm.net.signal_thresholds import MeasuredThreshold, ModelThreshold
-from mrcomm.net.thresholds import DistanceThreshold, NoThreshold, Threshold, threshold_class
-from mrcomm.ports import LinkSensor
+from mrcomm.net.thresholds import Threshold
+from mrcomm.ports import Base, Bus, LinkSensor
 from mrcomm.robot.base import SimBase
 from mrcomm.run.config import RunConfig
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.seeding import stream
 
+if TYPE_CHECKING:
+    from mrcomm.agents.executor import TaskExecutor
+    from mrcomm.metrics.timeline import Timeline
+
+
+def build_network(config: RunConfig) -> NetworkModel:
+    """The run's network model, from its spec and parameters."""
+    model: NetworkModel = config.spec("network").load()(config.variant_params("network"))
+    return model
+
 
 def build_threshold(config: RunConfig, world: ScenarioResources, ids: Sequence[str]) -> Threshold:
-    cls = threshold_class(config.threshold)
-    if cls is NoThreshold:
-        return NoThreshold()
-    if cls is DistanceThreshold:
-        return DistanceThreshold(config.slt_warning)
-    if cls is ModelThreshold:
-        return ModelThreshold(world.signal_table(config.signal_model), config.ssd_warning)
-    if cls is MeasuredThreshold:
-        assert config.rssi_trace is not None  # the config validator insists
-        return MeasuredThreshold(world.rssi_trace(config.rssi_trace), ids, config.esd_warning)
-    raise NotImplementedError(f"threshold {config.threshold!r} has no builder in sim/signals.py")
+    """The network-side threshold of the nodes ``ids``, from its spec and parameters."""
+    cls: type[Threshold] = config.spec("threshold").load()
+    return cls.build(config.variant_params("threshold"), world, ids)
 
 
 def build_link_sensor(config: RunConfig, world: ScenarioResources) -> LinkSensor:
     """The link sensor a robot's agent judges its links with (one per robot)."""
-    if config.threshold == "slt":
-        return DistanceSensor(config.slt_warning)
-    if config.threshold == "ssd":
-        table = world.signal_table(config.signal_model)
-        return ModelSensor(world.scenario.grid, table, config.ssd_warning)
-    if config.threshold == "esd":
-        return MeasuredSensor(config.esd_warning)
-    return NoSensor()
+    cls: type[Threshold] = config.spec("threshold").load()
+    return cls.sensor(config.variant_params("threshold"), world)
+
+
+def build_executor(
+    config: RunConfig,
+    bus: Bus,
+    base: Base,
+    timeline: Timeline,
+    *,
+    tie_break_rank: Callable[[str], float],
+    link_sensor: LinkSensor,
+    incarnation: int = 1,
+) -> TaskExecutor:
+    """One robot's task executor: the chosen behaviour with its parameters."""
+    cls: type[TaskExecutor] = config.spec("behaviour").load()
+    return cls(
+        bus,
+        base,
+        timeline,
+        tie_break_rank=tie_break_rank,
+        link_sensor=link_sensor,
+        params=config.variant_params("behaviour"),
+        incarnation=incarnation,
+    )
+
+
+def esd_trace_path(config: RunConfig) -> Path | None:
+    """The RSSI trace an ESD run replays (None for other thresholds)."""
+    if config.threshold != "esd":
+        return None
+    trace: Path | None = getattr(config.variant_params("threshold"), "trace", None)
+    return trace
+
+
+def build_trace_pulse(
+    config: RunConfig, world: ScenarioResources, sensors: Mapping[str, LinkSensor]
+) -> TracePulse | None:
+    """ESD in simulation: the pulses replaying the run's RSSI trace to each robot's
+    measured sensor (None without a trace)."""
+    path = esd_trace_path(config)
+    if path is None:
+        return None
+    measured = {r: s for r, s in sensors.items() if isinstance(s, MeasuredSensor)}
+    return TracePulse(world.rssi_trace(path), measured, tuple(sensors))
 
 
 class TracePulse:
@@ -108,9 +149,8 @@ def make_links(world: ScenarioResources, config: RunConfig) -> tuple[LinkModel, 
     links = LinkModel(
         node_ids,
         scenario.grid,
-        config.network,
+        build_network(config),
         build_threshold(config, world, evaluated),
-        ah_range=config.ah_range,
         aliases=aliases,
     )
     skip = {(ASSIGNER_ID, host), (host, ASSIGNER_ID)} if host else set()

@@ -19,18 +19,22 @@ import time
 from typing import Any
 
 from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
-from mrcomm.agents.behaviours import behaviour_class
 from mrcomm.agents.executor import TaskExecutor
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robot_metrics
 from mrcomm.metrics.timeline import Timeline
 from mrcomm.net.inprocess import InProcessNetwork
-from mrcomm.net.link_sensors import MeasuredSensor
 from mrcomm.net.links import LinkState
 from mrcomm.run.config import RunConfig
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.result import MissionResult
-from mrcomm.run.wiring import TracePulse, build_link_sensor, make_bases, make_links
+from mrcomm.run.wiring import (
+    build_executor,
+    build_link_sensor,
+    build_trace_pulse,
+    make_bases,
+    make_links,
+)
 from mrcomm.seeding import stream
 
 TRAJECTORY_PERIOD = 0.5  # s between recorded trajectory samples
@@ -56,15 +60,11 @@ class Mission:
         self.timelines = {rid: Timeline(rid) for rid in self.robot_ids}
         ranks = stream(seed, "tie-break").permutation(len(self.robot_ids))
         rank_of = {rid: float(ranks[i]) for i, rid in enumerate(self.robot_ids)}
-        executor_class = behaviour_class(config.behaviour)
         self.sensors = {rid: build_link_sensor(config, self.world) for rid in self.robot_ids}
-        self.pulse: TracePulse | None = None
-        if config.threshold == "esd" and config.rssi_trace is not None:
-            measured = {r: s for r, s in self.sensors.items() if isinstance(s, MeasuredSensor)}
-            trace = self.world.rssi_trace(config.rssi_trace)
-            self.pulse = TracePulse(trace, measured, self.robot_ids)
+        self.pulse = build_trace_pulse(config, self.world, self.sensors)
         self.executors: dict[str, TaskExecutor] = {
-            rid: executor_class(
+            rid: build_executor(
+                config,
                 self.network.endpoint(rid),
                 self.bases[rid],
                 self.timelines[rid],
@@ -77,7 +77,7 @@ class Mission:
             self.network.endpoint(ASSIGNER_ID),
             self.robot_ids,
             scenario.tasks,
-            use_aon=executor_class.uses_aon,
+            use_aon=config.spec("behaviour").uses_aon,
         )
         self.trajectories: dict[str, list[tuple[float, float, float]]] = {
             rid: [] for rid in self.robot_ids

@@ -1,0 +1,142 @@
+"""The run options, declared once and shared by every command that starts a run
+(``run``, ``live``, ``world``, ``agent``; ``sweep`` takes ``--set``), as zenoh-python's
+examples share one set of connection options: each option's type, default and help
+here, and one function that turns them into a validated
+:class:`~mrcomm.run.config.RunConfig`.
+
+``--set KIND.KEY=VALUE`` sets a parameter of the chosen variant of that kind
+(``behaviour.utility=greedy``, ``threshold.warning_dbm=-41``, ``network.range_m=10``,
+``behaviour.collision.danger_radius=1.2``); the value is read as YAML (numbers, true /
+false, null, strings). ``mrcomm variants`` lists every parameter.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+import yaml
+
+from mrcomm.errors import InputError, did_you_mean
+
+ScenarioArg = Annotated[Path, typer.Argument(help="Scenario YAML (e.g. data/scenarios/s1.yaml).")]
+NetworkOpt = Annotated[
+    str, typer.Option(help="Network model (see `mrcomm variants`): wlan, ah, ...")
+]
+SplOpt = Annotated[float, typer.Option(help="Simulated packet loss, percent (0-100).")]
+BehaviourOpt = Annotated[
+    str, typer.Option(help="Team behaviour (see `mrcomm variants`): nb, lf, ...")
+]
+ThresholdOpt = Annotated[
+    str, typer.Option(help="Signal threshold (see `mrcomm variants`): none, slt, ssd, esd, ...")
+]
+SeedOpt = Annotated[int, typer.Option(help="Random seed of the run.")]
+MaxTimeOpt = Annotated[float, typer.Option(help="Mission time limit, simulated s.")]
+DtOpt = Annotated[float, typer.Option(help="Simulation step (live: clock tick), simulated s.")]
+RssiTraceOpt = Annotated[
+    Path | None,
+    typer.Option(
+        help="ESD: recorded RSSI trace CSV (time,from,to,rssi) replayed by the robots' "
+        "pulses; same as --set threshold.trace=PATH."
+    ),
+]
+SignalModelOpt = Annotated[
+    Path | None,
+    typer.Option(
+        help="SSD: signal model JSON (default: bundled); same as --set threshold.model=PATH."
+    ),
+]
+SetOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--set",
+        metavar="KIND.KEY=VALUE",
+        help="Set a variant parameter, e.g. behaviour.utility=greedy (repeatable; "
+        "`mrcomm variants` lists them).",
+    ),
+]
+
+SET_KINDS = ("network", "behaviour", "threshold")
+
+
+def parse_assignments(items: list[str] | None, field: str = "--set") -> dict[str, dict[str, Any]]:
+    """``["behaviour.utility=greedy", ...]`` -> ``{"behaviour": {"utility": "greedy"}}``
+    (dotted keys nest); a malformed item is a one-line error."""
+    params: dict[str, dict[str, Any]] = {}
+    for item in items or []:
+        key, sep, text = item.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise InputError(f"expected KIND.KEY=VALUE, got {item!r}", field=field)
+        kind, _, rest = key.partition(".")
+        if kind not in SET_KINDS:
+            raise InputError(
+                f"unknown parameter section {kind!r}{did_you_mean(kind, SET_KINDS)} in "
+                f"{item!r}; sections: {', '.join(SET_KINDS)}",
+                field=field,
+            )
+        if not rest:
+            raise InputError(f"expected KIND.KEY=VALUE, got {item!r}", field=field)
+        try:
+            value = yaml.safe_load(text) if text.strip() else ""
+        except yaml.YAMLError:
+            value = text
+        node: dict[str, Any] = params.setdefault(kind, {})
+        *outer, last = rest.split(".")
+        for part in outer:
+            inner = node.setdefault(part, {})
+            if not isinstance(inner, dict):
+                raise InputError(f"{kind}.{part} is set twice, as a value and as a section")
+            node = inner
+        node[last] = value
+    return params
+
+
+def run_config(
+    *,
+    scenario: Path,
+    network: str,
+    spl: float,
+    behaviour: str,
+    threshold: str,
+    seed: int,
+    max_time: float,
+    dt: float,
+    sets: list[str] | None = None,
+    rssi_trace: Path | None = None,
+    signal_model: Path | None = None,
+) -> Any:
+    """The validated RunConfig of a command line (``--set`` wins over the shortcuts)."""
+    from mrcomm.run.config import make_config
+
+    params = parse_assignments(sets)
+    shortcuts = {"rssi_trace": rssi_trace, "signal_model": signal_model}
+    given = {k: v for k, v in shortcuts.items() if v is not None}
+    try:
+        return make_config(
+            None,
+            scenario=scenario,
+            network=network,
+            spl=spl,
+            behaviour=behaviour,
+            threshold=threshold,
+            seed=seed,
+            max_time=max_time,
+            dt=dt,
+            params=params,
+            **given,
+        )
+    except InputError as err:
+        raise InputError(err.message, field=_option_name(err.field)) from None
+
+
+def _option_name(field: str | None) -> str | None:
+    """A RunConfig field as the command line spells it (``max_time`` -> ``--max-time``;
+    ``params.behaviour.x`` and ``behaviour.x`` -> ``--set behaviour.x``)."""
+    if field is None:
+        return None
+    field = field.removeprefix("params.")
+    if "." in field:
+        return f"--set {field}"
+    return "--" + field.replace("_", "-")

@@ -1,0 +1,231 @@
+"""Variants as specs: the registry of behaviours, thresholds, network models and
+utility functions, each with its validated parameters.
+
+A *variant* is one registered :class:`VariantSpec`: a stable name and version (both go
+into the configuration), the object that implements it (a class or function, or a
+``"module:attribute"`` string loaded on first use, like Gymnasium's ``entry_point``),
+a pydantic model of its parameters (defaults and units documented in its fields), and
+what it needs and offers: the network models it works with, the topics it publishes,
+the metrics it adds, whether it uses AON.
+
+Built-in variants and users' plugins are found the same way: through the Python
+entry-point group ``mrcomm.variants``, each entry naming a spec (or a list of specs)::
+
+    [project.entry-points."mrcomm.variants"]
+    wander = "my_package.wander:SPEC"
+
+This module is a leaf: it imports nothing of MRComm but the error type, so any layer
+may use it without import circles.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from importlib.metadata import entry_points
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, ValidationError
+
+from mrcomm.errors import InputError, did_you_mean
+
+Kind = Literal["behaviour", "threshold", "network", "utility"]
+KINDS: tuple[Kind, ...] = ("behaviour", "threshold", "network", "utility")
+ENTRY_POINT_GROUP = "mrcomm.variants"
+
+
+class NoParams(BaseModel):
+    """A variant without parameters."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+@dataclass(frozen=True)
+class VariantSpec:
+    """One registered variant (see the module docstring)."""
+
+    kind: Kind
+    name: str
+    #: The implementation, or ``"module:attribute"`` to import it on first use.
+    entry: Any
+    #: The model of its parameters, or ``"module:attribute"``.
+    params: Any = NoParams
+    version: int = 1
+    summary: str = ""
+    #: Network models it can be combined with (None: any).
+    network_types: frozenset[str] | None = None
+    #: Topics it publishes (behaviours) beyond the ones every executor uses.
+    topics: tuple[str, ...] = ()
+    #: Metrics it adds to a run's results.
+    metrics: tuple[str, ...] = ()
+    #: Behaviours: whether task statuses travel with AON.
+    uses_aon: bool = False
+    #: Where the variant came from: the distribution that registered it.
+    origin: str = "mrcomm"
+
+    @property
+    def key(self) -> str:
+        """``kind.name``, the name of its parameter section (``behaviour.lf``)."""
+        return f"{self.kind}.{self.name}"
+
+    @property
+    def versioned(self) -> str:
+        """``name-vN``: what configurations record."""
+        return f"{self.name}-v{self.version}"
+
+    def load(self) -> Any:
+        """The implementation (imported on first use when given as a string)."""
+        return _resolve(self.entry, self.key)
+
+    def params_model(self) -> type[BaseModel]:
+        model = _resolve(self.params, self.key)
+        if not (isinstance(model, type) and issubclass(model, BaseModel)):
+            raise TypeError(f"{self.key}: params must be a pydantic model, got {model!r}")
+        return model
+
+    def make_params(self, values: Mapping[str, Any], where: str | None = None) -> BaseModel:
+        """Validate ``values`` (nested dicts for nested models) into the parameter model;
+        a bad key or value is a one-line :class:`InputError` naming ``kind.key``."""
+        model = self.params_model()
+        try:
+            return model(**dict(values))
+        except ValidationError as err:
+            first = err.errors()[0]
+            loc = ".".join(str(p) for p in first["loc"])
+            field = f"{self.kind}.{loc}" if loc else self.kind
+            if first["type"] == "extra_forbidden":
+                known = parameter_names(model)
+                message = (
+                    f"unknown parameter of {self.kind} {self.name!r}"
+                    f"{did_you_mean(loc, known)}; "
+                    f"it has {', '.join(known) if known else 'no parameters'}"
+                )
+            else:
+                got = first.get("input")
+                message = first["msg"].removeprefix("Value error, ")
+                if not isinstance(got, Mapping):
+                    message += f", got {got!r}"
+            raise InputError(message, file=where, field=field) from None
+
+
+def _resolve(target: Any, key: str) -> Any:
+    if not isinstance(target, str):
+        return target
+    module, _, attribute = target.partition(":")
+    try:
+        obj: Any = importlib.import_module(module)
+        for part in attribute.split(".") if attribute else ():
+            obj = getattr(obj, part)
+    except (ImportError, AttributeError) as err:
+        raise InputError(f"cannot load {target!r}: {err}", field=key) from None
+    return obj
+
+
+def parameter_names(model: type[BaseModel], prefix: str = "") -> list[str]:
+    """Every settable key of a parameter model, nested models as ``outer.inner``."""
+    names: list[str] = []
+    for name, info in model.model_fields.items():
+        sub = info.annotation
+        if isinstance(sub, type) and issubclass(sub, BaseModel):
+            names += parameter_names(sub, f"{prefix}{name}.")
+        else:
+            names.append(f"{prefix}{name}")
+    return names
+
+
+class SpecRegistry:
+    """Every variant, by kind and name. Entry points are read on first use."""
+
+    def __init__(self, group: str = ENTRY_POINT_GROUP) -> None:
+        self.group = group
+        self._specs: dict[Kind, dict[str, VariantSpec]] = {k: {} for k in KINDS}
+        self._discovered = False
+
+    def register(self, spec: VariantSpec) -> VariantSpec:
+        if spec.kind not in KINDS:
+            raise ValueError(f"unknown variant kind {spec.kind!r}; kinds: {', '.join(KINDS)}")
+        existing = self._specs[spec.kind].get(spec.name)
+        if existing is not None and existing != spec:
+            raise ValueError(
+                f"{spec.kind} {spec.name!r} registered twice "
+                f"(by {existing.origin} and by {spec.origin})"
+            )
+        self._specs[spec.kind][spec.name] = spec
+        return spec
+
+    def get(self, kind: Kind, name: str) -> VariantSpec:
+        self.discover()
+        entries = self._specs[kind]
+        try:
+            return entries[name]
+        except KeyError:
+            raise InputError(
+                f"unknown {kind} {name!r}{did_you_mean(name, entries)}; "
+                f"choose from {', '.join(sorted(entries))}",
+                field=kind,
+            ) from None
+
+    def names(self, kind: Kind) -> list[str]:
+        self.discover()
+        return sorted(self._specs[kind])
+
+    def all(self) -> list[VariantSpec]:
+        self.discover()
+        return [self._specs[k][n] for k in KINDS for n in sorted(self._specs[k])]
+
+    def discover(self) -> None:
+        """Register every spec the installed distributions declare (once)."""
+        if self._discovered:
+            return
+        self._discovered = True
+        found = entry_points(group=self.group)
+        if not any(ep.dist is not None and ep.dist.name == "mrcomm" for ep in found):
+            raise InputError(
+                "MRComm's built-in variants are not registered: reinstall the package "
+                "(`pip install -e .` or `make`)",
+                field=self.group,
+            )
+        for ep in sorted(found, key=lambda e: (e.dist.name if e.dist else "", e.name)):
+            origin = ep.dist.name if ep.dist is not None else "?"
+            try:
+                loaded = ep.load()
+            except Exception as err:  # a broken plugin names itself, never a traceback
+                raise InputError(
+                    f"plugin {ep.name} = {ep.value} (from {origin}) failed to load: "
+                    f"{type(err).__name__}: {err}",
+                    field=self.group,
+                ) from None
+            specs = loaded if isinstance(loaded, Iterable) else [loaded]
+            for spec in specs:
+                if not isinstance(spec, VariantSpec):
+                    raise InputError(
+                        f"plugin {ep.name} = {ep.value} (from {origin}) is not a VariantSpec",
+                        field=self.group,
+                    )
+                if spec.origin == "mrcomm" and origin != "mrcomm":
+                    spec = _with_origin(spec, origin)
+                self.register(spec)
+
+
+def _with_origin(spec: VariantSpec, origin: str) -> VariantSpec:
+    from dataclasses import replace
+
+    return replace(spec, origin=origin)
+
+
+#: The registry every part of MRComm uses.
+REGISTRY = SpecRegistry()
+
+
+def get_spec(kind: Kind, name: str) -> VariantSpec:
+    return REGISTRY.get(kind, name)
+
+
+def variant_names(kind: Kind) -> list[str]:
+    return REGISTRY.names(kind)
+
+
+def register(spec: VariantSpec) -> VariantSpec:
+    """Register a spec directly (tests; a plugin normally uses its entry point)."""
+    return REGISTRY.register(spec)
