@@ -91,17 +91,65 @@ scenario: {S1_PATH}
 repetitions: 1
 factors:
   network: [wlan, ah]
-  threshold: [none, slt]
-  slt_warning: [3.5, 4]
+  behaviour: [nb, lf]
+  threshold: slt
+  threshold.warning_m: [3.5, 4]
 exclude:
-  - {{threshold: none, slt_warning: 4}}
+  - {{behaviour: nb, threshold.warning_m: 4}}
 """
     exp = load_experiment(write_schema(tmp_path, text, "extra.yaml"))
     labels = [c.label for c in exp.configurations]
     assert exp.name == "extra"
     assert len(labels) == 6  # 8 combinations minus 2 excluded
-    assert "AH_NB_SPL0_SLT_SLTWARNING3.5" in labels
-    assert not any(lab.endswith("SPL0_SLTWARNING4") for lab in labels)
+    assert "AH_NB_SPL0_SLT_WARNINGM3.5" in labels
+    assert not any(lab.endswith("NB_SPL0_SLT_WARNINGM4") for lab in labels)
+    warnings = {c.label: c.config.variant_params("threshold").warning_m for c in exp.configurations}
+    assert warnings["AH_LF_SPL0_SLT_WARNINGM3.5"] == 3.5
+    assert warnings["AH_LF_SPL0_SLT_WARNINGM4"] == 4.0
+
+
+def test_parameters_as_factors_and_fixed_params(tmp_path: Path) -> None:
+    text = f"""\
+scenario: {S1_PATH}
+repetitions: 1
+factors:
+  behaviour: [lf]
+  behaviour.utility: [original, greedy]
+params:
+  behaviour: {{aon_lease: 30}}
+  network.range_m: 10
+options: {{network: ah}}
+"""
+    exp = load_experiment(write_schema(tmp_path, text, "params.yaml"))
+    by_label = {c.label: c for c in exp.configurations}
+    assert sorted(by_label) == ["AH_LF_SPL0_UTILITYgreedy", "AH_LF_SPL0_UTILITYoriginal"]
+    greedy = by_label["AH_LF_SPL0_UTILITYgreedy"].config
+    assert greedy.params == {
+        "network": {"range_m": 10.0},
+        "behaviour": {"utility": "greedy", "aon_lease": 30.0},
+    }
+    original = by_label["AH_LF_SPL0_UTILITYoriginal"].config
+    assert original.variant_params("behaviour").utility == "original"
+    assert by_label["AH_LF_SPL0_UTILITYgreedy"].config_id != (
+        by_label["AH_LF_SPL0_UTILITYoriginal"].config_id
+    )
+
+
+@pytest.mark.parametrize(
+    ("body", "expected"),
+    [
+        ("factors: {behaviour: [lf], behaviour.utility: [greedyy]}", "factors.behaviour.utility: "),
+        ("factors: {behaviour: [nb]}\nparams: {behaviour.utility: greedy}", "params.behaviour"),
+        ("factors: {behaviour: [lf]}\nparams: {behavior: {utility: greedy}}", "did you mean"),
+        ("factors: {threshold: [none]}\noptions: {slt_warning: 3}", "applies to threshold 'slt'"),
+    ],
+)
+def test_bad_parameters_are_one_line_errors(tmp_path: Path, body: str, expected: str) -> None:
+    text = f"scenario: {S1_PATH}\nrepetitions: 1\n{body}\n"
+    with pytest.raises(InputError) as err:
+        load_experiment(write_schema(tmp_path, text, "bad.yaml"))
+    assert expected in err.value.one_line()
+    assert "\n" not in err.value.one_line()
 
 
 @pytest.mark.parametrize(

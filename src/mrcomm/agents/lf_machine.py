@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from pydantic import field_validator
+
 from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS, ExecutorParams
 from mrcomm.metrics import labels as L
 
@@ -80,6 +82,16 @@ ROLE_OF_TOP_STATE = {
 
 class LfParams(ExecutorParams):
     utility: str = "original"
+
+    @field_validator("utility")
+    @classmethod
+    def _known_utility(cls, name: str) -> str:
+        from mrcomm.agents.utility import utility_names
+
+        if name not in utility_names():
+            raise ValueError(f"unknown utility {name!r}; choose from {', '.join(utility_names())}")
+        return name
+
     announce_period: float = 0.25  # utilities and roles at 4 Hz
     assign_timeout: float = 6.0  # decide with what was collected after this long
     roles_timeout: float = 3.0  # stop collecting roles after this long

@@ -21,6 +21,7 @@ table of the run in one transaction.
 from __future__ import annotations
 
 import re
+import shlex
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -29,11 +30,11 @@ import yaml
 
 from mrcomm.errors import InputError
 from mrcomm.experiment.rows import result_rows
-from mrcomm.experiment.schema import PATH_FIELDS, Configuration, Experiment, RunSpec
+from mrcomm.experiment.schema import Configuration, Experiment, RunSpec
 from mrcomm.experiment.seeds import make_config_id, make_run_id
 from mrcomm.experiment.store import ResultStore, inspect_database
 from mrcomm.experiment.tables import RUN_MODES
-from mrcomm.run.config import RunConfig, make_config
+from mrcomm.run.config import RunConfig, make_config, param_assignments
 from mrcomm.run.result import MissionResult
 
 #: ``experiments.schema_path`` of an ad-hoc experiment (sweeps hold their schema file).
@@ -173,6 +174,11 @@ def command_line(mode: str, options: dict[str, Any], seed: int) -> str:
     for key, value in options.items():
         if key == "scenario":
             continue
+        if key == "params":
+            config = RunConfig.model_construct(params=value)
+            for item in param_assignments(config):
+                words += ["--set", shlex.quote(item)]
+            continue
         flag = "--" + key.replace("_", "-")
         if value is True:
             words.append(flag)
@@ -191,12 +197,13 @@ def _run_config(result: MissionResult) -> RunConfig:
 
 def _absolute(config: RunConfig) -> RunConfig:
     """Paths resolved: the same file gives the same id from any working directory."""
-    update = {
-        key: Path(value).expanduser().resolve()
-        for key in ("scenario", *PATH_FIELDS)
-        if (value := getattr(config, key)) is not None
-    }
-    return config.model_copy(update=update)
+    params = {kind: dict(section) for kind, section in config.params.items()}
+    threshold = params.get("threshold", {})
+    for key in ("model", "trace"):  # the threshold parameters that name files
+        if threshold.get(key) is not None:
+            threshold[key] = str(Path(threshold[key]).expanduser().resolve())
+    scenario = Path(config.scenario).expanduser().resolve()
+    return config.model_copy(update={"scenario": scenario, "params": params})
 
 
 def _extra_options(mode: str, result: MissionResult, given: dict[str, Any]) -> dict[str, Any]:

@@ -13,11 +13,15 @@ number of repetitions::
       threshold: [slt, ssd]
       behaviour: [nb, lf]
     options: {max_time: 1800}         # fixed options of every configuration
+    params:                           # fixed variant parameters (mrcomm variants)
+      behaviour.aon_lease: 30
     exclude:                          # optional: drop combinations matching all keys
       - {network: wlan, threshold: ssd}
 
 Factors and options are any :class:`~mrcomm.run.config.RunConfig` field except
-``scenario`` and ``seed``. Everything is checked here, before any database is opened:
+``scenario`` and ``seed``, or a variant parameter ``KIND.KEY`` (``behaviour.utility:
+[original, greedy]``); ``params`` holds fixed parameters (dotted or nested keys).
+Everything is checked here, before any database is opened:
 unknown keys (with "did you mean"), empty factors, and every value, by building the
 RunConfig of every configuration.
 """
@@ -37,17 +41,18 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from mrcomm.errors import InputError, did_you_mean
 from mrcomm.experiment.seeds import make_config_id, make_run_id, run_seed
-from mrcomm.run.config import RunConfig, make_config
+from mrcomm.run.config import LEGACY_OPTIONS, RUN_KINDS, RunConfig, make_config
 from mrcomm.world.scenario import load_scenario
 from mrcomm.world.yamlfile import read_yaml, validation_error
 
 #: Factors that RunConfig.label() already spells out.
 LABEL_FACTORS = ("network", "spl", "threshold", "behaviour")
 #: RunConfig fields that hold file paths (resolved relative to the schema file).
-PATH_FIELDS = ("signal_model", "rssi_trace")
+PATH_FIELDS = ("signal_model", "rssi_trace", "threshold.model", "threshold.trace")
 _NOT_OPTIONS = {
     "scenario": "give scenarios in the top-level 'scenario' key",
     "seed": "run seeds derive from 'base_seed' (see docs/RESULTS.md)",
+    "params": "give variant parameters in the top-level 'params' key or as KIND.KEY",
 }
 
 
@@ -63,6 +68,7 @@ class ExperimentModel(BaseModel):
     base_seed: int = Field(0, ge=0, lt=1 << 63)
     factors: dict[str, Any] = Field(default_factory=dict)
     options: dict[str, Any] = Field(default_factory=dict)
+    params: dict[str, Any] = Field(default_factory=dict)
     exclude: list[dict[str, Any]] = Field(default_factory=list)
 
 
@@ -148,7 +154,56 @@ def load_experiment(path: str | Path) -> Experiment:
 
 
 def _allowed_options() -> list[str]:
-    return [name for name in RunConfig.model_fields if name not in _NOT_OPTIONS]
+    fields = [name for name in RunConfig.model_fields if name not in _NOT_OPTIONS]
+    return [*fields, *LEGACY_OPTIONS, *(f"{kind}.KEY" for kind in RUN_KINDS)]
+
+
+def _is_parameter(key: str) -> bool:
+    kind, dot, rest = key.partition(".")
+    return bool(dot and rest) and kind in RUN_KINDS
+
+
+def _flat_params(params: dict[str, Any], path: Path) -> dict[str, Any]:
+    """The ``params`` section as dotted keys (it may be written nested or dotted)."""
+    flat: dict[str, Any] = {}
+
+    def walk(prefix: str, node: dict[str, Any]) -> None:
+        for key, value in node.items():
+            name = f"{prefix}{key}"
+            if isinstance(value, dict):
+                walk(f"{name}.", value)
+            else:
+                flat[name] = value
+
+    walk("", params)
+    for key in flat:
+        if not _is_parameter(key):
+            kind = key.partition(".")[0]
+            raise InputError(
+                f"unknown parameter section '{kind}'{did_you_mean(kind, RUN_KINDS)}; "
+                f"sections: {', '.join(RUN_KINDS)}",
+                file=path,
+                field=f"params.{key}",
+            )
+    return flat
+
+
+def _nest(values: dict[str, Any]) -> dict[str, Any]:
+    """Run options with dotted parameter keys -> make_config's keyword arguments."""
+    out: dict[str, Any] = {}
+    params: dict[str, Any] = {}
+    for key, value in values.items():
+        if not _is_parameter(key):
+            out[key] = value
+            continue
+        node = params
+        *outer, last = key.split(".")
+        for part in outer:
+            node = node.setdefault(part, {})
+        node[last] = value
+    if params:
+        out["params"] = params
+    return out
 
 
 def _check_keys(keys: Sequence[str], section: str, path: Path) -> None:
@@ -158,7 +213,7 @@ def _check_keys(keys: Sequence[str], section: str, path: Path) -> None:
             raise InputError(
                 f"'{key}' cannot be set here: {_NOT_OPTIONS[key]}", file=path, field=section
             )
-        if key not in allowed:
+        if key not in allowed and not _is_parameter(key):
             kind = "factor" if section == "factors" else "option"
             raise InputError(
                 f"unknown {kind} '{key}'{did_you_mean(key, allowed)}; "
@@ -171,9 +226,12 @@ def _check_keys(keys: Sequence[str], section: str, path: Path) -> None:
 def _levels(model: ExperimentModel, path: Path) -> dict[str, list[Any]]:
     _check_keys(list(model.factors), "factors", path)
     _check_keys(list(model.options), "options", path)
+    params = _flat_params(model.params, path)
     both = sorted(set(model.factors) & set(model.options))
     if both:
         raise InputError(f"'{both[0]}' is both a factor and an option", file=path, field="options")
+    for key in sorted(set(params) & (set(model.factors) | set(model.options))):
+        raise InputError(f"'{key}' is set twice", file=path, field=f"params.{key}")
     levels: dict[str, list[Any]] = {}
     for name, value in model.factors.items():
         values = list(value) if isinstance(value, list) else [value]
@@ -246,20 +304,27 @@ def _label_part(name: str, value: Any) -> str:
         text = f"{value:g}"
     else:
         text = str(value)
+    name = name.rsplit(".", 1)[-1]  # a parameter by its own name: UTILITYgreedy
     return re.sub(r"[^A-Za-z0-9.+-]", "", f"{name.upper().replace('_', '')}{text}")
 
 
-def _build(values: dict[str, Any], levels: dict[str, list[Any]], path: Path) -> RunConfig:
+def _build(
+    values: dict[str, Any], levels: dict[str, list[Any]], path: Path, params: set[str]
+) -> RunConfig:
     try:
-        return make_config(str(path), **values)
+        return make_config(None, **_nest(values))
     except InputError as err:
-        field = err.field or ""
+        field = (err.field or "").removeprefix("params.")
         if field in levels:
             got = repr(values[field])
             message = err.message if got in err.message else f"{err.message}, got {got}"
             raise InputError(message, file=path, field=f"factors.{field}") from None
+        if field in params:
+            raise InputError(err.message, file=path, field=f"params.{field}") from None
         if field and field in values and field != "scenario":
             raise InputError(err.message, file=path, field=f"options.{field}") from None
+        if _is_parameter(field) or field in RUN_KINDS:
+            raise InputError(err.message, file=path, field=field) from None
         combo = ", ".join(f"{k}: {values[k]}" for k in levels)
         raise InputError(
             f"combination {{{combo}}}: {err.message} (drop it with an 'exclude' entry)",
@@ -274,9 +339,11 @@ def _expand(model: ExperimentModel, path: Path, yaml_text: str) -> Experiment:
     _check_exclude(model, levels, path)
     scenarios = _scenarios(model, path)
     base = path.parent
+    params = _flat_params(model.params, path)
+    written = {**model.options, **params}
     options = {
         k: (_resolve_path(v, base, f"options.{k}", path) if k in PATH_FIELDS else v)
-        for k, v in model.options.items()
+        for k, v in written.items()
     }
     for key in PATH_FIELDS:
         for v in levels.get(key, []):
@@ -296,7 +363,9 @@ def _expand(model: ExperimentModel, path: Path, yaml_text: str) -> Experiment:
                     for k, v in chosen.items()
                 },
             }
-            config = _build({"scenario": scenario_path, **given, "seed": 0}, levels, path)
+            config = _build(
+                {"scenario": scenario_path, **given, "seed": 0}, levels, path, set(params)
+            )
             label = _make_label(config, chosen, levels, scenario_name, len(scenarios) > 1)
             if label in labels:
                 raise InputError(
@@ -305,10 +374,10 @@ def _expand(model: ExperimentModel, path: Path, yaml_text: str) -> Experiment:
             # The id covers what was *given* (not defaults), as normalised by RunConfig,
             # with paths as written: stable when RunConfig gains a field, and the same
             # on every machine.
-            dumped = config.model_dump(mode="json", include=set(given))
+            dumped = _given_content(config, given)
             for k in PATH_FIELDS:
                 if k in given:
-                    dumped[k] = str(chosen.get(k, model.options.get(k)))
+                    dumped[k] = str(chosen.get(k, written.get(k)))
             content = {
                 "experiment": name,
                 "base_seed": model.base_seed,
@@ -331,6 +400,21 @@ def _expand(model: ExperimentModel, path: Path, yaml_text: str) -> Experiment:
         base_seed=model.base_seed,
         configurations=tuple(configurations),
     )
+
+
+def _given_content(config: RunConfig, given: dict[str, Any]) -> dict[str, Any]:
+    """What the configuration id covers of the given options, normalised: RunConfig's
+    own fields as it dumps them, legacy options and parameters as JSON values."""
+    fields = {k for k in given if k in RunConfig.model_fields}
+    dumped: dict[str, Any] = config.model_dump(mode="json", include=fields)
+    for key in given.keys() - fields:
+        value = given[key]
+        if key in LEGACY_OPTIONS and isinstance(value, int | float) and not isinstance(value, bool):
+            value = float(value)  # as the RunConfig field of earlier versions dumped it
+        dumped[key] = (
+            value if isinstance(value, str | int | float | bool) or value is None else str(value)
+        )
+    return dumped
 
 
 def _make_label(
