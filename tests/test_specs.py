@@ -179,3 +179,56 @@ def test_a_spec_validates_its_parameters_into_its_model() -> None:
         spec.make_params({"k": -1})
     with pytest.raises(InputError, match="it has k"):
         spec.make_params({"j": 1})
+
+
+def test_sweep_set_adds_fixed_parameters_and_refuses_a_factor(tmp_path: Any) -> None:
+    from mrcomm.experiment.schema import load_experiment
+
+    schema = tmp_path / "s.yaml"
+    schema.write_text(
+        f"scenario: {S1_PATH}\nrepetitions: 1\nfactors: {{behaviour: [lf], network: [ah]}}\n"
+    )
+    plain = load_experiment(schema)
+    greedy = load_experiment(schema, {"behaviour": {"utility": "greedy"}})
+    assert greedy.configurations[0].config.params == {"behaviour": {"utility": "greedy"}}
+    assert greedy.configurations[0].config_id != plain.configurations[0].config_id
+    schema.write_text(schema.read_text() + "params: {network.range_m: 9}\n")
+    with pytest.raises(InputError, match="network.range_m is already set"):
+        load_experiment(schema, {"network": {"range_m": 10}})
+    schema.write_text(
+        f"scenario: {S1_PATH}\nrepetitions: 1\n"
+        "factors: {behaviour: [lf], behaviour.utility: [original, greedy]}\n"
+    )
+    with pytest.raises(InputError, match="behaviour.utility is already set"):
+        load_experiment(schema, {"behaviour": {"utility": "greedy"}})
+
+
+def test_a_new_variant_version_is_a_new_configuration(
+    tmp_path: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from dataclasses import replace
+
+    from mrcomm.experiment.schema import load_experiment
+
+    schema = tmp_path / "s.yaml"
+    schema.write_text(f"scenario: {S1_PATH}\nrepetitions: 1\nfactors: {{behaviour: [nb]}}\n")
+    before = load_experiment(schema).configurations[0]
+    bumped = replace(get_spec("behaviour", "nb"), version=2)
+    monkeypatch.setitem(REGISTRY._specs["behaviour"], "nb", bumped)
+    after = load_experiment(schema).configurations[0]
+    assert after.config.variants()["behaviour"] == "nb-v2"
+    assert after.config_id != before.config_id and after.label == before.label
+
+
+def test_the_report_lists_each_configurations_parameters_and_versions() -> None:
+    import pandas as pd
+
+    from mrcomm.analysis.report import _config_rows
+
+    options = {"params": {"behaviour": {"utility": "greedy", "collision": {"danger_radius": 1.2}}}}
+    options["variants"] = {"behaviour": "lf-v1"}
+    frame = pd.DataFrame([{"config_id": "c", "label": "L", "options": json.dumps(options)}])
+    row = _config_rows(frame)[0]
+    assert row[:2] == ["c", "L"]
+    assert row[2] == "behaviour.collision.danger_radius=1.2, behaviour.utility=greedy"
+    assert row[3] == "behaviour lf-v1"

@@ -10,6 +10,7 @@ atomically: a failure leaves no half-written report behind.
 from __future__ import annotations
 
 import datetime as dt
+import json
 import math
 import platform
 import time
@@ -324,11 +325,12 @@ def build_report(
         "n_runs": len(runs),
         "status": status,
         "errors": _failed_runs(runs),
-        "configs": frame_of(data, "configs")
-        .drop(columns=["options"], errors="ignore")
-        .astype(str)
-        .values.tolist(),
-        "config_columns": [c for c in frame_of(data, "configs").columns if c != "options"],
+        "configs": _config_rows(frame_of(data, "configs")),
+        "config_columns": [
+            *(c for c in frame_of(data, "configs").columns if c != "options"),
+            "parameters",
+            "variants",
+        ],
         "tables": {name: _html_table(name, tables.get(name)) for name in st.TABLE_NAMES},
         "table_titles": TABLE_TITLES,
         "figures": figures,
@@ -373,3 +375,36 @@ def _environment() -> jinja2.Environment:
         trim_blocks=True,
         lstrip_blocks=True,
     )
+
+
+def _config_rows(configs: pd.DataFrame) -> list[list[str]]:
+    """Each configuration's columns, then its variant parameters (``--set`` form) and
+    the versions of its variants, read from its stored options."""
+    rows: list[list[str]] = []
+    for record in configs.to_dict("records"):
+        try:
+            options = json.loads(str(record.get("options") or "{}"))
+        except ValueError:
+            options = {}
+        params = options.get("params") or {}
+        assignments = [
+            f"{kind}.{key}={value}"
+            for kind, section in sorted(params.items())
+            for key, value in sorted(_flatten(section).items())
+        ]
+        variants = options.get("variants") or {}
+        cells = [str(v) for k, v in record.items() if k != "options"]
+        cells.append(", ".join(assignments) or "defaults")
+        cells.append(", ".join(f"{k} {v}" for k, v in sorted(variants.items())))
+        rows.append(cells)
+    return rows
+
+
+def _flatten(section: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in section.items():
+        if isinstance(value, dict):
+            out.update(_flatten(value, f"{prefix}{key}."))
+        else:
+            out[f"{prefix}{key}"] = value
+    return out

@@ -26,6 +26,7 @@ from rich.progress import (
 )
 
 from mrcomm.cli.files import check_writable
+from mrcomm.cli.run_options import SetOpt, parse_assignments
 from mrcomm.errors import InputError
 
 if TYPE_CHECKING:
@@ -60,6 +61,7 @@ def sweep(
     connect_timeout: Annotated[
         float, typer.Option(help="How long to wait for the Dask scheduler, s.")
     ] = 10.0,
+    sets: SetOpt = None,
 ) -> None:
     """Run every configuration x repetition of an experiment (resumable).
 
@@ -75,7 +77,7 @@ def sweep(
     )
     from mrcomm.experiment.schema import load_experiment
 
-    experiment = load_experiment(schema)
+    experiment = load_experiment(schema, parse_assignments(sets))
     if jobs is not None and jobs < 1:
         raise InputError(f"must be at least 1, got {jobs}", field="--jobs")
     if jobs is not None and scheduler is not None:

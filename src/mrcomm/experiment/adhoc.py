@@ -120,6 +120,7 @@ def store_result(
         "mode": mode,
         "scenario": scenario_name,
         "options": options,
+        **config.id_content(),
     }
     config_id = make_config_id(label, content)
     configuration = Configuration(

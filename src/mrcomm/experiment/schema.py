@@ -135,8 +135,10 @@ class Experiment:
         return [c.run(r, self.base_seed) for c in self.configurations for r in range(1, reps + 1)]
 
 
-def load_experiment(path: str | Path) -> Experiment:
-    """Read, validate and expand an experiment schema file (InputError on bad input)."""
+def load_experiment(path: str | Path, params: dict[str, Any] | None = None) -> Experiment:
+    """Read, validate and expand an experiment schema file (InputError on bad input).
+    ``params`` (``sweep --set``) adds fixed variant parameters to the file's ``params``;
+    one the file already sets, as a parameter or a factor, is an error."""
     path = Path(path)
     raw = read_yaml(path)
     if not isinstance(raw, dict):
@@ -150,6 +152,13 @@ def load_experiment(path: str | Path) -> Experiment:
         model = ExperimentModel(**raw)
     except pydantic.ValidationError as err:
         raise validation_error(err, file=path, root=ExperimentModel) from None
+    if params:
+        given = _flat_params(model.params, path)
+        extra = _flat_params(params, path)
+        for key in sorted(extra):
+            if key in given or key in model.factors or key in model.options:
+                raise InputError(f"{key} is already set by {path}", field="--set")
+        model = model.model_copy(update={"params": {**given, **extra}})
     return _expand(model, path, path.read_text(encoding="utf-8"))
 
 
@@ -383,6 +392,7 @@ def _expand(model: ExperimentModel, path: Path, yaml_text: str) -> Experiment:
                 "base_seed": model.base_seed,
                 "scenario": scenario_name,
                 "options": dumped,
+                **config.id_content(),
             }
             config_id = make_config_id(label, content)
             labels[label] = config_id

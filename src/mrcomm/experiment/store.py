@@ -246,6 +246,7 @@ class ResultStore:
                 json.dumps(
                     {
                         **c.config.model_dump(mode="json", exclude={"seed"}),
+                        "variants": c.config.variants(),
                         **c.extra_options,
                     },
                     sort_keys=True,

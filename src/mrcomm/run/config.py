@@ -94,6 +94,13 @@ class RunConfig(BaseModel):
         """kind -> ``name-vN`` of every chosen variant (recorded with each run)."""
         return {kind: self.spec(kind).versioned for kind in RUN_KINDS}
 
+    def id_content(self) -> dict[str, str]:
+        """What a configuration id adds for its variants: the versions of those past
+        their first (a new version of a variant is a new configuration; ids of
+        configurations on first versions stay what they always were)."""
+        bumped = {k: v for k, v in self.variants().items() if not v.endswith("-v1")}
+        return {"variants": json.dumps(bumped, sort_keys=True)} if bumped else {}
+
     def label(self) -> str:
         """Short configuration label, e.g. ``AH_NB_SPL25_SSD``."""
         spl = f"{self.spl:g}"
