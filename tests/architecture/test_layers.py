@@ -1,0 +1,158 @@
+"""The package's shape: layers depend downwards only, and no import circles.
+
+Read statically (``ast``) from ``src/mrcomm``: every ``import`` outside
+``if TYPE_CHECKING:`` blocks counts for the layering; only module-level ones (run at
+import time) count for circles.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[2] / "src" / "mrcomm"
+
+#: Rank of each top-level part of the package: a module may import only parts of a
+#: lower or equal rank (equal: siblings that do not form circles).
+RANKS = {
+    "errors": 0,
+    "fileio": 0,
+    "seeding": 0,
+    "specs": 0,
+    "ports": 2,  # the agents' ports speak in messages and poses
+    "world": 1,
+    "messaging": 2,
+    "net": 2,
+    "robot": 2,
+    "metrics": 2,
+    "agents": 3,
+    "run": 4,
+    "sim": 5,
+    "live": 5,
+    "experiment": 6,
+    "analysis": 6,
+    "testing": 6,
+    "cli": 7,
+}
+
+
+def module_name(path: Path) -> str:
+    """``src/mrcomm/sim/mission.py`` -> ``mrcomm.sim.mission``."""
+    parts = path.relative_to(SRC.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES: dict[str, Path] = {}
+
+
+def part_of(module: str) -> str | None:
+    pieces = module.split(".")
+    return pieces[1] if len(pieces) > 1 and pieces[0] == "mrcomm" else None
+
+
+def _is_type_checking(node: ast.If) -> bool:
+    test = node.test
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
+
+
+def imports(path: Path, *, top_level_only: bool) -> set[str]:
+    """The mrcomm modules ``path`` imports (``top_level_only``: not those inside
+    functions, which run only when called)."""
+    module = module_name(path)
+    package = module if path.name == "__init__.py" else module.rsplit(".", 1)[0]
+    found: set[str] = set()
+
+    def add(base: str, names: list[str]) -> None:
+        if not base.startswith("mrcomm"):
+            return
+        found.add(base)
+        for name in names:  # `from mrcomm.x import y` may import the module mrcomm.x.y
+            if f"{base}.{name}" in MODULES:
+                found.add(f"{base}.{name}")
+
+    def visit(node: ast.AST) -> None:
+        if isinstance(node, ast.If) and _is_type_checking(node):
+            for child in node.orelse:
+                visit(child)
+            return
+        if top_level_only and isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+            return
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                add(alias.name, [])
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join([*anchor, *([base] if base else [])])
+            add(base, [a.name for a in node.names])
+        for child in ast.iter_child_nodes(node):
+            visit(child)
+
+    visit(ast.parse(path.read_text(encoding="utf-8")))
+    return found
+
+
+MODULES.update({module_name(p): p for p in sorted(SRC.rglob("*.py"))})
+
+
+def test_the_import_reader_sees_imports() -> None:
+    mission = imports(MODULES["mrcomm.sim.mission"], top_level_only=True)
+    assert {"mrcomm.run.config", "mrcomm.run.wiring"} <= mission
+    everything = imports(MODULES["mrcomm.cli.run_cmd"], top_level_only=False)
+    assert "mrcomm.analysis.mission_plot" in everything  # imported inside a function
+    assert "mrcomm.analysis.mission_plot" not in imports(
+        MODULES["mrcomm.cli.run_cmd"], top_level_only=True
+    )
+
+
+def test_every_part_has_a_rank() -> None:
+    parts = {part_of(m) for m in MODULES} - {None}
+    assert parts <= set(RANKS), sorted(parts - set(RANKS))
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_layers_depend_downwards_only(module: str) -> None:
+    own = part_of(module)
+    if own is None:
+        return
+    upward = [
+        target
+        for target in sorted(imports(MODULES[module], top_level_only=False))
+        if (part := part_of(target)) is not None and RANKS[part] > RANKS[own]
+    ]
+    assert not upward, f"{module} ({own}) imports upwards: {upward}"
+
+
+def test_no_import_circles() -> None:
+    graph = {
+        m: {t for t in imports(p, top_level_only=True) if t in MODULES and t != m}
+        for m, p in MODULES.items()
+    }
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def walk(node: str) -> list[str] | None:
+        state[node] = 1
+        stack.append(node)
+        for nxt in sorted(graph[node]):
+            if state.get(nxt) == 1:
+                return [*stack[stack.index(nxt) :], nxt]
+            if nxt not in state and (cycle := walk(nxt)):
+                return cycle
+        stack.pop()
+        state[node] = 2
+        return None
+
+    for start in sorted(graph):
+        if start not in state and (cycle := walk(start)):
+            pytest.fail("import circle: " + " -> ".join(cycle))
+
+
+def test_no_module_over_600_lines() -> None:
+    long = {m: n for m, p in MODULES.items() if (n := len(p.read_text().splitlines())) > 600}
+    assert not long, long
