@@ -193,13 +193,13 @@ def test_sweep_set_adds_fixed_parameters_and_refuses_a_factor(tmp_path: Any) -> 
     assert greedy.configurations[0].config.params == {"behaviour": {"utility": "greedy"}}
     assert greedy.configurations[0].config_id != plain.configurations[0].config_id
     schema.write_text(schema.read_text() + "params: {network.range_m: 9}\n")
-    with pytest.raises(InputError, match="network.range_m is already set"):
+    with pytest.raises(InputError, match=r"network\.range_m is already set"):
         load_experiment(schema, {"network": {"range_m": 10}})
     schema.write_text(
         f"scenario: {S1_PATH}\nrepetitions: 1\n"
         "factors: {behaviour: [lf], behaviour.utility: [original, greedy]}\n"
     )
-    with pytest.raises(InputError, match="behaviour.utility is already set"):
+    with pytest.raises(InputError, match=r"behaviour\.utility is already set"):
         load_experiment(schema, {"behaviour": {"utility": "greedy"}})
 
 

@@ -19,16 +19,11 @@ from mrcomm.messaging.messages import (
     TaskState,
     TaskStatus,
 )
+from mrcomm.messaging.topics import Lane, lane_of
+from mrcomm.net.delivery import DeliveryPolicy
 from mrcomm.net.inprocess import InProcessNetwork
 from mrcomm.net.network import AdHoc
-from mrcomm.net.zenoh_bus import (
-    Lane,
-    LinkRules,
-    PositionBook,
-    Presence,
-    ZenohBus,
-    lane_of,
-)
+from mrcomm.net.zenoh_bus import LinkRules, PositionBook, Presence, ZenohBus
 from mrcomm.seeding import stream
 
 from .helpers import drain, mesh_options, nodes, wait_for
@@ -122,7 +117,7 @@ def test_loss_draws_match_the_in_process_bus_exactly() -> None:
     # The in-process bus with the same receiver stream decides the same way.
     ref = InProcessNetwork(
         ["robot_1", "robot_2"],
-        loss_percent=50.0,
+        policy=DeliveryPolicy(50.0),
         loss_rngs={a: stream(7, "loss", a) for a in ("robot_1", "robot_2")},
     )
     ref_got: list[Message] = []

@@ -13,6 +13,7 @@ from mrcomm.messaging.messages import (
     PoseMsg,
     UtilityMsg,
 )
+from mrcomm.net.delivery import DeliveryPolicy
 from mrcomm.net.inprocess import InProcessNetwork
 from mrcomm.net.links import LinkModel
 from mrcomm.net.network import AdHoc, Wlan
@@ -25,7 +26,7 @@ IDS = ("a", "b", "c")
 
 def _network(loss: float, seed: int = 0) -> InProcessNetwork:
     return InProcessNetwork(
-        IDS, loss_percent=loss, loss_rngs={i: stream(seed, "loss", i) for i in IDS}
+        IDS, policy=DeliveryPolicy(loss), loss_rngs={i: stream(seed, "loss", i) for i in IDS}
     )
 
 

@@ -23,13 +23,8 @@ TOPIC_UTILITY = "utility"
 TOPIC_ROLE = "role"
 TOPIC_RSSI = "rssi"
 TOPIC_AON = "aon"
-#: Presence of agents that publish no pose (the task assigner), like a Zenoh liveliness
-#: token: not subject to simulated packet loss, but cut by range like everything else.
 TOPIC_HEARTBEAT = "heartbeat"
-
-#: Topics that simulated packet loss (SPL) applies to (SPEC §3). AON carries task
-#: status, so it is perturbed too.
-LOSSY_TOPICS = frozenset({TOPIC_POSE, TOPIC_TASK_STATUS, TOPIC_AON})
+# How the network treats each topic: mrcomm.messaging.topics.
 
 
 class TaskState(StrEnum):

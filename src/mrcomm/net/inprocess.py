@@ -2,25 +2,20 @@
 
 Every agent gets an endpoint implementing the :class:`~mrcomm.ports.Bus` port. Messages
 published during one simulation step are delivered at the start of the next, in publish
-order. Network effects are applied by the *receiving* side, as in the original and as in
-live mode, so every dropped message is counted where it was lost:
-
-1. range: the link between sender and receiver must be connected (AH range limit);
-2. simulated packet loss (SPL X %): each receiver drops X % of the messages on lossy
-   topics, independently, from its own seeded random stream.
-
-Topics in ``exempt_topics`` (the task assignment: all agents start with perfect
-communication) are never perturbed.
+order. Whether each reaches each receiver is decided on the receiving side by the run's
+:class:`~mrcomm.net.delivery.DeliveryPolicy` (range cut from the step's link matrix,
+then simulated packet loss from the receiver's own seeded stream), the same policy the
+Zenoh bus applies in live mode.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-from mrcomm.messaging.messages import LOSSY_TOPICS, TOPIC_ASSIGNMENT, Message
+from mrcomm.messaging.messages import Message
+from mrcomm.net.delivery import RECEIVED, DeliveryPolicy, LossStream, TopicCounts
 from mrcomm.ports import Handler
 
 #: Observer of every delivery decision: (now, topic, sender, receiver, message, outcome)
@@ -29,43 +24,6 @@ DeliveryObserver = Callable[[float, str, str, str, Message, str], None]
 
 #: Observer of every publication: (stamp, topic, sender, message).
 PublishObserver = Callable[[float, str, str, Message], None]
-
-_UNIFORM_BATCH = 1024
-
-
-@dataclass
-class TopicCounts:
-    """Message counts of one agent on one topic."""
-
-    sent: int = 0
-    received: int = 0
-    dropped_loss: int = 0
-    dropped_range: int = 0
-
-    def as_dict(self) -> dict[str, int]:
-        return {
-            "sent": self.sent,
-            "received": self.received,
-            "dropped_loss": self.dropped_loss,
-            "dropped_range": self.dropped_range,
-        }
-
-
-class _LossStream:
-    """A receiver's stream of uniform draws, refilled in batches (one draw per message)."""
-
-    def __init__(self, rng: np.random.Generator) -> None:
-        self._rng = rng
-        self._buffer: list[float] = []
-        self._next = 0
-
-    def draw(self) -> float:
-        if self._next >= len(self._buffer):
-            self._buffer = self._rng.random(_UNIFORM_BATCH).tolist()
-            self._next = 0
-        value = self._buffer[self._next]
-        self._next += 1
-        return value
 
 
 class InProcessEndpoint:
@@ -94,18 +52,12 @@ class InProcessNetwork:
         self,
         agent_ids: Sequence[str],
         *,
-        loss_percent: float,
+        policy: DeliveryPolicy,
         loss_rngs: Mapping[str, np.random.Generator],
-        lossy_topics: Iterable[str] = LOSSY_TOPICS,
-        exempt_topics: Iterable[str] = (TOPIC_ASSIGNMENT,),
     ) -> None:
-        if not 0.0 <= loss_percent <= 100.0:
-            raise ValueError("loss_percent must be within 0-100")
         self.ids: tuple[str, ...] = tuple(agent_ids)
-        self._loss = loss_percent / 100.0
-        self._lossy = frozenset(lossy_topics)
-        self._exempt = frozenset(exempt_topics)
-        self._streams = [_LossStream(loss_rngs[a]) for a in self.ids]
+        self.policy = policy
+        self._streams = [LossStream(loss_rngs[a]) for a in self.ids]
         # topic -> receiver index -> handlers
         self._subs: dict[str, dict[int, list[Handler]]] = {}
         self._outbox: list[tuple[int, str, Message]] = []
@@ -132,33 +84,23 @@ class InProcessNetwork:
         handlers during delivery wait for the next call."""
         self._now = now
         outbox, self._outbox = self._outbox, []
+        decide = self.policy.decide
+        streams = self._streams
         for sender, topic, message in outbox:
             receivers = self._subs.get(topic)
             if not receivers:
                 continue
-            exempt = topic in self._exempt
-            lossy = (not exempt) and self._loss > 0.0 and topic in self._lossy
             links = self._connected[sender]
             for receiver, handlers in receivers.items():
                 if receiver == sender:
                     continue
-                outcome = "received"
-                if not exempt and not links[receiver]:
-                    outcome = "dropped_range"
-                elif lossy and self._streams[receiver].draw() < self._loss:
-                    outcome = "dropped_loss"
-                counts = self._count(receiver, topic)
-                if outcome == "received":
-                    counts.received += 1
-                elif outcome == "dropped_loss":
-                    counts.dropped_loss += 1
-                else:
-                    counts.dropped_range += 1
+                outcome = decide(topic, links[receiver], streams[receiver])
+                self._count(receiver, topic).count(outcome)
                 if self.observer is not None:
                     self.observer(
                         now, topic, self.ids[sender], self.ids[receiver], message, outcome
                     )
-                if outcome == "received":
+                if outcome == RECEIVED:
                     for handler in handlers:
                         handler(message)
 
@@ -183,11 +125,7 @@ class InProcessNetwork:
         """Totals per topic over all agents."""
         totals: dict[str, TopicCounts] = {}
         for (_, topic), c in self.counts.items():
-            t = totals.setdefault(topic, TopicCounts())
-            t.sent += c.sent
-            t.received += c.received
-            t.dropped_loss += c.dropped_loss
-            t.dropped_range += c.dropped_range
+            totals.setdefault(topic, TopicCounts()).add(c)
         return {topic: c.as_dict() for topic, c in sorted(totals.items())}
 
     def counts_by_agent(self) -> dict[str, dict[str, dict[str, int]]]:

@@ -44,16 +44,16 @@ import numpy as np
 
 from mrcomm.errors import InputError
 from mrcomm.messaging.messages import (
-    LOSSY_TOPICS,
-    TOPIC_ASSIGNMENT,
     Message,
     PoseMsg,
     decode,
     encode,
 )
-from mrcomm.net.inprocess import DeliveryObserver, TopicCounts
+from mrcomm.messaging.topics import AGENT_TOPICS, Lane, lane_of
+from mrcomm.net.delivery import RECEIVED, DeliveryPolicy, LossStream, TopicCounts
+from mrcomm.net.inprocess import DeliveryObserver
 from mrcomm.net.network import NetworkModel, Wlan
-from mrcomm.net.zenoh_config import ALL_TOPICS, Lane, ZenohOptions, build_config, lane_of
+from mrcomm.net.zenoh_config import ZenohOptions, build_config
 from mrcomm.ports import Handler
 
 Point = tuple[float, float]
@@ -311,16 +311,15 @@ def _open_error(err: BaseException) -> str:
 
 @dataclass(frozen=True)
 class LinkRules:
-    """The receiver-side network model of a run (as in simulation)."""
+    """The receiver-side network model of a run, as in simulation: the network model's
+    range cut and the delivery policy (:mod:`mrcomm.net.delivery`)."""
 
     network: NetworkModel = field(default_factory=Wlan)
     loss_percent: float = 0.0
-    lossy_topics: frozenset[str] = LOSSY_TOPICS
-    exempt_topics: frozenset[str] = frozenset({TOPIC_ASSIGNMENT})
+    policy: DeliveryPolicy = field(init=False)
 
     def __post_init__(self) -> None:
-        if not 0.0 <= self.loss_percent <= 100.0:
-            raise ValueError("loss_percent must be within 0-100")
+        object.__setattr__(self, "policy", DeliveryPolicy(self.loss_percent))
 
 
 @dataclass
@@ -350,37 +349,20 @@ class PositionBook:
         return self.heard.get(agent)
 
 
-class _LossStream:
-    """A receiver's uniform draws, one per lossy message, in batches."""
-
-    def __init__(self, rng: np.random.Generator) -> None:
-        self._rng = rng
-        self._buffer: list[float] = []
-        self._next = 0
-
-    def draw(self) -> float:
-        if self._next >= len(self._buffer):
-            self._buffer = self._rng.random(1024).tolist()
-            self._next = 0
-        value = self._buffer[self._next]
-        self._next += 1
-        return value
-
-
 class ZenohEndpoint:
     """One agent's endpoint on the Zenoh bus (implements the Bus port)."""
 
     def __init__(self, bus: ZenohBus, owner: str, rng: np.random.Generator) -> None:
         self._bus = bus
         self._owner = owner
-        self._loss = _LossStream(rng)
+        self._loss = LossStream(rng)
         self._handlers: dict[str, list[Handler]] = {}
         self.counts: dict[str, TopicCounts] = {}
         #: Hook between perturbation and handlers: return the message to deliver (or a
         #: replacement), or None to hold it back (used to resynchronise a restart).
         self.gate: Callable[[str, Message], Message | None] | None = None
         node = bus.node
-        for topic in ALL_TOPICS:
+        for topic in AGENT_TOPICS:
             node.prepare(node.key(owner, topic), lane_of(topic))
 
     @property
@@ -406,17 +388,11 @@ class ZenohEndpoint:
         if not handlers or sender == self._owner:
             return
         outcome = self._bus._decide(self, topic, sender)
-        counts = self._count(topic)
-        if outcome == "received":
-            counts.received += 1
-        elif outcome == "dropped_loss":
-            counts.dropped_loss += 1
-        else:
-            counts.dropped_range += 1
+        self._count(topic).count(outcome)
         observer = self._bus.observer
         if observer is not None:
             observer(self._bus.now, topic, sender, self._owner, message, outcome)
-        if outcome != "received":
+        if outcome != RECEIVED:
             return
         if self.gate is not None:
             gated = self.gate(topic, message)
@@ -479,15 +455,10 @@ class ZenohBus:
             self.node.listen(f"{self.node.prefix}/*/{topic}", "bus", decode)
 
     def _decide(self, receiver: ZenohEndpoint, topic: str, sender: str) -> str:
-        rules = self.rules
-        if topic in rules.exempt_topics:
-            return "received"
-        if not self._in_range(sender, receiver.owner):
-            return "dropped_range"
-        lossy = rules.loss_percent > 0.0 and topic in rules.lossy_topics
-        if lossy and receiver._loss.draw() < rules.loss_percent / 100.0:
-            return "dropped_loss"
-        return "received"
+        policy = self.rules.policy
+        # Exempt topics need no position look-up: the policy ignores the range for them.
+        connected = policy.exempt(topic) or self._in_range(sender, receiver.owner)
+        return policy.decide(topic, connected, receiver._loss)
 
     def _in_range(self, sender: str, receiver: str) -> bool:
         a = self.positions.position(sender)

@@ -3,7 +3,8 @@
 Turns the command-line choices (listen / connect endpoints, multicast scouting on or
 off, TCP or UDP, optional mutual TLS and an access-control list) or a Zenoh JSON5
 config file into a ``zenoh.Config`` for a *peer* (no router: every robot its own
-node), and fixes the quality of service of every topic (:class:`Lane`). Every bad
+node), and fixes the quality of service of every topic (the lanes of
+:mod:`mrcomm.messaging.topics`). Every bad
 value is a one-line :class:`~mrcomm.errors.InputError` naming the option, raised
 before any session is opened.
 
@@ -19,20 +20,10 @@ from __future__ import annotations
 import json
 import re
 from dataclasses import dataclass, field
-from enum import Enum
 from pathlib import Path
 from typing import Any
 
 from mrcomm.errors import InputError
-from mrcomm.messaging.messages import (
-    TOPIC_AON,
-    TOPIC_ASSIGNMENT,
-    TOPIC_POSE,
-    TOPIC_ROLE,
-    TOPIC_RSSI,
-    TOPIC_TASK_STATUS,
-    TOPIC_UTILITY,
-)
 
 #: Transport protocols a live node may use.
 PROTOCOLS = ("tcp", "udp", "tls")
@@ -53,33 +44,6 @@ _ACL_MESSAGES = [
     "declare_liveliness_subscriber",
     "liveliness_query",
 ]
-
-
-#: Every topic an agent may publish (their publishers are declared up front).
-ALL_TOPICS = (
-    TOPIC_ASSIGNMENT,
-    TOPIC_POSE,
-    TOPIC_TASK_STATUS,
-    TOPIC_AON,
-    TOPIC_UTILITY,
-    TOPIC_ROLE,
-)
-
-
-class Lane(Enum):
-    """Quality of service of a publication."""
-
-    BEST_EFFORT = "best_effort"  # pose, clock: newest wins, dropped under congestion
-    STATUS = "status"  # task status, AON: reliable, blocking, own priority
-    CONTROL = "control"  # assignment, roles, base commands: reliable, blocking
-
-
-def lane_of(topic: str) -> Lane:
-    if topic in (TOPIC_POSE, TOPIC_RSSI):
-        return Lane.BEST_EFFORT
-    if topic in (TOPIC_TASK_STATUS, TOPIC_AON):
-        return Lane.STATUS
-    return Lane.CONTROL
 
 
 @dataclass(frozen=True)

@@ -23,6 +23,7 @@ from mrcomm.agents.executor import TaskExecutor
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robot_metrics
 from mrcomm.metrics.timeline import Timeline
+from mrcomm.net.delivery import DeliveryPolicy
 from mrcomm.net.inprocess import InProcessNetwork
 from mrcomm.net.links import LinkState
 from mrcomm.run.config import RunConfig
@@ -52,7 +53,7 @@ class Mission:
         seed = config.seed
         self.network = InProcessNetwork(
             self.node_ids,
-            loss_percent=config.spl,
+            policy=DeliveryPolicy(config.spl),
             loss_rngs={a: stream(seed, "loss", a) for a in self.node_ids},
         )
         self.links, self.link_recorder = make_links(self.world, config)
