@@ -1,6 +1,10 @@
 """Restructurings change no result: the S1 runs and the live mission's merged result
 recorded before the run-kernel restructuring (``tests/golden/golden.py``) are
-reproduced exactly."""
+reproduced exactly.
+
+One change is deliberate: the live result's AON total now has ``left_out_reports``
+(0 here), as the simulated result always had — the two assemblers had drifted, and
+there is one now (``run/assemble.py``)."""
 
 from __future__ import annotations
 

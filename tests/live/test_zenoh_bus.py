@@ -8,7 +8,6 @@ import threading
 import numpy as np
 import pytest
 
-from mrcomm.live.collect import sum_counts
 from mrcomm.messaging.messages import (
     TOPIC_ASSIGNMENT,
     TOPIC_POSE,
@@ -24,6 +23,7 @@ from mrcomm.net.delivery import DeliveryPolicy
 from mrcomm.net.inprocess import InProcessNetwork
 from mrcomm.net.network import AdHoc
 from mrcomm.net.zenoh_bus import LinkRules, PositionBook, Presence, ZenohBus
+from mrcomm.run.assemble import sum_counts
 from mrcomm.seeding import stream
 
 from .helpers import drain, mesh_options, nodes, wait_for

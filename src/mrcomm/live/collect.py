@@ -19,8 +19,6 @@ stepped on their host's clock, how that clock fared (``host_clock``).
 from __future__ import annotations
 
 import json
-import math
-from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -28,11 +26,11 @@ from typing import Any
 import numpy as np
 
 from mrcomm.agents.assignment import round_robin
-from mrcomm.agents.behaviours import behaviour_class
 from mrcomm.errors import InputError
 from mrcomm.live.protocol import WORLD_ID
-from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robot_metrics
+from mrcomm.messaging.aon_state import AON_COUNTERS
 from mrcomm.metrics.timeline import Event, Interval, Timeline
+from mrcomm.run.assemble import AonAgentFacts, RobotTruth, RunFacts, assemble
 from mrcomm.run.config import make_config
 from mrcomm.run.result import MissionResult
 from mrcomm.world.scenario import load_scenario
@@ -110,78 +108,43 @@ def collect(record_dir: Path) -> tuple[MissionResult, dict[str, Any]]:
             by_process.setdefault(j.process, []).append(j)
 
     timelines = {rid: _timeline(rid, by_process.get(rid, []), end) for rid in robot_ids}
-    received = _assigner_receipts(journals)
-    agenda = round_robin(scenario.tasks, robot_ids)
-    failed_pairs = [
-        (t.task_id, rid)
-        for rid in robot_ids
-        for t in agenda[rid]
-        if (t.task_id, rid) not in received
-    ]
-    uses_aon = behaviour_class(run.behaviour).uses_aon
-    robots: dict[str, dict[str, Any]] = {}
     truth_robots = truth.get("robots", {})
-    for rid in robot_ids:
-        tr = truth_robots.get(rid, {})
-        facts = RobotFacts(
+    robots = {
+        rid: RobotTruth(
             distance=float(tr.get("distance", 0.0)),
             min_separation=tr.get("min_separation"),
             max_separation=tr.get("max_separation"),
-            tasks_assigned=len(agenda[rid]),
-            tasks_failed=sum(1 for _, r in failed_pairs if r == rid),
+            replans=tr.get("replans"),
+            recoveries=tr.get("recoveries"),
         )
-        metrics = robot_metrics(timelines[rid], facts)
-        if uses_aon:
-            metrics.update(lf_metrics(timelines[rid]))
-        metrics["failed_tasks"] = [t for t, r in failed_pairs if r == rid]
-        metrics["replans"] = tr.get("replans")
-        metrics["recoveries"] = tr.get("recoveries")
-        robots[rid] = _rounded(metrics)
-    failed_tasks = list(dict.fromkeys(t for t, _ in failed_pairs))
-    mission = mission_metrics(
-        robots, timelines, tasks_total=len(scenario.tasks), failed_tasks=failed_tasks
-    )
-    mission["timed_out"] = timed_out
-    mission["end_time"] = round(end, 6)
-    by_agent = _counts_by_agent(journals)
-    config = run.model_dump(mode="json")
-    config["label"] = run.label()
-    config["scenario_name"] = scenario.name
-    config["mode"] = "live"
-    config["speed"] = start.get("speed")
-    result = MissionResult(
-        config=config,
-        mission=_rounded(mission),
-        robots=robots,
-        messages=sum_counts(by_agent.values()),
-        messages_by_agent=by_agent,
-        aon=_aon_summary(journals, timelines),
-        links=truth.get("links", {}),
-        sim_time_s=round(end, 6),
-        wall_time_s=float(truth.get("wall_time", 0.0)),
-        timelines=timelines,
-        trajectories=_trajectories(world, robot_ids),
-        scenario=scenario,
-        rssi_series=[
-            (float(line["t"]), str(a), str(b), float(v))
-            for line in world.of("rssi")
-            for a, b, v in line["v"]
-        ],
+        for rid in robot_ids
+        for tr in [truth_robots.get(rid, {})]
+    }
+    result = assemble(
+        RunFacts(
+            config=run,
+            scenario=scenario,
+            end_time=end,
+            finished=not timed_out,
+            wall_time_s=float(truth.get("wall_time", 0.0)),
+            timelines=timelines,
+            # The assigner's round robin, as it assigned (assignment is not perturbed).
+            agenda=round_robin(scenario.tasks, robot_ids),
+            received=_assigner_receipts(journals),
+            robots=robots,
+            counts_by_agent=_counts_by_agent(journals),
+            aon=_aon_facts(journals),
+            links=truth.get("links", {}),
+            trajectories=_trajectories(world, robot_ids),
+            rssi_series=[
+                (float(line["t"]), str(a), str(b), float(v))
+                for line in world.of("rssi")
+                for a, b, v in line["v"]
+            ],
+            config_extra={"mode": "live", "speed": start.get("speed")},
+        )
     )
     return result, _live_report(journals, world, by_process)
-
-
-def sum_counts(per_agent: Iterable[Mapping[str, Mapping[str, int]]]) -> dict[str, dict[str, int]]:
-    """Totals per topic over several agents' counts."""
-    totals: dict[str, dict[str, int]] = {}
-    for counts in per_agent:
-        for topic, c in counts.items():
-            t = totals.setdefault(
-                topic, {"sent": 0, "received": 0, "dropped_loss": 0, "dropped_range": 0}
-            )
-            for k in t:
-                t[k] += int(c.get(k, 0))
-    return dict(sorted(totals.items()))
 
 
 # -- timelines -------------------------------------------------------------------------
@@ -248,45 +211,23 @@ def _counts_by_agent(journals: list[JournalData]) -> dict[str, dict[str, dict[st
     return {a: dict(sorted(t.items())) for a, t in sorted(out.items())}
 
 
-def _aon_summary(journals: list[JournalData], timelines: dict[str, Timeline]) -> dict[str, Any]:
-    per_agent: dict[str, dict[str, Any]] = {}
-    keys = (
-        "publications",
-        "resend_publications",
-        "replies",
-        "restarts",
-        "deliveries",
-        "finished",
-        "left_out_reports",
-    )
-    times: dict[str, list[float]] = {}
+def _aon_facts(journals: list[JournalData]) -> dict[str, AonAgentFacts]:
+    """Each agent's AON statistics: counters summed over its incarnations (each
+    journal's last record), pending from the latest, every finish time."""
+    out: dict[str, AonAgentFacts] = {}
     for j in journals:
         last: dict[str, dict[str, Any]] = {}
         for line in j.of("aon"):
             last[line["agent"]] = line
         for agent, line in last.items():
-            row = per_agent.setdefault(agent, {k: 0 for k in (*keys, "pending")})
-            for k in keys:
-                row[k] += int(line.get(k, 0))
-            row["pending"] = int(line.get("pending", 0))  # the latest incarnation's
-            times.setdefault(agent, []).extend(float(x) for x in line.get("finish_times", []))
-    if not per_agent:
-        return {}
-    for agent, row in per_agent.items():
-        ts = times.get(agent, [])
-        row["mean_finish_time"] = round(sum(ts) / len(ts), 6) if ts else None
-        row["max_finish_time"] = round(max(ts), 6) if ts else None
-    rows = per_agent.values()
-    finish = [r["max_finish_time"] for r in rows if r["max_finish_time"] is not None]
-    total: dict[str, Any] = {
-        k: sum(r[k] for r in rows)
-        for k in ("publications", "resend_publications", "replies", "restarts", "pending")
-    }
-    total["statuses_sent"] = sum(
-        1 for tl in timelines.values() for e in tl.events if e.label == "task_completed"
-    )
-    total["max_finish_time"] = max(finish) if finish else None
-    return {"total": total, "agents": dict(sorted(per_agent.items()))}
+            facts = out.setdefault(
+                agent, AonAgentFacts(counters=dict.fromkeys(AON_COUNTERS, 0), pending=0)
+            )
+            for k in AON_COUNTERS:
+                facts.counters[k] += int(line.get(k, 0))
+            facts.pending = int(line.get("pending", 0))  # the latest incarnation's
+            facts.finish_times.extend(float(x) for x in line.get("finish_times", []))
+    return out
 
 
 def _trajectories(world: JournalData, robot_ids: tuple[str, ...]) -> dict[str, list[Any]]:
@@ -376,13 +317,6 @@ def _percentiles(samples: list[float]) -> dict[str, Any]:
         "p95": round(float(np.percentile(a, 95)), 3),
         "p99": round(float(np.percentile(a, 99)), 3),
         "max": round(float(a.max()), 3),
-    }
-
-
-def _rounded(metrics: dict[str, Any]) -> dict[str, Any]:
-    return {
-        k: (round(v, 6) if isinstance(v, float) and math.isfinite(v) else v)
-        for k, v in metrics.items()
     }
 
 

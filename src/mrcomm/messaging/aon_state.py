@@ -139,7 +139,7 @@ class AonStats:
     #: Finish reports naming left-out members.
     left_out_reports: int = 0
 
-    def counters(self) -> dict[str, int]:
+    def counters(self) -> dict[str, int]:  # keys: AON_COUNTERS
         """The integer counters, by name (for results and journals)."""
         return {
             "publications": self.publications,
@@ -153,3 +153,15 @@ class AonStats:
 
     #: Seconds from first holding a message to its (first) finish, per message.
     finish_times: dict[MessageId, float] = field(default_factory=dict)
+
+
+#: The names of :meth:`AonStats.counters`, as results and journals carry them.
+AON_COUNTERS = (
+    "publications",
+    "resend_publications",
+    "replies",
+    "restarts",
+    "deliveries",
+    "finished",
+    "left_out_reports",
+)

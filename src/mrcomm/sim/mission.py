@@ -16,16 +16,14 @@ assembled once by :meth:`Mission.result`.
 from __future__ import annotations
 
 import time
-from typing import Any
 
 from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
 from mrcomm.agents.executor import TaskExecutor
-from mrcomm.metrics import labels as L
-from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robot_metrics
 from mrcomm.metrics.timeline import Timeline
 from mrcomm.net.delivery import DeliveryPolicy
 from mrcomm.net.inprocess import InProcessNetwork
 from mrcomm.net.links import LinkState
+from mrcomm.run.assemble import AonAgentFacts, RobotTruth, RunFacts, assemble
 from mrcomm.run.config import RunConfig
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.result import MissionResult
@@ -155,97 +153,48 @@ class Mission:
         self._sample_trajectories(end)
         for tl in self.timelines.values():
             tl.close_all(end)
-        failed_pairs = self.assigner.failed()
-        robots: dict[str, dict[str, Any]] = {}
+        robots: dict[str, RobotTruth] = {}
         for i, rid in enumerate(self.robot_ids):
             closest, furthest = self.link_recorder.separation(i)
-            facts = RobotFacts(
-                distance=round(self.bases[rid].odometry_distance, 6),
+            base = self.bases[rid]
+            robots[rid] = RobotTruth(
+                distance=round(base.odometry_distance, 6),
                 min_separation=closest,
                 max_separation=furthest,
-                tasks_assigned=len(self.assigner.agenda[rid]),
-                tasks_failed=sum(1 for _, robot in failed_pairs if robot == rid),
+                replans=base.replans,
+                recoveries=base.recoveries,
             )
-            metrics = robot_metrics(self.timelines[rid], facts)
-            if self.executors[rid].uses_aon:
-                metrics.update(lf_metrics(self.timelines[rid]))
-            metrics["failed_tasks"] = [t for t, robot in failed_pairs if robot == rid]
-            metrics["replans"] = getattr(self.bases[rid], "replans", None)
-            metrics["recoveries"] = getattr(self.bases[rid], "recoveries", None)
-            robots[rid] = _rounded(metrics)
-        mission = mission_metrics(
-            robots,
-            self.timelines,
-            tasks_total=len(self.world.scenario.tasks),
-            failed_tasks=self.assigner.failed_tasks(),
-        )
-        mission["timed_out"] = not self.finished
-        aon = self._aon_summary()
-        mission["end_time"] = round(end, 6)
-        config = self.config.model_dump(mode="json")
-        config["label"] = self.config.label()
-        config["scenario_name"] = self.world.scenario.name
-        return MissionResult(
-            config=config,
-            mission=_rounded(mission),
-            robots=robots,
-            messages=self.network.counts_by_topic(),
-            messages_by_agent=self.network.counts_by_agent(),
-            aon=aon,
-            links=self.link_recorder.summaries(),
-            sim_time_s=round(end, 6),
-            wall_time_s=self._wall,
-            timelines=self.timelines,
-            trajectories=self.trajectories,
-            scenario=self.world.scenario,
-            rssi_series=[
-                (round(t, 3), a, b, round(v, 3)) for t, a, b, v in self.link_recorder.rssi_series
-            ],
-        )
-
-    def _aon_summary(self) -> dict[str, Any]:
-        """AON statistics per agent and in total (empty when statuses go plain)."""
         endpoints = {rid: getattr(e, "aon", None) for rid, e in self.executors.items()}
         endpoints[ASSIGNER_ID] = self.assigner.aon
-        per_agent: dict[str, Any] = {}
-        for agent, aon in endpoints.items():
-            if aon is None:
-                continue
-            st = aon.stats
-            times = list(st.finish_times.values())
-            per_agent[agent] = {
-                **st.counters(),
-                "pending": len(aon.pending_ids()),
-                "mean_finish_time": round(sum(times) / len(times), 6) if times else None,
-                "max_finish_time": round(max(times), 6) if times else None,
-            }
-        if not per_agent:
-            return {}
-        rows = per_agent.values()
-        finish = [r["max_finish_time"] for r in rows if r["max_finish_time"] is not None]
-        total = {
-            k: sum(r[k] for r in rows)
-            for k in (
-                "publications",
-                "resend_publications",
-                "replies",
-                "restarts",
-                "pending",
-                "left_out_reports",
+        aon = {
+            agent: AonAgentFacts(
+                counters=endpoint.stats.counters(),
+                pending=len(endpoint.pending_ids()),
+                finish_times=list(endpoint.stats.finish_times.values()),
             )
+            for agent, endpoint in endpoints.items()
+            if endpoint is not None
         }
-        total["statuses_sent"] = sum(
-            1 for tl in self.timelines.values() for e in tl.events if e.label == L.TASK_COMPLETED
+        return assemble(
+            RunFacts(
+                config=self.config,
+                scenario=self.world.scenario,
+                end_time=end,
+                finished=self.finished,
+                wall_time_s=self._wall,
+                timelines=self.timelines,
+                agenda=self.assigner.agenda,
+                received=set(self.assigner.success_received),
+                robots=robots,
+                counts_by_agent=self.network.counts_by_agent(),
+                aon=aon,
+                links=self.link_recorder.summaries(),
+                trajectories=self.trajectories,
+                rssi_series=list(self.link_recorder.rssi_series),
+            )
         )
-        total["max_finish_time"] = max(finish) if finish else None
-        return {"total": total, "agents": per_agent}
 
 
 def run_mission(config: RunConfig, world: ScenarioResources | None = None) -> MissionResult:
     """Simulate one mission to its end and return its results."""
     return Mission(config, world).run()
-
-
-def _rounded(metrics: dict[str, Any]) -> dict[str, Any]:
-    # Six decimals: stable JSON, far below any physical meaning.
-    return {k: (round(v, 6) if isinstance(v, float) else v) for k, v in metrics.items()}

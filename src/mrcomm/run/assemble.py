@@ -1,0 +1,184 @@
+"""The one result assembler of every mode: the facts a run collected in, its metrics out.
+
+A simulated run (:meth:`mrcomm.sim.mission.Mission.result`) and a live run
+(:func:`mrcomm.live.collect.collect`, from the journals of its processes) gather the
+same :class:`RunFacts` — timelines, what the task assigner received, message counts,
+AON statistics, each robot's ground truth, links, trajectories — and this module turns
+them into the same :class:`~mrcomm.run.result.MissionResult`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from mrcomm.metrics import labels as L
+from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robot_metrics
+from mrcomm.metrics.timeline import Timeline
+from mrcomm.run.config import RunConfig
+from mrcomm.run.result import MissionResult
+from mrcomm.world.scenario import Scenario
+
+#: The per-topic message counts, in the order results show them.
+COUNT_KEYS = ("sent", "received", "dropped_loss", "dropped_range")
+#: AON counters summed over agents into the run's total.
+AON_TOTAL_KEYS = (
+    "publications",
+    "resend_publications",
+    "replies",
+    "restarts",
+    "pending",
+    "left_out_reports",
+)
+
+
+@dataclass
+class RobotTruth:
+    """What the robot's body (the simulator or the live world) knows of one robot."""
+
+    distance: float
+    min_separation: float | None
+    max_separation: float | None
+    replans: int | None = None
+    recoveries: int | None = None
+
+
+@dataclass
+class AonAgentFacts:
+    """One agent's AON statistics: its counters (``AonStats.counters()``, summed over
+    incarnations), messages still pending, and the finish time of each message."""
+
+    counters: dict[str, int]
+    pending: int
+    finish_times: list[float] = field(default_factory=list)
+
+
+@dataclass
+class RunFacts:
+    """Everything a run collected that its result is computed from."""
+
+    config: RunConfig
+    scenario: Scenario
+    end_time: float
+    finished: bool
+    wall_time_s: float
+    timelines: dict[str, Timeline]
+    #: The tasks each robot was assigned (the task assigner's agenda).
+    agenda: Mapping[str, Sequence[Any]]
+    #: (task_id, robot) pairs whose completion reached the task assigner.
+    received: set[tuple[str, str]]
+    robots: dict[str, RobotTruth]
+    counts_by_agent: dict[str, dict[str, dict[str, int]]]
+    aon: dict[str, AonAgentFacts]
+    links: dict[str, dict[str, Any]]
+    trajectories: dict[str, list[tuple[float, float, float]]]
+    #: (time, from, to, rssi dBm) samples of robot pairs.
+    rssi_series: list[tuple[float, str, str, float]]
+    #: Configuration entries only one mode has (a live run's mode and speed).
+    config_extra: dict[str, Any] = field(default_factory=dict)
+
+
+def assemble(facts: RunFacts) -> MissionResult:
+    """The run's result (what ``mrcomm run --json`` prints) from its facts."""
+    robot_ids = tuple(facts.robots)
+    failed_pairs = [
+        (task.task_id, rid)
+        for rid in robot_ids
+        for task in facts.agenda[rid]
+        if (task.task_id, rid) not in facts.received
+    ]
+    uses_aon = facts.config.spec("behaviour").uses_aon
+    robots: dict[str, dict[str, Any]] = {}
+    for rid in robot_ids:
+        truth = facts.robots[rid]
+        robot_facts = RobotFacts(
+            distance=truth.distance,
+            min_separation=truth.min_separation,
+            max_separation=truth.max_separation,
+            tasks_assigned=len(facts.agenda[rid]),
+            tasks_failed=sum(1 for _, robot in failed_pairs if robot == rid),
+        )
+        metrics = robot_metrics(facts.timelines[rid], robot_facts)
+        if uses_aon:
+            metrics.update(lf_metrics(facts.timelines[rid]))
+        metrics["failed_tasks"] = [t for t, robot in failed_pairs if robot == rid]
+        metrics["replans"] = truth.replans
+        metrics["recoveries"] = truth.recoveries
+        robots[rid] = rounded(metrics)
+    mission = mission_metrics(
+        robots,
+        facts.timelines,
+        tasks_total=len(facts.scenario.tasks),
+        failed_tasks=list(dict.fromkeys(t for t, _ in failed_pairs)),
+    )
+    mission["timed_out"] = not facts.finished
+    mission["end_time"] = round(facts.end_time, 6)
+    config = facts.config.model_dump(mode="json")
+    config["label"] = facts.config.label()
+    config["scenario_name"] = facts.scenario.name
+    config.update(facts.config_extra)
+    by_agent = {
+        agent: dict(sorted(topics.items()))
+        for agent, topics in sorted(facts.counts_by_agent.items())
+    }
+    return MissionResult(
+        config=config,
+        mission=rounded(mission),
+        robots=robots,
+        messages=sum_counts(by_agent.values()),
+        messages_by_agent=by_agent,
+        aon=aon_summary(facts.aon, facts.timelines),
+        links=facts.links,
+        sim_time_s=round(facts.end_time, 6),
+        wall_time_s=facts.wall_time_s,
+        timelines=facts.timelines,
+        trajectories=facts.trajectories,
+        scenario=facts.scenario,
+        rssi_series=[(round(t, 3), a, b, round(v, 3)) for t, a, b, v in facts.rssi_series],
+    )
+
+
+def sum_counts(per_agent: Iterable[Mapping[str, Mapping[str, int]]]) -> dict[str, dict[str, int]]:
+    """Totals per topic over several agents' counts."""
+    totals: dict[str, dict[str, int]] = {}
+    for counts in per_agent:
+        for topic, c in counts.items():
+            t = totals.setdefault(topic, dict.fromkeys(COUNT_KEYS, 0))
+            for k in COUNT_KEYS:
+                t[k] += int(c.get(k, 0))
+    return dict(sorted(totals.items()))
+
+
+def aon_summary(
+    agents: Mapping[str, AonAgentFacts], timelines: Mapping[str, Timeline]
+) -> dict[str, Any]:
+    """AON statistics per agent and in total (empty when statuses go plain)."""
+    if not agents:
+        return {}
+    per_agent: dict[str, dict[str, Any]] = {}
+    for agent, stats in sorted(agents.items()):
+        times = stats.finish_times
+        per_agent[agent] = {
+            **stats.counters,
+            "pending": stats.pending,
+            "mean_finish_time": round(sum(times) / len(times), 6) if times else None,
+            "max_finish_time": round(max(times), 6) if times else None,
+        }
+    rows = per_agent.values()
+    finish = [r["max_finish_time"] for r in rows if r["max_finish_time"] is not None]
+    total: dict[str, Any] = {k: sum(int(r.get(k, 0)) for r in rows) for k in AON_TOTAL_KEYS}
+    total["statuses_sent"] = sum(
+        1 for tl in timelines.values() for e in tl.events if e.label == L.TASK_COMPLETED
+    )
+    total["max_finish_time"] = max(finish) if finish else None
+    return {"total": total, "agents": per_agent}
+
+
+def rounded(metrics: dict[str, Any]) -> dict[str, Any]:
+    """Six decimals for finite floats: stable JSON, far below any physical meaning."""
+    return {
+        k: (round(v, 6) if isinstance(v, float) and math.isfinite(v) else v)
+        for k, v in metrics.items()
+    }
