@@ -21,7 +21,7 @@ the agents have gone. It is not a team member: a crash of any agent leaves it ru
 from __future__ import annotations
 
 import time
-from typing import Any
+from dataclasses import asdict
 
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.errors import InputError
@@ -41,10 +41,10 @@ from mrcomm.live.protocol import (
 )
 from mrcomm.live.settings import LiveSettings, config_crc
 from mrcomm.net.zenoh_bus import Incoming, Lane, ZenohNode
+from mrcomm.run.bodies import RobotBodies
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.wiring import esd_trace_path, make_bases, make_links
 
-TRAJECTORY_PERIOD = 0.5  # simulated s between trajectory samples
 END_GRACE_SIM = 1.0  # simulated s everyone must stay done before the mission ends ...
 END_GRACE_WALL = 0.3  # ... and wall s, for messages still in flight
 END_LINGER = 3.0  # wall s the end is announced while agents are still present
@@ -59,7 +59,8 @@ class WorldProcess:
         self.world = ScenarioResources.load(run.scenario)
         scenario = self.world.scenario
         self.robot_ids = tuple(r.id for r in scenario.robots)
-        self.bases = make_bases(self.world, run.seed)
+        self.bodies = RobotBodies(make_bases(self.world, run.seed), self.world.scenario.assigner)
+        self.bases = self.bodies.bases
         self.node_ids = (*self.robot_ids, ASSIGNER_ID)
         self.links, self.link_recorder = make_links(self.world, run)
         self.incarnation = incarnation
@@ -72,7 +73,6 @@ class WorldProcess:
         self.present: dict[str, set[int]] = {}
         self.now = 0.0
         self._done_since: tuple[float, float] | None = None
-        self._next_sample = 0.0
         self.wall_start = 0.0
         self.wall_time = 0.0
 
@@ -191,9 +191,7 @@ class WorldProcess:
             base.cancel()
 
     def _advance(self, dt: float) -> None:
-        truth = [b.true_xy for b in self.bases.values()]
-        for i, base in enumerate(self.bases.values()):
-            base.update(dt, self.now, truth[:i] + truth[i + 1 :])
+        self.bodies.advance(dt, self.now, self.bodies.true_xy())
 
     def _base_states(self) -> tuple[BaseState, ...]:
         out = []
@@ -260,7 +258,7 @@ class WorldProcess:
 
     # -- ground truth ------------------------------------------------------------------------
     def _record(self) -> None:
-        positions = self._positions()
+        positions = self.bodies.node_positions(self.bodies.true_xy())
         links = self.links.update(positions, self.now)
         # The RSSI of every robot pair at the pulse rate (the threshold's: ESD's trace,
         # SSD's model), as the simulation samples its ``rssi_series``.
@@ -268,33 +266,16 @@ class WorldProcess:
         if samples:
             v = [[a, b, round(rssi, 3)] for a, b, rssi in samples]
             self.journal.write("rssi", t=round(self.now, 3), v=v)
-        if self.now >= self._next_sample:
-            self._next_sample += TRAJECTORY_PERIOD
-            points = {rid: [round(x, 3), round(y, 3)] for rid, (x, y) in self._true_xy()}
+        if self.bodies.sample_due(self.now):
+            points = {rid: [x, y] for rid, (x, y) in self.bodies.sample().items()}
             self.journal.write("traj", t=round(self.now, 3), p=points)
             self.journal.write("clock", sim=self.now, wall=time.time())
             self.journal.flush()
 
-    def _true_xy(self) -> list[tuple[str, tuple[float, float]]]:
-        return [(rid, b.true_xy) for rid, b in self.bases.items()]
-
-    def _positions(self) -> list[tuple[float, float]]:
-        robots = {rid: b.true_xy for rid, b in self.bases.items()}
-        return [*robots.values(), self.world.scenario.assigner.locate(robots)]
-
     def _write_truth(self, end: float, timed_out: bool) -> None:
-        truth: dict[str, Any] = {}
-        for i, (rid, base) in enumerate(self.bases.items()):
-            closest, furthest = self.link_recorder.separation(i)
-            truth[rid] = {
-                "distance": round(base.odometry_distance, 6),
-                "min_separation": closest,
-                "max_separation": furthest,
-                "replans": base.replans,
-                "recoveries": base.recoveries,
-            }
-            p = base.true_pose
-            self.journal.write("traj", t=round(end, 3), p={rid: [round(p.x, 3), round(p.y, 3)]})
+        truth = {rid: asdict(t) for rid, t in self.bodies.truth(self.link_recorder).items()}
+        for rid, (x, y) in self.bodies.sample().items():
+            self.journal.write("traj", t=round(end, 3), p={rid: [x, y]})
         self.journal.write(
             "truth",
             end_time=end,

@@ -23,7 +23,8 @@ from mrcomm.metrics.timeline import Timeline
 from mrcomm.net.delivery import DeliveryPolicy
 from mrcomm.net.inprocess import InProcessNetwork
 from mrcomm.net.links import LinkState
-from mrcomm.run.assemble import AonAgentFacts, RobotTruth, RunFacts, assemble
+from mrcomm.run.assemble import AonAgentFacts, RunFacts, assemble
+from mrcomm.run.bodies import RobotBodies
 from mrcomm.run.config import RunConfig
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.result import MissionResult
@@ -35,8 +36,6 @@ from mrcomm.run.wiring import (
     make_links,
 )
 from mrcomm.seeding import stream
-
-TRAJECTORY_PERIOD = 0.5  # s between recorded trajectory samples
 
 
 class Mission:
@@ -55,7 +54,8 @@ class Mission:
             loss_rngs={a: stream(seed, "loss", a) for a in self.node_ids},
         )
         self.links, self.link_recorder = make_links(self.world, config)
-        self.bases = make_bases(self.world, seed)
+        self.bodies = RobotBodies(make_bases(self.world, seed), scenario.assigner)
+        self.bases = self.bodies.bases
         self.timelines = {rid: Timeline(rid) for rid in self.robot_ids}
         ranks = stream(seed, "tie-break").permutation(len(self.robot_ids))
         rank_of = {rid: float(ranks[i]) for i, rid in enumerate(self.robot_ids)}
@@ -81,7 +81,6 @@ class Mission:
         self.trajectories: dict[str, list[tuple[float, float, float]]] = {
             rid: [] for rid in self.robot_ids
         }
-        self._next_sample = 0.0
         self.now = 0.0
         self.steps = 0
         self.finished = False
@@ -103,8 +102,8 @@ class Mission:
     def step(self) -> None:
         now = self.now
         dt = self.config.dt
-        truth = [b.true_xy for b in self.bases.values()]
-        positions = self._node_positions(truth)
+        truth = self.bodies.true_xy()
+        positions = self.bodies.node_positions(truth)
         links = self.links.update(positions, now)
         self.last_links = links
         self.network.set_connected(links.connected.tolist())
@@ -118,13 +117,10 @@ class Mission:
         for executor in self.executors.values():
             executor.step(now)
         # Bases have not moved since `truth` was taken: it is each one's view of the others.
-        for i, base in enumerate(self.bases.values()):
-            others = truth[:i] + truth[i + 1 :]
-            base.update(dt, now, others)
+        self.bodies.advance(dt, now, truth)
         self.link_recorder.record(links, dt, now)
-        if now >= self._next_sample:
+        if self.bodies.sample_due(now):
             self._sample_trajectories(now)
-            self._next_sample += TRAJECTORY_PERIOD
         self.steps += 1
         self.now = round(now + dt, 9)
         if (
@@ -135,17 +131,9 @@ class Mission:
             self.finished = True
 
     # -- per-step bookkeeping ------------------------------------------------------------
-    def _node_positions(self, robots: list[tuple[float, float]]) -> list[tuple[float, float]]:
-        # Plain tuples: the link model works on them directly (no array round trip).
-        assigner = self.world.scenario.assigner.locate(
-            dict(zip(self.robot_ids, robots, strict=True))
-        )
-        return [*robots, assigner]
-
     def _sample_trajectories(self, now: float) -> None:
-        for rid, base in self.bases.items():
-            p = base.true_pose
-            self.trajectories[rid].append((round(now, 3), round(p.x, 3), round(p.y, 3)))
+        for rid, (x, y) in self.bodies.sample().items():
+            self.trajectories[rid].append((round(now, 3), x, y))
 
     # -- results -------------------------------------------------------------------------
     def result(self) -> MissionResult:
@@ -153,17 +141,6 @@ class Mission:
         self._sample_trajectories(end)
         for tl in self.timelines.values():
             tl.close_all(end)
-        robots: dict[str, RobotTruth] = {}
-        for i, rid in enumerate(self.robot_ids):
-            closest, furthest = self.link_recorder.separation(i)
-            base = self.bases[rid]
-            robots[rid] = RobotTruth(
-                distance=round(base.odometry_distance, 6),
-                min_separation=closest,
-                max_separation=furthest,
-                replans=base.replans,
-                recoveries=base.recoveries,
-            )
         endpoints = {rid: getattr(e, "aon", None) for rid, e in self.executors.items()}
         endpoints[ASSIGNER_ID] = self.assigner.aon
         aon = {
@@ -185,7 +162,7 @@ class Mission:
                 timelines=self.timelines,
                 agenda=self.assigner.agenda,
                 received=set(self.assigner.success_received),
-                robots=robots,
+                robots=self.bodies.truth(self.link_recorder),
                 counts_by_agent=self.network.counts_by_agent(),
                 aon=aon,
                 links=self.link_recorder.summaries(),
