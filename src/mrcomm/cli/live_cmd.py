@@ -15,28 +15,18 @@ from __future__ import annotations
 
 import tempfile
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from mrcomm.cli.db_option import DbOpt, ExperimentOpt, check_db, store_run
 from mrcomm.cli.run_cmd import show_result
-from mrcomm.cli.run_options import (
-    BehaviourOpt,
-    DtOpt,
-    MaxTimeOpt,
-    NetworkOpt,
-    RssiTraceOpt,
-    ScenarioArg,
-    SeedOpt,
-    SetOpt,
-    SignalModelOpt,
-    SplOpt,
-    ThresholdOpt,
-    run_config,
-)
+from mrcomm.cli.run_options import with_run_options
 from mrcomm.errors import InputError
 from mrcomm.net.zenoh_config import ZenohOptions, make_options
+
+if TYPE_CHECKING:
+    from mrcomm.run.config import RunConfig
 
 TeamOpt = Annotated[str, typer.Option(help="Team name: the key space mrcomm/<team>/.")]
 ListenOpt = Annotated[
@@ -95,18 +85,9 @@ def zenoh_options(
     )
 
 
+@with_run_options
 def world(
-    scenario: ScenarioArg,
-    network: NetworkOpt = "wlan",
-    spl: SplOpt = 0.0,
-    behaviour: BehaviourOpt = "nb",
-    threshold: ThresholdOpt = "none",
-    seed: SeedOpt = 1,
-    max_time: MaxTimeOpt = 1800.0,
-    dt: DtOpt = 0.1,
-    rssi_trace: RssiTraceOpt = None,
-    signal_model: SignalModelOpt = None,
-    sets: SetOpt = None,
+    run: RunConfig,
     speed: SpeedOpt = 1.0,
     team: TeamOpt = "team",
     listen: ListenOpt = None,
@@ -128,11 +109,6 @@ def world(
     from mrcomm.live.settings import LiveSettings, check_record_dir
     from mrcomm.live.world import run_world
 
-    run = run_config(
-        scenario=scenario, network=network, spl=spl, behaviour=behaviour,
-        threshold=threshold, seed=seed, max_time=max_time, dt=dt, rssi_trace=rssi_trace,
-        signal_model=signal_model, sets=sets,
-    )  # fmt: skip
     zenoh = zenoh_options(
         team, listen, connect, multicast, protocol, tls_ca, tls_cert, tls_key, acl,
         zenoh_config, link_lease,
@@ -143,19 +119,10 @@ def world(
     raise typer.Exit(run_world(settings))
 
 
+@with_run_options
 def agent(
-    scenario: ScenarioArg,
+    run: RunConfig,
     robot: Annotated[str, typer.Option(help="Robot id of this agent (or 'assigner').")],
-    network: NetworkOpt = "wlan",
-    spl: SplOpt = 0.0,
-    behaviour: BehaviourOpt = "nb",
-    threshold: ThresholdOpt = "none",
-    seed: SeedOpt = 1,
-    max_time: MaxTimeOpt = 1800.0,
-    dt: DtOpt = 0.1,
-    rssi_trace: RssiTraceOpt = None,
-    signal_model: SignalModelOpt = None,
-    sets: SetOpt = None,
     team: TeamOpt = "team",
     listen: ListenOpt = None,
     connect: ConnectOpt = None,
@@ -194,11 +161,6 @@ def agent(
     from mrcomm.world.scenario import load_scenario
 
     check_agent_clock(clock, "--clock")
-    run = run_config(
-        scenario=scenario, network=network, spl=spl, behaviour=behaviour,
-        threshold=threshold, seed=seed, max_time=max_time, dt=dt, rssi_trace=rssi_trace,
-        signal_model=signal_model, sets=sets,
-    )  # fmt: skip
     check_agent_id(load_scenario(run.scenario), robot)
     zenoh = zenoh_options(
         team, listen, connect, multicast, protocol, tls_ca, tls_cert, tls_key, acl,
@@ -222,18 +184,9 @@ def agent(
     raise typer.Exit(run_agent(settings, robot))
 
 
+@with_run_options
 def live(
-    scenario: ScenarioArg,
-    network: NetworkOpt = "wlan",
-    spl: SplOpt = 0.0,
-    behaviour: BehaviourOpt = "nb",
-    threshold: ThresholdOpt = "none",
-    seed: SeedOpt = 1,
-    max_time: MaxTimeOpt = 1800.0,
-    dt: DtOpt = 0.1,
-    rssi_trace: RssiTraceOpt = None,
-    signal_model: SignalModelOpt = None,
-    sets: SetOpt = None,
+    run: RunConfig,
     speed: SpeedOpt = 1.0,
     team: TeamOpt = "team",
     protocol: ProtocolOpt = "tcp",
@@ -264,11 +217,6 @@ def live(
     from mrcomm.live.settings import LiveSettings, check_agent_clock, check_record_dir
 
     check_agent_clock(agent_clock, "--agent-clock", speed)
-    run = run_config(
-        scenario=scenario, network=network, spl=spl, behaviour=behaviour,
-        threshold=threshold, seed=seed, max_time=max_time, dt=dt, rssi_trace=rssi_trace,
-        signal_model=signal_model, sets=sets,
-    )  # fmt: skip
     if tls_dir is not None and not (tls_dir / "ca.pem").is_file():
         raise InputError("no ca.pem in the TLS directory", file=tls_dir, field="--tls-dir")
     if acl and tls_dir is None:

@@ -13,39 +13,18 @@ from rich.table import Table
 from mrcomm.cli.db_option import DbOpt, ExperimentOpt, check_db, store_run, stored_json
 from mrcomm.cli.display import fmt
 from mrcomm.cli.files import check_writable, write_atomically
-from mrcomm.cli.run_options import (
-    BehaviourOpt,
-    DtOpt,
-    MaxTimeOpt,
-    NetworkOpt,
-    RssiTraceOpt,
-    ScenarioArg,
-    SeedOpt,
-    SetOpt,
-    SignalModelOpt,
-    SplOpt,
-    ThresholdOpt,
-    run_config,
-)
+from mrcomm.cli.run_options import with_run_options
 from mrcomm.run.result import MissionResult
 from mrcomm.sim.mission import run_mission
 
 if TYPE_CHECKING:
     from mrcomm.experiment.adhoc import StoredRun
+    from mrcomm.run.config import RunConfig
 
 
+@with_run_options
 def run(
-    scenario: ScenarioArg,
-    network: NetworkOpt = "wlan",
-    spl: SplOpt = 0.0,
-    behaviour: BehaviourOpt = "nb",
-    threshold: ThresholdOpt = "none",
-    seed: SeedOpt = 1,
-    max_time: MaxTimeOpt = 1800.0,
-    dt: DtOpt = 0.1,
-    rssi_trace: RssiTraceOpt = None,
-    signal_model: SignalModelOpt = None,
-    sets: SetOpt = None,
+    run: RunConfig,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
     plot: Annotated[Path | None, typer.Option(help="Write a map/trajectory figure (PNG/SVG).")] = (
         None
@@ -58,19 +37,7 @@ def run(
 ) -> None:
     """Run one mission in simulation (faster than real time); with --db, store it in a
     results database (mode sim)."""
-    config = run_config(
-        scenario=scenario,
-        network=network,
-        spl=spl,
-        behaviour=behaviour,
-        threshold=threshold,
-        seed=seed,
-        max_time=max_time,
-        dt=dt,
-        sets=sets,
-        rssi_trace=rssi_trace,
-        signal_model=signal_model,
-    )
+    config = run
     if plot is not None:
         check_writable(plot, "--plot")
     check_db(db, experiment)

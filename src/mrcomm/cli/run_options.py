@@ -12,6 +12,10 @@ false, null, strings). ``mrcomm variants`` lists every parameter.
 
 from __future__ import annotations
 
+import functools
+import inspect
+import typing
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -58,6 +62,56 @@ SetOpt = Annotated[
 ]
 
 SET_KINDS = ("network", "behaviour", "threshold")
+
+
+def _run_options(
+    scenario: ScenarioArg,
+    network: NetworkOpt = "wlan",
+    spl: SplOpt = 0.0,
+    behaviour: BehaviourOpt = "nb",
+    threshold: ThresholdOpt = "none",
+    seed: SeedOpt = 1,
+    max_time: MaxTimeOpt = 1800.0,
+    dt: DtOpt = 0.1,
+    rssi_trace: RssiTraceOpt = None,
+    signal_model: SignalModelOpt = None,
+    sets: SetOpt = None,
+) -> None:
+    """The run options every run-starting command takes (their one declaration)."""
+
+
+def with_run_options(command: Callable[..., None]) -> Callable[..., None]:
+    """Give a command the run options. ``command``'s first parameter is ``run``: it
+    receives the validated RunConfig built from them; its other parameters follow
+    the run options on the command line."""
+    own = inspect.signature(command)
+    first, *rest = own.parameters.values()
+    if first.name != "run":
+        raise TypeError(f"{command.__name__}: the first parameter must be 'run'")
+    shared = list(inspect.signature(_run_options).parameters.values())
+    names = [p.name for p in shared]
+    # Typer reads the annotations: resolve them here, in each function's own module.
+    from mrcomm.run.config import RunConfig  # commands name it only when type checking
+
+    hints = {
+        **typing.get_type_hints(_run_options, include_extras=True),
+        **typing.get_type_hints(command, localns={"RunConfig": RunConfig}, include_extras=True),
+    }
+    parameters = [p.replace(annotation=hints[p.name]) for p in shared] + [
+        # Keyword-only: a command's own required option may follow the defaults.
+        p.replace(annotation=hints[p.name], kind=inspect.Parameter.KEYWORD_ONLY)
+        for p in rest
+    ]
+
+    @functools.wraps(command)
+    def wrapper(**kwargs: Any) -> None:
+        options = {name: kwargs.pop(name) for name in names}
+        command(run_config(**options), **kwargs)
+
+    del wrapper.__wrapped__  # typer must see the new signature, not the command's
+    wrapper.__signature__ = own.replace(parameters=parameters)  # type: ignore[attr-defined]
+    wrapper.__annotations__ = {p.name: p.annotation for p in parameters} | {"return": None}
+    return wrapper
 
 
 def parse_assignments(items: list[str] | None, field: str = "--set") -> dict[str, dict[str, Any]]:
