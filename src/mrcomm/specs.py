@@ -21,18 +21,29 @@ may use it without import circles.
 from __future__ import annotations
 
 import importlib
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from importlib.metadata import entry_points
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from mrcomm.errors import InputError, did_you_mean
 
 Kind = Literal["behaviour", "threshold", "network", "utility"]
 KINDS: tuple[Kind, ...] = ("behaviour", "threshold", "network", "utility")
 ENTRY_POINT_GROUP = "mrcomm.variants"
+
+
+def parameter(default: Any, description: str, unit: str | None = None, **limits: Any) -> Any:
+    """A documented variant parameter: its default, what it means, its unit (shown by
+    ``mrcomm variants``) and pydantic limits (``gt=0``...). Never NaN or infinite."""
+    extra: Any = {"unit": unit} if unit else None
+    text = f"{description} ({unit})" if unit else description
+    if isinstance(default, int | float) and not isinstance(default, bool):
+        limits.setdefault("allow_inf_nan", False)
+    return Field(default, description=text, json_schema_extra=extra, **limits)
 
 
 class NoParams(BaseModel):
@@ -153,6 +164,20 @@ class SpecRegistry:
             )
         self._specs[spec.kind][spec.name] = spec
         return spec
+
+    @contextmanager
+    def registered(self, spec: VariantSpec) -> Iterator[VariantSpec]:
+        """``spec`` registered for the duration of a ``with`` block (unless it already
+        is): checks and tests of variants that no entry point declares."""
+        self.discover()
+        known = self._specs[spec.kind].get(spec.name)
+        if known is None:
+            self.register(spec)
+        try:
+            yield spec
+        finally:
+            if known is None:
+                del self._specs[spec.kind][spec.name]
 
     def get(self, kind: Kind, name: str) -> VariantSpec:
         self.discover()

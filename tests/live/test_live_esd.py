@@ -153,8 +153,8 @@ def test_launcher_starts_one_replaying_pulse_per_robot(tmp_path: Path) -> None:
     assert f"--tls-cert {tmp_path / 'robot_2.pem'}" in text  # its robot's certificate
     assert "--acl world,robot_1,robot_2,robot_3" in text
     # Every process gets the trace: the team's run configurations must agree.
-    assert f"--set threshold.trace=\"{TRACE}\"" in " ".join(team.command("robot_1"))
-    assert f"--set threshold.trace=\"{TRACE}\"" in " ".join(team.command(WORLD_ID))
+    assert f'--set threshold.trace="{TRACE}"' in " ".join(team.command("robot_1"))
+    assert f'--set threshold.trace="{TRACE}"' in " ".join(team.command(WORLD_ID))
 
 
 def test_live_esd_needs_a_trace(tmp_path: Path) -> None:

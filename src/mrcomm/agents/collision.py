@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 from pydantic import BaseModel, ConfigDict
 
+from mrcomm.specs import parameter
 from mrcomm.world.geometry import Pose, wrap_angle
 
 DANGER_ZONE = "danger_zone"
@@ -27,10 +28,18 @@ EVENT_HORIZON = "event_horizon"
 class CollisionParams(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
-    danger_radius: float = 1.0
-    event_horizon: float = 0.5  # centre-to-centre distance (footprint radius 0.18 m each)
-    same_direction_deg: float = 45.0
-    moving_speed: float = 0.05  # m/s below which a mate counts as standing still
+    danger_radius: float = parameter(
+        1.0, "radius of the danger zone, a semicircle ahead of the robot", "m", gt=0
+    )
+    event_horizon: float = parameter(
+        0.5, "any mate closer than this (centre to centre) is a near collision", "m", gt=0
+    )
+    same_direction_deg: float = parameter(
+        45.0, "a mate heading within this of our heading travels alongside", "deg", ge=0
+    )
+    moving_speed: float = parameter(
+        0.05, "below this speed a mate counts as standing still", "m/s", ge=0
+    )
 
 
 @dataclass(frozen=True)

@@ -39,6 +39,7 @@ from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ACTIVITY, Timeline
 from mrcomm.net.link_sensors import NoSensor
 from mrcomm.ports import Base, Bus, LinkSensor, NavStatus
+from mrcomm.specs import parameter
 from mrcomm.world.geometry import wrap_angle
 
 NB_STATES = [
@@ -79,18 +80,36 @@ _ACTIVITY_OF_STATE = {
 class ExecutorParams(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
-    pose_period: float = 0.2  # 5 Hz
-    collision: CollisionParams = Field(default_factory=CollisionParams)
-    collision_pause: float = 1.0  # both robots pause at least this long
-    give_way_timeout: float = 10.0  # the yielding robot waits at most this long
-    clear_time: float = 0.5  # the conflict must be gone this long before resuming
-    resume_grace: float = 3.0  # no new conflict with the same mate right after resuming
-    max_grace: float = 24.0  # grace doubles with each repeat, up to this (breaks livelock)
-    repeat_window: float = 5.0  # repeated near collisions within this window are flagged
-    nav_retry_delay: float = 2.0
-    make_way_radius: float = 1.4  # a robot without a goal this close to a mate that has one
-    make_way_step: float = 1.5  # ... steps this far aside
-    make_way_timeout: float = 6.0
+    pose_period: float = parameter(0.2, "time between pose messages (5 Hz)", "s", gt=0)
+    collision: CollisionParams = Field(
+        default_factory=CollisionParams, description="near-collision detection"
+    )
+    collision_pause: float = parameter(
+        1.0, "both robots of a near collision pause at least this long", "s", ge=0
+    )
+    give_way_timeout: float = parameter(
+        10.0, "the robot without right of way waits at most this long", "s", gt=0
+    )
+    clear_time: float = parameter(
+        0.5, "a conflict must be gone this long before moving on", "s", ge=0
+    )
+    resume_grace: float = parameter(
+        3.0, "no new conflict with the same mate right after resuming", "s", ge=0
+    )
+    max_grace: float = parameter(
+        24.0, "the grace doubles with each repeat up to this (breaks livelock)", "s", ge=0
+    )
+    repeat_window: float = parameter(
+        5.0, "near collisions with the same mate within this window are repeats", "s", ge=0
+    )
+    nav_retry_delay: float = parameter(
+        2.0, "wait after a navigation failure before choosing again", "s", ge=0
+    )
+    make_way_radius: float = parameter(
+        1.4, "a robot without a goal this close to a mate with one steps aside", "m", ge=0
+    )
+    make_way_step: float = parameter(1.5, "how far it steps aside", "m", gt=0)
+    make_way_timeout: float = parameter(6.0, "it gives up stepping aside after", "s", gt=0)
 
 
 @contextmanager

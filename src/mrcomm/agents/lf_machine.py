@@ -11,6 +11,7 @@ from pydantic import field_validator
 
 from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS, ExecutorParams
 from mrcomm.metrics import labels as L
+from mrcomm.specs import parameter
 
 _DRIVE = [
     {"trigger": "arrive", "source": "navigating", "dest": "executing"},
@@ -81,7 +82,9 @@ ROLE_OF_TOP_STATE = {
 
 
 class LfParams(ExecutorParams):
-    utility: str = "original"
+    utility: str = parameter(
+        "original", "the leader election's utility function (mrcomm variants utility)"
+    )
 
     @field_validator("utility")
     @classmethod
@@ -92,17 +95,35 @@ class LfParams(ExecutorParams):
             raise ValueError(f"unknown utility {name!r}; choose from {', '.join(utility_names())}")
         return name
 
-    announce_period: float = 0.25  # utilities and roles at 4 Hz
-    assign_timeout: float = 6.0  # decide with what was collected after this long
-    roles_timeout: float = 3.0  # stop collecting roles after this long
-    follow_distance: float = 1.2  # a follower stops this close to the leader
-    refollow_distance: float = 1.7  # and moves again when the leader is this far
-    refresh_period_near: float = 1.0  # follower goal refresh when the leader is near
-    refresh_period_far: float = 0.4  # ... and when it is beyond the warning threshold
-    lost_timeout: float = 60.0  # a follower silent this long no longer holds the leader
-    route_check_step: float = 0.5  # m between the route points a follower checks
-    direct_hop: float = 1.5  # m per hop of a direct route to the leader
-    #: AON: a member silent this long (no pose, no AON traffic) is reported as left out
-    #: of pending messages by name instead of being waited for; it is brought up to date
-    #: when heard again. None waits forever.
-    aon_lease: float | None = 60.0
+    announce_period: float = parameter(
+        0.25, "utilities and roles are published this often (4 Hz)", "s", gt=0
+    )
+    assign_timeout: float = parameter(
+        6.0, "role assignment decides with what it collected after this long", "s", gt=0
+    )
+    roles_timeout: float = parameter(3.0, "stop collecting roles after this long", "s", gt=0)
+    follow_distance: float = parameter(1.2, "a follower stops this close to its leader", "m", gt=0)
+    refollow_distance: float = parameter(
+        1.7, "and moves again when the leader is this far", "m", gt=0
+    )
+    refresh_period_near: float = parameter(
+        1.0, "a follower refreshes its goal this often when the leader is near", "s", gt=0
+    )
+    refresh_period_far: float = parameter(
+        0.4, "... and this often when the leader is beyond the warning threshold", "s", gt=0
+    )
+    lost_timeout: float = parameter(
+        60.0, "a follower silent this long no longer holds its leader", "s", gt=0
+    )
+    route_check_step: float = parameter(
+        0.5, "spacing of the route points a follower checks against the threshold", "m", gt=0
+    )
+    direct_hop: float = parameter(1.5, "length of each hop of a direct route", "m", gt=0)
+    #: None waits forever.
+    aon_lease: float | None = parameter(
+        60.0,
+        "AON: a member silent this long is reported as left out of pending messages "
+        "(brought up to date when heard again); null waits forever",
+        "s",
+        gt=0,
+    )

@@ -9,6 +9,7 @@ import sys
 import typer
 
 from mrcomm.cli.analyze_cmd import analyze
+from mrcomm.cli.check_cmd import check
 from mrcomm.cli.fsm_cmd import fsm
 from mrcomm.cli.live_cmd import agent, collect_cmd, live, world
 from mrcomm.cli.pulse_cmd import pulse
@@ -49,6 +50,7 @@ cli.command("pulse")(pulse)
 cli.command("analyze")(analyze)
 cli.command("report")(report)
 cli.command("variants")(variants)
+cli.command("check")(check)
 
 
 def app() -> None:

@@ -75,6 +75,10 @@ class InProcessNetwork:
         """Link matrix for this step: ``connected[s][r]`` (sender s can reach receiver r)."""
         self._connected = connected
 
+    def subscribers(self, topic: str) -> list[str]:
+        """The agents subscribed to ``topic``, in subscription order."""
+        return [self.ids[i] for i in self._subs.get(topic, {})]
+
     def pending(self) -> int:
         """Messages waiting for the next delivery."""
         return len(self._outbox)

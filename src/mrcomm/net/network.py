@@ -40,6 +40,9 @@ class NetworkModel:
     #: Beyond this distance nothing is delivered (inf: no distance limit).
     reach_m: float = math.inf
 
+    def __init__(self, params: BaseModel | None = None) -> None:
+        """``params``: the model's validated parameters (its spec's parameter model)."""
+
     def connected(self, distance: NDArray[np.float64]) -> NDArray[np.bool_]:
         """(n, n) connectivity from the (n, n) distances (NaN: a node without a
         position, e.g. a virtual task assigner, is always connected)."""
@@ -57,9 +60,6 @@ class Wlan(NetworkModel):
     """Infrastructure WLAN: every link connected."""
 
     name = "wlan"
-
-    def __init__(self, params: BaseModel | None = None) -> None:
-        pass
 
 
 class AdHocParams(BaseModel):
@@ -79,8 +79,10 @@ class AdHoc(NetworkModel):
 
     name = "ah"
 
-    def __init__(self, params: AdHocParams | None = None) -> None:
-        self.reach_m = (params if params is not None else AdHocParams.model_validate({})).range_m
+    def __init__(self, params: BaseModel | None = None) -> None:
+        if not isinstance(params, AdHocParams):
+            params = AdHocParams.model_validate({})
+        self.reach_m = params.range_m
 
     def connected(self, distance: NDArray[np.float64]) -> NDArray[np.bool_]:
         return ~(distance > self.reach_m)  # NaN (virtual) stays connected
