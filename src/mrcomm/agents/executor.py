@@ -18,12 +18,13 @@ import logging
 import math
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import Any
+from typing import Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict, Field
 from transitions import Machine
 
 from mrcomm.agents.collision import CollisionParams, MateState, classify, has_right_of_way
+from mrcomm.agents.machine_table import StateEntry, build_table
 from mrcomm.messaging.messages import (
     TOPIC_ASSIGNMENT,
     TOPIC_POSE,
@@ -137,6 +138,15 @@ class TaskExecutor:
     initial = "unassigned"
     machine_class: type[Machine] = Machine
     Params: type[ExecutorParams] = ExecutorParams
+    #: Leaf states stepped by no handler (``unassigned``: the step chooses a task).
+    PASSIVE_STATES: ClassVar[frozenset[str]] = frozenset({"unassigned"})
+    #: Each leaf state's entry (handler, leaf, top), built and checked per class.
+    STATE_TABLE: ClassVar[dict[str, StateEntry]] = {}
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        cls.STATE_TABLE = build_table(cls, cls.states, cls.PASSIVE_STATES)
+
     state: str
     trigger: Callable[..., bool]
 
@@ -204,7 +214,7 @@ class TaskExecutor:
 
     def leaf(self) -> str:
         """Innermost state name (``na_navigating`` -> ``navigating``)."""
-        return self.state.rsplit("_", 1)[-1]
+        return self.STATE_TABLE[self.state].leaf
 
     def set_time(self, now: float) -> None:
         """The time of the coming delivery and step: messages handled before ``step``
@@ -222,12 +232,10 @@ class TaskExecutor:
             self._next_pose = max(self._next_pose + self.params.pose_period, now)
         self.before_state_step()
         # A behaviour may handle a nested state itself (``_step_leader_holding``);
-        # otherwise the NB handler of the innermost state runs.
-        handler = getattr(self, f"_step_{self.state}", None) or getattr(
-            self, f"_step_{self.leaf()}", None
-        )
+        # otherwise the NB handler of the innermost state runs (see machine_table).
+        handler = self.STATE_TABLE[self.state].handler
         if handler is not None:
-            handler()
+            handler(self)
 
     def before_state_step(self) -> None:
         """Hook run every step before the state handler (LF monitors links here)."""
@@ -493,7 +501,7 @@ class TaskExecutor:
 
     def activity_of(self, state: str) -> str | None:
         """Timeline activity recorded while in ``state`` (full state name)."""
-        return _ACTIVITY_OF_STATE.get(state.rsplit("_", 1)[-1])
+        return _ACTIVITY_OF_STATE.get(self.STATE_TABLE[state].leaf)
 
     def _after_state_change(self) -> None:
         self._state_since = self._now
@@ -510,3 +518,8 @@ class TaskExecutor:
 
     def on_state_change(self) -> None:
         """Hook after every state change (LF records roles here)."""
+
+
+TaskExecutor.STATE_TABLE = build_table(
+    TaskExecutor, TaskExecutor.states, TaskExecutor.PASSIVE_STATES
+)

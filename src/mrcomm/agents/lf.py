@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from typing import Any
+from typing import Any, cast
 
 from transitions.extensions import HierarchicalMachine
 
@@ -59,6 +59,8 @@ from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ROLE
 from mrcomm.ports import NavStatus
 from mrcomm.world.geometry import Pose
+
+NA_IDLE = "na_idle"  # transitions' name of NA's idle state
 
 
 class LeaderFollowerExecutor(TaskExecutor):
@@ -102,7 +104,7 @@ class LeaderFollowerExecutor(TaskExecutor):
     @property
     def done(self) -> bool:
         """Agenda complete, back in NA, and every status finished with AON."""
-        settled = self._t0 is not None and not self.agenda and self.state == "na_idle"
+        settled = self._t0 is not None and not self.agenda and self.state == NA_IDLE
         return settled and (self.aon is None or not self.aon.pending_ids())
 
     def send_status(self, task_id: str, state: TaskState) -> None:
@@ -120,7 +122,7 @@ class LeaderFollowerExecutor(TaskExecutor):
         if (
             status.state is TaskState.SUCCESS
             and status.robot == self.leader
-            and self.state.startswith("follower")
+            and self._in("follower")
         ):
             self._dissolve("leader completed its task")
 
@@ -153,7 +155,7 @@ class LeaderFollowerExecutor(TaskExecutor):
             self.aon.step(self._now)
         # Idle robots join rounds but never open one; links are judged at the pose rate.
         if (
-            self.state.startswith("na_")
+            self._in("na")
             and self.leaf() not in ("unassigned", "idle")
             and self._now >= self._next_monitor
         ):
@@ -381,14 +383,14 @@ class LeaderFollowerExecutor(TaskExecutor):
 
     def after_task_completed(self) -> None:
         self._just_completed = True
-        if self.state.startswith("leader"):
+        if self._in("leader"):
             self._dissolve("task completed")
         else:
             self._select_next()
 
     # -- follower ------------------------------------------------------------------------
     def navigation_target(self) -> tuple[float, float] | None:
-        if self.state.startswith("follower") or self.state == "regrouping":
+        if self._in("follower") or self.state == "regrouping":
             return self._follow_target
         return super().navigation_target()
 
@@ -402,15 +404,15 @@ class LeaderFollowerExecutor(TaskExecutor):
 
     def _step_follower_clearing(self) -> None:
         self._step_clearing()
-        if not self.state.endswith("clearing"):
+        if self.leaf() != "clearing":
             self._follow_target = None
             self._next_refresh = self._now
 
     def current_role(self) -> str:
-        return ROLE_OF_TOP_STATE.get(self.state.split("_", 1)[0], "")
+        return ROLE_OF_TOP_STATE.get(self.STATE_TABLE[self.state].top, "")
 
     def current_leader(self) -> str:
-        return (self.leader or "") if self.state.startswith("follower") else ""
+        return (self.leader or "") if self._in("follower") else ""
 
     def _leader_gone(self) -> bool:
         """The leader's own poses, sent since we follow it, say it no longer leads (its
@@ -528,12 +530,17 @@ class LeaderFollowerExecutor(TaskExecutor):
                 self._follow_target = (known[0].x, known[0].y)
                 self.base.navigate_to(*self._follow_target)
 
+    def _in(self, top: str) -> bool:
+        """Whether the robot is in ``top`` or one of its sub-states."""
+        machine = cast(HierarchicalMachine, self.machine)
+        return bool(machine.is_state(top, self, allow_substates=True))
+
     # -- timeline ------------------------------------------------------------------------
     def activity_of(self, state: str) -> str | None:
         return ACTIVITY_OF_FULL_STATE.get(state) or super().activity_of(state)
 
     def on_state_change(self) -> None:
-        top = self.state.split("_", 1)[0]
+        top = self.STATE_TABLE[self.state].top
         if top != self._top_state:
             self._top_state = top
             self._state_since_role = self._now
