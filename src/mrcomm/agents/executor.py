@@ -25,6 +25,7 @@ from transitions import Machine
 
 from mrcomm.agents.collision import CollisionParams, MateState, classify, has_right_of_way
 from mrcomm.agents.machine_table import StateEntry, build_table
+from mrcomm.agents.team_view import TeamView
 from mrcomm.messaging.messages import (
     TOPIC_ASSIGNMENT,
     TOPIC_POSE,
@@ -173,10 +174,8 @@ class TaskExecutor:
         self.agenda: list[TaskSpec] = []
         self.completed: list[str] = []
         self.known_done: set[str] = set()  # task ids any robot reported complete
-        self.mates: dict[str, MateState] = {}
-        self.mate_heard: dict[str, float] = {}
-        self.mate_roles: dict[str, str] = {}
-        self.mate_leaders: dict[str, str] = {}  # mate -> the robot it follows ("" none)
+        self.team_view = TeamView()
+        self.mates = self.team_view.poses  # each mate's last received pose
         self.goal: TaskSpec | None = None
         self._now = 0.0
         self._t0: float | None = None  # assignment received: mission start for this robot
@@ -483,12 +482,7 @@ class TaskExecutor:
         assert isinstance(message, PoseMsg)
         if message.sender == self.robot_id:
             return
-        self.mates[message.sender] = MateState(
-            message.sender, message.x, message.y, message.theta, message.v, message.goal_dist
-        )
-        self.mate_heard[message.sender] = self._now
-        self.mate_roles[message.sender] = message.role
-        self.mate_leaders[message.sender] = message.leader
+        self.team_view.hear(message, self._now)
 
     def _on_status(self, message: Message) -> None:
         assert isinstance(message, TaskStatus)

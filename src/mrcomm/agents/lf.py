@@ -339,7 +339,7 @@ class LeaderFollowerExecutor(TaskExecutor):
         pose = self.base.pose
         for mate in self.team:
             known = self.mates.get(mate)
-            if known is None or self._now - self.mate_heard.get(mate, -1e9) > self.lf.lost_timeout:
+            if known is None or self.team_view.age(mate, self._now) > self.lf.lost_timeout:
                 continue
             if not self._follows_me(mate):
                 continue
@@ -355,11 +355,11 @@ class LeaderFollowerExecutor(TaskExecutor):
         other's team would wait for ever; a mate that left the roles is not waited for
         either (its own link monitor opens a new round when it needs one)."""
         confirmed = self._confirmed_at.get(mate)
-        if confirmed is not None and self.mate_heard.get(mate, -math.inf) <= confirmed:
+        if confirmed is not None and self.team_view.heard.get(mate, -math.inf) <= confirmed:
             return True
-        role = self.mate_roles.get(mate)
+        role = self.team_view.roles.get(mate)
         if role == L.ROLE_FOLLOWER:
-            return self.mate_leaders.get(mate) == self.robot_id
+            return self.team_view.leaders.get(mate) == self.robot_id
         return role == L.ROLE_ASSIGNING and confirmed is not None
 
     def _step_leader_navigating(self) -> None:
@@ -418,8 +418,8 @@ class LeaderFollowerExecutor(TaskExecutor):
         """The leader's own poses, sent since we follow it, say it no longer leads (its
         completion may have reached us before we followed it)."""
         leader = self.leader or ""
-        fresh = self.mate_heard.get(leader, -1.0) > self._state_since_role
-        return fresh and self.mate_roles.get(leader) not in (L.ROLE_LEADER, L.ROLE_ASSIGNING)
+        fresh = self.team_view.heard.get(leader, -1.0) > self._state_since_role
+        return fresh and self.team_view.roles.get(leader) not in (L.ROLE_LEADER, L.ROLE_ASSIGNING)
 
     def before_follower_step(self) -> bool:
         if self._leader_gone():
@@ -517,7 +517,7 @@ class LeaderFollowerExecutor(TaskExecutor):
     def _step_regrouping(self) -> None:
         """Nobody answered the round: drive to the closest mate's last known position
         and try again once someone is heard (emergent regrouping)."""
-        heard_recently = any(self._now - t < 1.0 for t in self.mate_heard.values())
+        heard_recently = self.team_view.heard_within(1.0, self._now)
         if heard_recently and self._now - self._state_since > 1.0:
             self._open_round(self._round + 1)
             return
