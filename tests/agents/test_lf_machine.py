@@ -1,0 +1,230 @@
+"""The LF machine, unit by unit, on a fake base and a fake bus (SLT link sensor, warning
+at 4 m): the trigger, role assignment, leading and holding, following, regrouping and
+dissolving. Every transition of the top machine and of the leader and follower
+sub-machines is taken (the last test checks that)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import pytest
+
+from mrcomm.agents.lf import LeaderFollowerExecutor
+from mrcomm.agents.lf_machine import LF_STATES, LF_TRANSITIONS
+from mrcomm.messaging.messages import (
+    TOPIC_ROLE,
+    TOPIC_TASK_STATUS,
+    TOPIC_UTILITY,
+    RoleMsg,
+    TaskState,
+    TaskStatus,
+    UtilityMsg,
+)
+from mrcomm.metrics import labels as L
+from mrcomm.net.link_sensors import DistanceSensor
+from mrcomm.ports import NavStatus
+
+from .fakes import Harness, pose_of, task, untaken
+
+TEAM = ("robot_1", "robot_2", "robot_3")
+
+
+def lf() -> Harness:
+    return Harness(LeaderFollowerExecutor, link_sensor=DistanceSensor(4.0))
+
+
+def utility(mate: str, value: float, round_no: int = 1) -> UtilityMsg:
+    return UtilityMsg(sender=mate, incarnation=1, seq=9, stamp=0.0, round=round_no, utility=value)
+
+
+def role(mate: str, leader: str, round_no: int = 1) -> RoleMsg:
+    kind = L.ROLE_LEADER if mate == leader else L.ROLE_FOLLOWER
+    return RoleMsg(sender=mate, incarnation=1, seq=9, stamp=0.0, round=round_no, role=kind,
+                   leader=leader)  # fmt: skip
+
+
+def deliver(h: Harness, topic: str, message: object) -> None:
+    h.agent.set_time(h.now)
+    h.bus.deliver(topic, message)  # type: ignore[arg-type]
+
+
+def disconnect(h: Harness, mate_at: tuple[float, float] = (6.0, 0.0)) -> None:
+    """robot_1 drives to its task; robot_2 is heard beyond the warning distance."""
+    h.assign([task("t", 10.0, 0.0), task("u", -10.0, 0.0)], team=TEAM)
+    assert h.step() == "na_navigating"
+    h.hear(pose_of("robot_2", *mate_at))
+    h.hear(pose_of("robot_3", 1.0, 1.0))
+    h.step(times=3)
+    assert h.agent.state == "assigning"
+
+
+def lead(h: Harness) -> None:
+    disconnect(h)
+    statuses = h.bus.published(TOPIC_TASK_STATUS)
+    assert statuses[-1].state is TaskState.DISCONNECT_ROLE
+    deliver(h, TOPIC_UTILITY, utility("robot_2", 0.01))
+    deliver(h, TOPIC_UTILITY, utility("robot_3", 0.02))
+    h.step()
+    assert h.agent.leader == "robot_1"  # the highest utility leads
+    deliver(h, TOPIC_ROLE, role("robot_2", "robot_1"))
+    deliver(h, TOPIC_ROLE, role("robot_3", "robot_1"))
+    assert h.step() == "leader_navigating"
+    assert h.base.goal == (10.0, 0.0)
+
+
+def follow(h: Harness) -> None:
+    disconnect(h, mate_at=(6.0, 0.0))
+    deliver(h, TOPIC_UTILITY, utility("robot_2", 50.0))
+    deliver(h, TOPIC_UTILITY, utility("robot_3", 0.0))
+    h.step()
+    deliver(h, TOPIC_ROLE, role("robot_2", "robot_2"))
+    deliver(h, TOPIC_ROLE, role("robot_3", "robot_2"))
+    assert h.step() == "follower_following"
+    assert h.agent.leader == "robot_2"
+
+
+# -- scenarios ----------------------------------------------------------------------------
+
+
+def scenario_leader_holds_for_its_follower_and_completes(h: Harness) -> None:
+    lead(h)
+    # robot_2's pose says it follows robot_1 and it is beyond the warning distance: hold.
+    h.hear(pose_of("robot_2", -5.0, 0.0, role=L.ROLE_FOLLOWER, leader="robot_1"))
+    assert h.step(times=3) == "leader_holding"
+    assert h.base.goal is None  # stopped
+    h.hear(pose_of("robot_2", -2.0, 0.0, role=L.ROLE_FOLLOWER, leader="robot_1"))
+    assert h.step(times=5) == "leader_navigating"  # followers are judged at 5 Hz
+    assert h.base.goal == (10.0, 0.0)
+    assert h.timeline.total(L.LEADER_DISCONNECT) > 0
+    h.base.arrive()
+    h.step()
+    assert h.agent.state.startswith("na_")  # task done: roles dissolved
+    events = [e.label for e in h.timeline.events]
+    assert L.ROLES_DISSOLVED in events and L.TASK_COMPLETED in events
+
+
+def scenario_leader_retries_and_avoids(h: Harness) -> None:
+    lead(h)
+    h.hear(pose_of("robot_2", -2.0, 0.0, role=L.ROLE_FOLLOWER, leader="robot_1"))  # close
+    h.base.status = NavStatus.ABORTED
+    assert h.step() == "leader_retrying"
+    h.step(times=int(h.agent.params.nav_retry_delay / 0.1) + 1)
+    assert h.agent.state == "leader_navigating"
+    # robot_3 right ahead, heading at us, closer to its goal: near collision.
+    h.hear(pose_of("robot_3", 0.8, 0.0, math.pi, v=0.3, goal_dist=0.5))
+    assert h.step() == "leader_avoiding"
+    h.hear(pose_of("robot_3", 0.8, 3.0, math.pi / 2, v=0.3, goal_dist=0.5))
+    h.step(times=25)
+    assert h.agent.state == "leader_navigating"
+
+
+def scenario_a_newer_round_takes_a_leader_back_to_assignment(h: Harness) -> None:
+    lead(h)
+    deliver(h, TOPIC_UTILITY, utility("robot_2", 1.0, round_no=2))
+    assert h.agent.state == "assigning"
+
+
+def scenario_follower_follows_waits_and_makes_way(h: Harness) -> None:
+    follow(h)
+    h.hear(pose_of("robot_2", 3.0, 0.0, role=L.ROLE_LEADER, goal_dist=-1.0))
+    h.step()
+    assert h.base.goal == (3.0, 0.0)  # to the leader's last known position
+    h.base.pose = h.base.pose._replace(x=2.2)
+    assert h.step() == "follower_waiting"  # within 1.2 m: wait
+    h.hear(pose_of("robot_2", 5.0, 0.0, role=L.ROLE_LEADER, goal_dist=-1.0))
+    assert h.step() == "follower_following"  # the leader moved on: follow again
+    # The leader, driving towards us with a goal, finds us in its way: step aside.
+    h.base.pose = h.base.pose._replace(x=4.0)
+    h.hear(pose_of("robot_2", 5.0, 0.0, math.pi, v=0.2, role=L.ROLE_LEADER, goal_dist=6.0))
+    assert h.step() == "follower_clearing"
+    h.base.arrive()
+    assert h.step() == "follower_following"
+
+
+def scenario_follower_avoids_a_mate(h: Harness) -> None:
+    follow(h)
+    h.hear(pose_of("robot_2", 3.5, 0.0, role=L.ROLE_LEADER, goal_dist=-1.0))
+    h.step()
+    h.hear(pose_of("robot_3", 0.8, 0.0, math.pi, v=0.3, goal_dist=0.5))
+    assert h.step() == "follower_avoiding"
+    h.hear(pose_of("robot_3", 0.8, 3.0, math.pi / 2, v=0.3, goal_dist=0.5))
+    h.step(times=25)
+    assert h.agent.state == "follower_following"
+
+
+def scenario_follower_dissolves_when_its_leader_completes(h: Harness) -> None:
+    follow(h)
+    done = TaskStatus(sender="robot_2", incarnation=1, seq=5, stamp=0.0, robot="robot_2",
+                      task_id="x", state=TaskState.SUCCESS)  # fmt: skip
+    deliver(h, TOPIC_TASK_STATUS, done)
+    assert h.agent.state.startswith("na_")
+    assert h.agent.leader is None
+
+
+def scenario_nobody_answers_so_it_regroups_then_rejoins(h: Harness) -> None:
+    disconnect(h)
+    h.step(times=int(h.agent.lf.assign_timeout / 0.1) + 2)
+    assert h.agent.state == "regrouping"
+    assert h.base.goal is not None  # back towards the closest mate's last position
+    h.step(times=12)
+    h.hear(pose_of("robot_3", 1.0, 1.0))
+    h.step()
+    assert h.agent.state == "assigning"  # someone is heard again: a new round
+
+
+def scenario_an_idle_robot_joins_with_utility_zero_and_roles_dissolve(h: Harness) -> None:
+    h.assign([], team=TEAM)
+    assert h.step() == "na_idle"
+    deliver(h, TOPIC_UTILITY, utility("robot_2", 0.0))
+    assert h.agent.state == "assigning"  # joined the newer round
+    deliver(h, TOPIC_UTILITY, utility("robot_3", 0.0))
+    h.step()
+    assert h.agent.state.startswith("na_")  # nobody has work: no leader
+    published = h.bus.published(TOPIC_UTILITY)
+    assert published and published[0].utility == 0.0
+
+
+SCENARIOS: list[Callable[[Harness], None]] = [
+    scenario_leader_holds_for_its_follower_and_completes,
+    scenario_leader_retries_and_avoids,
+    scenario_a_newer_round_takes_a_leader_back_to_assignment,
+    scenario_follower_follows_waits_and_makes_way,
+    scenario_follower_avoids_a_mate,
+    scenario_follower_dissolves_when_its_leader_completes,
+    scenario_nobody_answers_so_it_regroups_then_rejoins,
+    scenario_an_idle_robot_joins_with_utility_zero_and_roles_dissolve,
+]
+
+
+@pytest.mark.parametrize("scenario", SCENARIOS, ids=lambda f: f.__name__.removeprefix("scenario_"))
+def test_scenario(scenario: Callable[[Harness], None]) -> None:
+    scenario(lf())
+
+
+def test_every_lf_transition_is_taken_by_these_tests() -> None:
+    taken: list[tuple[str, str]] = []
+    for scenario in SCENARIOS:
+        harness = lf()
+        scenario(harness)
+        taken += harness.taken
+    missing = untaken(LF_TRANSITIONS, taken)
+    for state in LF_STATES:
+        if isinstance(state, dict) and state["name"] in ("leader", "follower"):
+            missing += untaken(state["transitions"], taken, prefix=state["name"] + "_")
+    assert not missing, missing
+
+
+def test_the_utility_parameter_selects_the_function() -> None:
+    h = Harness(
+        LeaderFollowerExecutor,
+        link_sensor=DistanceSensor(4.0),
+        params=LeaderFollowerExecutor.Params(utility="greedy"),
+    )
+    h.assign([task("t", 10.0, 0.0), task("u", 12.0, 0.0)], team=TEAM)
+    h.step()
+    assert h.agent._my_utility() == pytest.approx(1 / 10.0)  # greedy: 1 / goal distance
+    original = lf()
+    original.assign([task("t", 10.0, 0.0), task("u", 12.0, 0.0)], team=TEAM)
+    original.step()
+    assert original.agent._my_utility() == pytest.approx(2 / 10.0)  # x 2 tasks left
