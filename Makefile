@@ -6,10 +6,11 @@ STAMP := $(VENV)/.installed
 
 .PHONY: demo test lint bench system-deps clean
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml examples/mrcomm-repeat/pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet -e '.[dev]'
+	$(BIN)/pip install --quiet -e examples/mrcomm-repeat  # the example plugin, tested by make test
 	touch $(STAMP)
 
 # System packages some features need: graphviz renders the state-machine diagrams
@@ -43,11 +44,11 @@ demo: $(STAMP) system-deps
 # Live-mode tests run processes against a wall clock: they run after the others, alone,
 # so that the simulation tests do not starve them of CPU on a 2-core machine.
 test: $(STAMP) system-deps
-	MPLBACKEND=Agg $(BIN)/pytest -q -n 2 --ignore=tests/live
+	MPLBACKEND=Agg $(BIN)/pytest -q -n 2 --ignore=tests/live tests examples/mrcomm-repeat/tests
 	MPLBACKEND=Agg $(BIN)/pytest -q tests/live
 
 lint: $(STAMP)
-	$(BIN)/ruff check src tests benchmarks scripts
+	$(BIN)/ruff check src tests benchmarks scripts examples
 	$(BIN)/mypy
 
 bench: $(STAMP)

@@ -40,10 +40,9 @@ def parameter(default: Any, description: str, unit: str | None = None, **limits:
     """A documented variant parameter: its default, what it means, its unit (shown by
     ``mrcomm variants``) and pydantic limits (``gt=0``...). Never NaN or infinite."""
     extra: Any = {"unit": unit} if unit else None
-    text = f"{description} ({unit})" if unit else description
     if isinstance(default, int | float) and not isinstance(default, bool):
         limits.setdefault("allow_inf_nan", False)
-    return Field(default, description=text, json_schema_extra=extra, **limits)
+    return Field(default, description=description, json_schema_extra=extra, **limits)
 
 
 class NoParams(BaseModel):

@@ -215,6 +215,11 @@ class TaskExecutor:
         """Innermost state name (``na_navigating`` -> ``navigating``)."""
         return self.STATE_TABLE[self.state].leaf
 
+    @property
+    def now(self) -> float:
+        """The agent's current time (simulated s since the mission began)."""
+        return self._now
+
     def set_time(self, now: float) -> None:
         """The time of the coming delivery and step: messages handled before ``step``
         are stamped with it (the runtime calls this first)."""
@@ -419,9 +424,10 @@ class TaskExecutor:
     def send_status(self, task_id: str, state: TaskState) -> None:
         """NB: publish once, no acknowledgement (communication-aware behaviours
         override this to send with AON)."""
-        self.bus.publish(TOPIC_TASK_STATUS, self._status(task_id, state))
+        self.bus.publish(TOPIC_TASK_STATUS, self.status_message(task_id, state))
 
-    def _status(self, task_id: str, state: TaskState) -> TaskStatus:
+    def status_message(self, task_id: str, state: TaskState) -> TaskStatus:
+        """A new status message of this robot (the next sequence number, now)."""
         self._seq += 1
         return TaskStatus(
             sender=self.robot_id,

@@ -108,7 +108,7 @@ class LeaderFollowerExecutor(TaskExecutor):
         return settled and (self.aon is None or not self.aon.pending_ids())
 
     def send_status(self, task_id: str, state: TaskState) -> None:
-        status = self._status(task_id, state)
+        status = self.status_message(task_id, state)
         if self.aon is None or state is not TaskState.SUCCESS:
             self.bus.publish(TOPIC_TASK_STATUS, status)  # informational statuses: plain
             return

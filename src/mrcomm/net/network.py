@@ -69,7 +69,7 @@ class AdHocParams(BaseModel):
         AH_RANGE_M,
         gt=0.0,
         allow_inf_nan=False,
-        description="communication limit between two nodes (m)",
+        description="communication limit between two nodes",
         json_schema_extra={"unit": "m"},
     )
 

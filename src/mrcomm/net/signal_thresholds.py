@@ -42,7 +42,7 @@ class SsdParams(BaseModel):
     warning_dbm: float = Field(
         -42.0,
         allow_inf_nan=False,
-        description="a link warns below this predicted RSSI (dBm)",
+        description="a link warns below this predicted RSSI",
         json_schema_extra={"unit": "dBm"},
     )
     model: Path | None = Field(
@@ -98,7 +98,7 @@ class EsdParams(BaseModel):
     warning_dbm: float = Field(
         -41.0,
         allow_inf_nan=False,
-        description="a link warns below this measured RSSI (dBm)",
+        description="a link warns below this measured RSSI",
         json_schema_extra={"unit": "dBm"},
     )
     trace: Path | None = Field(

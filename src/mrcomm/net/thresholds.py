@@ -129,7 +129,7 @@ class SltParams(BaseModel):
         4.0,
         gt=0.0,
         allow_inf_nan=False,
-        description="a link warns beyond this distance (m)",
+        description="a link warns beyond this distance",
         json_schema_extra={"unit": "m"},
     )
 

@@ -1,0 +1,76 @@
+"""``repeat`` — an example MRComm behaviour written outside MRComm, in one file.
+
+NB with redundancy: each task status is published ``repeats`` times, one second apart,
+instead of once. It is the cheapest way to fight packet loss without acknowledgements:
+at SPL X % a status is lost only if every copy is (X^repeats), where NB loses X and
+LF's AON makes sure at the cost of n(n+1) publications per status.
+
+Everything a behaviour needs is here: the executor class (a subclass of MRComm's NB
+executor), its parameter model (with defaults, limits, units) and its spec. The entry
+point in ``pyproject.toml`` registers the spec.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from mrcomm.agents.executor import ExecutorParams, TaskExecutor
+from mrcomm.messaging.messages import TOPIC_TASK_STATUS, TaskState, TaskStatus
+from mrcomm.specs import VariantSpec, parameter
+
+REPEAT_PERIOD_S = 1.0  # between copies of a status
+
+
+class RepeatParams(ExecutorParams):
+    """NB's parameters and one more."""
+
+    repeats: int = parameter(3, "times each task status is published (1: plain NB)", ge=1, le=20)
+
+
+class RepeatExecutor(TaskExecutor):
+    """NB that publishes each status ``repeats`` times."""
+
+    Params: ClassVar[type[ExecutorParams]] = RepeatParams
+
+    def __init__(self, *args: object, **kwargs: object) -> None:
+        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+        # (due time, copies left, status): copies still to publish.
+        self._copies: list[tuple[float, int, TaskStatus]] = []
+
+    @property
+    def repeats(self) -> int:
+        params = self.params
+        return params.repeats if isinstance(params, RepeatParams) else 1
+
+    def send_status(self, task_id: str, state: TaskState) -> None:
+        status = self.status_message(task_id, state)
+        self.bus.publish(TOPIC_TASK_STATUS, status)
+        if state is TaskState.SUCCESS and self.repeats > 1:
+            self._copies.append((self.now + REPEAT_PERIOD_S, self.repeats - 1, status))
+
+    def before_state_step(self) -> None:
+        """Publish the copies that are due (the same message: receivers see duplicates
+        of one status, not new statuses)."""
+        pending = []
+        for due, left, status in self._copies:
+            if self.now + 1e-9 >= due:
+                self.bus.publish(TOPIC_TASK_STATUS, status)
+                left -= 1
+                due += REPEAT_PERIOD_S
+            if left > 0:
+                pending.append((due, left, status))
+        self._copies = pending
+
+    @property
+    def done(self) -> bool:
+        return super().done and not self._copies
+
+
+SPEC = VariantSpec(
+    kind="behaviour",
+    name="repeat",
+    entry=RepeatExecutor,
+    params=RepeatParams,
+    summary="NB that publishes each task status `repeats` times, 1 s apart (example plugin)",
+    topics=("pose", "task_status"),
+)
