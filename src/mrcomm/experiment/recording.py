@@ -121,7 +121,7 @@ class MissionRecorder:
         self.mission = mission
         self.out = out
         self.scene_period = scene_period
-        scenario = mission.world.scenario
+        scenario = mission.resources.scenario
         self._robot_radius = scenario.robot_radius
         self._colors = {rid: scene.robot_color(i) for i, rid in enumerate(mission.robot_ids)}
         # Which robots carry each task (a task may need several): fixed at assignment.
@@ -274,7 +274,7 @@ class MissionRecorder:
         received = m.assigner.success_received
         goals = {e.goal.task_id for e in m.executors.values() if e.goal is not None}
         views = []
-        for task in m.world.scenario.tasks:
+        for task in m.resources.scenario.tasks:
             robots = self._task_robots[task.task_id]
             if robots and all((task.task_id, r) in received for r in robots):
                 state = "communicated"
@@ -292,7 +292,7 @@ class MissionRecorder:
 
 def run_and_record(
     config: RunConfig,
-    world: ScenarioResources | None,
+    resources: ScenarioResources | None,
     path: Path,
     *,
     scene_period: float = 0.2,
@@ -304,7 +304,7 @@ def run_and_record(
         raise InputError(f"directory {path.parent} does not exist", file=path, field="--record")
     if not scene_period > 0.0:
         raise InputError("must be positive", field="scene_period")
-    mission = Mission(config, world)
+    mission = Mission(config, resources)
     results: list[MissionResult] = []
 
     def record(tmp: Path) -> None:

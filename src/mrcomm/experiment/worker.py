@@ -65,7 +65,7 @@ class RunOutcome:
 
 
 @functools.lru_cache(maxsize=8)
-def _world(scenario: str) -> ScenarioResources:
+def _resources(scenario: str) -> ScenarioResources:
     # One ScenarioResources per scenario per worker: the planner's cost grid is built once.
     return ScenarioResources.load(Path(scenario))
 
@@ -82,11 +82,11 @@ def run_one(task: RunTask) -> RunOutcome:
     start = time.perf_counter()
     deadline = start + task.timeout_s if task.timeout_s is not None else None
     try:
-        world = _world(str(task.spec.config.scenario))
+        resources = _resources(str(task.spec.config.scenario))
         if task.record_path is not None:
-            result = _record(task.spec.config, world, Path(task.record_path), deadline)
+            result = _record(task.spec.config, resources, Path(task.record_path), deadline)
         else:
-            result = _simulate(task.spec.config, world, deadline)
+            result = _simulate(task.spec.config, resources, deadline)
         wall = time.perf_counter() - start
         return RunOutcome(task.spec.run_id, "ok", None, wall, result_rows(task.spec, result, wall))
     except RunTimeout:
@@ -100,8 +100,10 @@ def run_one(task: RunTask) -> RunOutcome:
         return failed_outcome(task, "error", f"{text}\n{traceback.format_exc()}", wall)
 
 
-def _simulate(config: RunConfig, world: ScenarioResources, deadline: float | None) -> MissionResult:
-    mission = Mission(config, world)
+def _simulate(
+    config: RunConfig, resources: ScenarioResources, deadline: float | None
+) -> MissionResult:
+    mission = Mission(config, resources)
     start = time.perf_counter()
     while not mission.done:
         mission.step()
@@ -117,14 +119,14 @@ def _simulate(config: RunConfig, world: ScenarioResources, deadline: float | Non
 
 
 def _record(
-    config: RunConfig, world: ScenarioResources, path: Path, deadline: float | None
+    config: RunConfig, resources: ScenarioResources, path: Path, deadline: float | None
 ) -> MissionResult:
     # run_and_record writes to a temporary name and renames when complete, so a killed
     # or failed run never leaves a truncated recording under the run's name.
     from mrcomm.experiment.recording import run_and_record
 
     with _alarm(deadline):
-        return run_and_record(config, world, path)
+        return run_and_record(config, resources, path)
 
 
 @contextlib.contextmanager

@@ -117,8 +117,8 @@ class AgentProcess:
     def __init__(self, settings: LiveSettings, agent: str, incarnation: int) -> None:
         self.settings = settings
         run = settings.run
-        self.world = ScenarioResources.load(run.scenario)
-        self.scenario = self.world.scenario
+        self.resources = ScenarioResources.load(run.scenario)
+        self.scenario = self.resources.scenario
         check_agent_id(self.scenario, agent)
         self.agent = agent
         self.incarnation = incarnation
@@ -158,7 +158,7 @@ class AgentProcess:
         if agent != ASSIGNER_ID:
             start = next(r.pose for r in self.scenario.robots if r.id == agent)
             self.base = RemoteBase(
-                agent, incarnation, start, self._send_command, self.world.planner
+                agent, incarnation, start, self._send_command, self.resources.planner
             )
             base = self.base
             positions.own[agent] = lambda: (base.pose.x, base.pose.y)
@@ -166,7 +166,7 @@ class AgentProcess:
             rank_of = {rid: float(ranks[i]) for i, rid in enumerate(self.robot_ids)}
             endpoint = self.bus.endpoint(agent, stream(run.seed, "loss", agent))
             timeline = Timeline(agent)
-            sensor = build_link_sensor(run, self.world)
+            sensor = build_link_sensor(run, self.resources)
             if isinstance(sensor, MeasuredSensor):
                 self.measured = sensor
             self.executor = executor_class(

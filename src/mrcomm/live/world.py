@@ -56,13 +56,15 @@ class WorldProcess:
     def __init__(self, settings: LiveSettings, incarnation: int) -> None:
         self.settings = settings
         run = settings.run
-        self.world = ScenarioResources.load(run.scenario)
-        scenario = self.world.scenario
+        self.resources = ScenarioResources.load(run.scenario)
+        scenario = self.resources.scenario
         self.robot_ids = tuple(r.id for r in scenario.robots)
-        self.bodies = RobotBodies(make_bases(self.world, run.seed), self.world.scenario.assigner)
+        self.bodies = RobotBodies(
+            make_bases(self.resources, run.seed), self.resources.scenario.assigner
+        )
         self.bases = self.bodies.bases
         self.node_ids = (*self.robot_ids, ASSIGNER_ID)
-        self.links, self.link_recorder = make_links(self.world, run)
+        self.links, self.link_recorder = make_links(self.resources, run)
         self.incarnation = incarnation
         self.team = team_processes(scenario)
         self.node = ZenohNode(settings.zenoh)

@@ -84,8 +84,6 @@ class Threshold:
     name: ClassVar[str] = ""
     #: Whether :meth:`evaluate` needs the line-of-sight matrix (costly: ray casts).
     needs_line_of_sight: ClassVar[bool] = False
-    #: Network types this threshold may be combined with (None: any).
-    network_types: ClassVar[frozenset[str] | None] = None
 
     def evaluate(self, pairs: PairGeometry, now: float) -> tuple[FloatArray | None, BoolArray]:
         """Return (rssi or None, warning), both (n, n), for the pairs' geometry."""

@@ -33,16 +33,18 @@ def build_network(config: RunConfig) -> NetworkModel:
     return model
 
 
-def build_threshold(config: RunConfig, world: ScenarioResources, ids: Sequence[str]) -> Threshold:
+def build_threshold(
+    config: RunConfig, resources: ScenarioResources, ids: Sequence[str]
+) -> Threshold:
     """The network-side threshold of the nodes ``ids``, from its spec and parameters."""
     cls: type[Threshold] = config.spec("threshold").load()
-    return cls.build(config.variant_params("threshold"), world, ids)
+    return cls.build(config.variant_params("threshold"), resources, ids)
 
 
-def build_link_sensor(config: RunConfig, world: ScenarioResources) -> LinkSensor:
+def build_link_sensor(config: RunConfig, resources: ScenarioResources) -> LinkSensor:
     """The link sensor a robot's agent judges its links with (one per robot)."""
     cls: type[Threshold] = config.spec("threshold").load()
-    return cls.sensor(config.variant_params("threshold"), world)
+    return cls.sensor(config.variant_params("threshold"), resources)
 
 
 def build_executor(
@@ -77,7 +79,7 @@ def esd_trace_path(config: RunConfig) -> Path | None:
 
 
 def build_trace_pulse(
-    config: RunConfig, world: ScenarioResources, sensors: Mapping[str, LinkSensor]
+    config: RunConfig, resources: ScenarioResources, sensors: Mapping[str, LinkSensor]
 ) -> TracePulse | None:
     """ESD in simulation: the pulses replaying the run's RSSI trace to each robot's
     measured sensor (None without a trace)."""
@@ -85,7 +87,7 @@ def build_trace_pulse(
     if path is None:
         return None
     measured = {r: s for r, s in sensors.items() if isinstance(s, MeasuredSensor)}
-    return TracePulse(world.rssi_trace(path), measured, tuple(sensors))
+    return TracePulse(resources.rssi_trace(path), measured, tuple(sensors))
 
 
 class TracePulse:
@@ -119,28 +121,28 @@ class TracePulse:
                     sensor.update(peer, float(value), now)
 
 
-def make_bases(world: ScenarioResources, seed: int) -> dict[str, SimBase]:
+def make_bases(resources: ScenarioResources, seed: int) -> dict[str, SimBase]:
     """Every robot's base at its start pose, each with its own seeded noise stream."""
-    scenario = world.scenario
+    scenario = resources.scenario
     return {
         r.id: SimBase(
             r.id,
             scenario.grid,
-            world.planner,
+            resources.planner,
             r.pose,
-            world.robot_params,
+            resources.robot_params,
             stream(seed, "robot", r.id),
         )
         for r in scenario.robots
     }
 
 
-def make_links(world: ScenarioResources, config: RunConfig) -> tuple[LinkModel, LinkRecorder]:
+def make_links(resources: ScenarioResources, config: RunConfig) -> tuple[LinkModel, LinkRecorder]:
     """The link model of the robots and the task assigner (in that order) and its
     recorder. A hosted assigner shares its robot's position, so its links are its
     host's (evaluated once; ESD's trace has no row for it: it measures with its host's
     card) and its link to its host is not a link."""
-    scenario = world.scenario
+    scenario = resources.scenario
     robot_ids = tuple(r.id for r in scenario.robots)
     node_ids = (*robot_ids, ASSIGNER_ID)
     host = scenario.assigner.host
@@ -150,7 +152,7 @@ def make_links(world: ScenarioResources, config: RunConfig) -> tuple[LinkModel, 
         node_ids,
         scenario.grid,
         build_network(config),
-        build_threshold(config, world, evaluated),
+        build_threshold(config, resources, evaluated),
         aliases=aliases,
     )
     skip = {(ASSIGNER_ID, host), (host, ASSIGNER_ID)} if host else set()

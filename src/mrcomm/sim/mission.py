@@ -41,10 +41,10 @@ from mrcomm.seeding import stream
 class Mission:
     """A mission being simulated; drive it with :meth:`run` or :meth:`step`."""
 
-    def __init__(self, config: RunConfig, world: ScenarioResources | None = None) -> None:
+    def __init__(self, config: RunConfig, resources: ScenarioResources | None = None) -> None:
         self.config = config
-        self.world = world or ScenarioResources.load(config.scenario)
-        scenario = self.world.scenario
+        self.resources = resources or ScenarioResources.load(config.scenario)
+        scenario = self.resources.scenario
         self.robot_ids = tuple(r.id for r in scenario.robots)
         self.node_ids = (*self.robot_ids, ASSIGNER_ID)
         seed = config.seed
@@ -53,14 +53,14 @@ class Mission:
             policy=DeliveryPolicy(config.spl),
             loss_rngs={a: stream(seed, "loss", a) for a in self.node_ids},
         )
-        self.links, self.link_recorder = make_links(self.world, config)
-        self.bodies = RobotBodies(make_bases(self.world, seed), scenario.assigner)
+        self.links, self.link_recorder = make_links(self.resources, config)
+        self.bodies = RobotBodies(make_bases(self.resources, seed), scenario.assigner)
         self.bases = self.bodies.bases
         self.timelines = {rid: Timeline(rid) for rid in self.robot_ids}
         ranks = stream(seed, "tie-break").permutation(len(self.robot_ids))
         rank_of = {rid: float(ranks[i]) for i, rid in enumerate(self.robot_ids)}
-        self.sensors = {rid: build_link_sensor(config, self.world) for rid in self.robot_ids}
-        self.pulse = build_trace_pulse(config, self.world, self.sensors)
+        self.sensors = {rid: build_link_sensor(config, self.resources) for rid in self.robot_ids}
+        self.pulse = build_trace_pulse(config, self.resources, self.sensors)
         self.executors: dict[str, TaskExecutor] = {
             rid: build_executor(
                 config,
@@ -155,7 +155,7 @@ class Mission:
         return assemble(
             RunFacts(
                 config=self.config,
-                scenario=self.world.scenario,
+                scenario=self.resources.scenario,
                 end_time=end,
                 finished=self.finished,
                 wall_time_s=self._wall,
@@ -172,6 +172,6 @@ class Mission:
         )
 
 
-def run_mission(config: RunConfig, world: ScenarioResources | None = None) -> MissionResult:
+def run_mission(config: RunConfig, resources: ScenarioResources | None = None) -> MissionResult:
     """Simulate one mission to its end and return its results."""
-    return Mission(config, world).run()
+    return Mission(config, resources).run()
