@@ -23,7 +23,9 @@ from typing import Any, ClassVar
 from pydantic import BaseModel, ConfigDict, Field
 from transitions import Machine
 
-from mrcomm.agents.collision import CollisionParams, MateState, classify, has_right_of_way
+from mrcomm.agents import agenda
+from mrcomm.agents.avoidance import Avoidance
+from mrcomm.agents.collision import CollisionParams, MateState
 from mrcomm.agents.machine_table import StateEntry, build_table
 from mrcomm.agents.team_view import TeamView
 from mrcomm.messaging.messages import (
@@ -42,7 +44,7 @@ from mrcomm.metrics.timeline import ACTIVITY, Timeline
 from mrcomm.net.link_sensors import NoSensor
 from mrcomm.ports import Base, Bus, LinkSensor, NavStatus
 from mrcomm.specs import parameter
-from mrcomm.world.geometry import wrap_angle
+from mrcomm.world.geometry import Pose, wrap_angle
 
 NB_STATES = [
     "unassigned",
@@ -183,12 +185,7 @@ class TaskExecutor:
         self._next_pose = 0.0
         self._moved_once = False
         self._state_since = 0.0
-        self._avoid_mate: str | None = None
-        self._right_of_way = False
-        self._clear_since: float | None = None
-        self._grace_until: dict[str, float] = {}
-        self._last_conflict: dict[str, float] = {}
-        self._repeats: dict[str, int] = {}
+        self.avoidance = Avoidance(self.robot_id, self.params, tie_break_rank)
         self._clearing_goals: list[tuple[float, float]] = []
         self._execute_until = 0.0
         self._agenda_reported = False
@@ -333,31 +330,18 @@ class TaskExecutor:
             self._select_next()
 
     def _step_avoiding(self) -> None:
-        elapsed = self._now - self._state_since
-        if elapsed < self.params.collision_pause:
+        # The pose is read only when needed: a base may draw noise for each reading.
+        if not self.avoidance.may_resume(
+            self._current_pose, self.mates, self._now, self._state_since
+        ):
             return
-        if not self._right_of_way and elapsed < self.params.give_way_timeout:
-            mate = self.mates.get(self._avoid_mate or "")
-            in_conflict = mate is not None and (
-                classify(self.base.pose, mate, self.params.collision) is not None
-            )
-            if in_conflict:
-                self._clear_since = None
-                return
-            if self._clear_since is None:
-                self._clear_since = self._now
-            if self._now - self._clear_since < self.params.clear_time:
-                return
-        if self._avoid_mate is not None:
-            # Pausing again and again for the same mate means the bases are jammed:
-            # leave it to navigation (re-planning, stuck recovery) for longer each time.
-            repeats = self._repeats.get(self._avoid_mate, 0)
-            grace = min(self.params.resume_grace * 2**repeats, self.params.max_grace)
-            self._grace_until[self._avoid_mate] = self._now + grace
         target = self.navigation_target()
         if target is not None:
             self.base.navigate_to(*target)
         self.trigger("resume")
+
+    def _current_pose(self) -> Pose:
+        return self.base.pose
 
     def navigation_target(self) -> tuple[float, float] | None:
         """Where the robot is driving (NB: its current task)."""
@@ -371,54 +355,32 @@ class TaskExecutor:
             return
         assert self._t0 is not None
         elapsed = self._now - self._t0
-        pose = self.base.pose
-        available = [
-            t
-            for t in self.agenda
-            if t.arrival_time <= elapsed + 1e-9 and all(d in self.known_done for d in t.depends)
-        ]
-        if not available:
+        ready = agenda.available(self.agenda, elapsed, self.known_done)
+        if not ready:
             if self.leaf() != "waiting":
                 self.trigger("wait")
             return
-        task = min(available, key=lambda t: (math.hypot(t.x - pose.x, t.y - pose.y), t.task_id))
+        task = agenda.closest(ready, self.base.pose)
         self.goal = task
         self.base.navigate_to(task.x, task.y)
         self.trigger("go")
 
     def _check_collisions(self) -> None:
         pose = self.base.pose
-        params = self.params.collision
-        for mate in self.mates.values():
-            if self._grace_until.get(mate.robot, -1.0) > self._now:
-                continue
-            kind = classify(pose, mate, params)
-            if kind is None:
-                continue
-            previous = self._last_conflict.get(mate.robot)
-            repeat = previous is not None and self._now - previous < self.params.repeat_window
-            self._last_conflict[mate.robot] = self._now
-            self._repeats[mate.robot] = self._repeats.get(mate.robot, 0) + 1 if repeat else 0
-            self.timeline.event(
-                L.NEAR_COLLISION,
-                self._now,
-                mate=mate.robot,
-                kind=kind,
-                repeat=repeat,
-                x=round(pose.x, 3),
-                y=round(pose.y, 3),
-            )
-            self._avoid_mate = mate.robot
-            self._clear_since = None
-            self._right_of_way = has_right_of_way(
-                self._goal_distance(),
-                mate.goal_dist,
-                self._rank(self.robot_id),
-                self._rank(mate.robot),
-            )
-            self.base.cancel()
-            self.trigger("conflict")
+        conflict = self.avoidance.detect(pose, self.mates.values(), self._now, self._goal_distance)
+        if conflict is None:
             return
+        self.timeline.event(
+            L.NEAR_COLLISION,
+            self._now,
+            mate=conflict.mate,
+            kind=conflict.kind,
+            repeat=conflict.repeat,
+            x=round(pose.x, 3),
+            y=round(pose.y, 3),
+        )
+        self.base.cancel()
+        self.trigger("conflict")
 
     # -- communication ---------------------------------------------------------------
     def send_status(self, task_id: str, state: TaskState) -> None:

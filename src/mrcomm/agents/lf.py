@@ -33,6 +33,7 @@ from typing import Any, cast
 
 from transitions.extensions import HierarchicalMachine
 
+from mrcomm.agents import agenda
 from mrcomm.agents.executor import TaskExecutor
 from mrcomm.agents.lf_machine import (
     ACTIVITY_OF_FULL_STATE,
@@ -312,19 +313,12 @@ class LeaderFollowerExecutor(TaskExecutor):
 
     # -- leader --------------------------------------------------------------------------
     def _lead_next_task(self) -> None:
-        pose = self.base.pose
         elapsed = self._now - (self._t0 or 0.0)
-        available = [
-            t
-            for t in self.agenda
-            if t.arrival_time <= elapsed + 1e-9 and all(d in self.known_done for d in t.depends)
-        ]
-        if not available:
+        ready = agenda.available(self.agenda, elapsed, self.known_done)
+        if not ready:
             self._dissolve("leader has no available task")
             return
-        self.goal = min(
-            available, key=lambda t: (math.hypot(t.x - pose.x, t.y - pose.y), t.task_id)
-        )
+        self.goal = agenda.closest(ready, self.base.pose)
         self.base.navigate_to(self.goal.x, self.goal.y)
 
     def _followers_out(self) -> bool:

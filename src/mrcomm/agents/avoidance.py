@@ -1,0 +1,95 @@
+"""Collision avoidance between team mates, as one part of an executor: which mate's
+pose puts it in the robot's danger zone, who has right of way, when the robot may move
+on, and the growing grace that breaks livelocks (pausing again and again for the same
+mate means the bases are jammed: navigation's re-planning and stuck recovery get longer
+each time before the next pause)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from mrcomm.agents.collision import MateState, classify, has_right_of_way
+from mrcomm.world.geometry import Pose
+
+if TYPE_CHECKING:
+    from mrcomm.agents.executor import ExecutorParams
+
+
+@dataclass(frozen=True)
+class Conflict:
+    """A near collision found this step."""
+
+    mate: str
+    kind: str
+    #: Another one with the same mate within the repeat window.
+    repeat: bool
+
+
+class Avoidance:
+    """The near-collision state of one robot."""
+
+    def __init__(self, robot: str, params: ExecutorParams, rank: Callable[[str], float]) -> None:
+        self.robot = robot
+        self.params = params
+        self._rank = rank
+        self.mate: str | None = None  # the mate of the current conflict
+        self.right_of_way = False
+        self._clear_since: float | None = None
+        self._grace_until: dict[str, float] = {}
+        self._last_conflict: dict[str, float] = {}
+        self._repeats: dict[str, int] = {}
+
+    def detect(
+        self,
+        pose: Pose,
+        mates: Iterable[MateState],
+        now: float,
+        goal_distance: Callable[[], float],
+    ) -> Conflict | None:
+        """The first mate in conflict with ``pose`` (outside its grace), which becomes
+        the current conflict with right of way decided; None when there is none."""
+        for mate in mates:
+            if self._grace_until.get(mate.robot, -1.0) > now:
+                continue
+            kind = classify(pose, mate, self.params.collision)
+            if kind is None:
+                continue
+            previous = self._last_conflict.get(mate.robot)
+            repeat = previous is not None and now - previous < self.params.repeat_window
+            self._last_conflict[mate.robot] = now
+            self._repeats[mate.robot] = self._repeats.get(mate.robot, 0) + 1 if repeat else 0
+            self.mate = mate.robot
+            self._clear_since = None
+            self.right_of_way = has_right_of_way(
+                goal_distance(), mate.goal_dist, self._rank(self.robot), self._rank(mate.robot)
+            )
+            return Conflict(mate.robot, kind, repeat)
+        return None
+
+    def may_resume(
+        self, pose: Callable[[], Pose], mates: Mapping[str, MateState], now: float, since: float
+    ) -> bool:
+        """Whether a robot paused since ``since`` may move on: after the pause, at once
+        with right of way; without it once the mate has been clear for a while, or after
+        the give-way time-out. Resuming starts the mate's grace."""
+        elapsed = now - since
+        params = self.params
+        if elapsed < params.collision_pause:
+            return False
+        if not self.right_of_way and elapsed < params.give_way_timeout:
+            mate = mates.get(self.mate or "")
+            in_conflict = mate is not None and classify(pose(), mate, params.collision) is not None
+            if in_conflict:
+                self._clear_since = None
+                return False
+            if self._clear_since is None:
+                self._clear_since = now
+            if now - self._clear_since < params.clear_time:
+                return False
+        if self.mate is not None:
+            repeats = self._repeats.get(self.mate, 0)
+            grace = min(params.resume_grace * 2**repeats, params.max_grace)
+            self._grace_until[self.mate] = now + grace
+        return True
