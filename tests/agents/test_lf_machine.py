@@ -215,6 +215,25 @@ def test_every_lf_transition_is_taken_by_these_tests() -> None:
     assert not missing, missing
 
 
+def test_role_checks_agree_with_transitions_is_state() -> None:
+    """The state table's top state answers what transitions' is_state does."""
+    for scenario in SCENARIOS:
+        h = lf()
+        seen = set()
+        original = h.agent._after_state_change
+
+        def check(h: Harness = h, seen: set[str] = seen, original=original) -> None:  # type: ignore[no-untyped-def]
+            original()
+            seen.add(h.agent.state)
+            for top in ("na", "assigning", "leader", "follower", "regrouping"):
+                expected = h.agent.machine.is_state(top, h.agent, allow_substates=True)
+                assert h.agent._in(top) == bool(expected), (h.agent.state, top)
+
+        h.agent._after_state_change = check  # type: ignore[method-assign]
+        scenario(h)
+        assert seen
+
+
 def test_the_utility_parameter_selects_the_function() -> None:
     h = Harness(
         LeaderFollowerExecutor,

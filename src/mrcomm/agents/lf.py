@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from typing import Any, cast
+from typing import Any
 
 from transitions.extensions import HierarchicalMachine
 
@@ -525,9 +525,10 @@ class LeaderFollowerExecutor(TaskExecutor):
                 self.base.navigate_to(*self._follow_target)
 
     def _in(self, top: str) -> bool:
-        """Whether the robot is in ``top`` or one of its sub-states."""
-        machine = cast(HierarchicalMachine, self.machine)
-        return bool(machine.is_state(top, self, allow_substates=True))
+        """Whether the robot is in ``top`` or one of its sub-states — what
+        ``machine.is_state(top, self, allow_substates=True)`` answers, read from the
+        state table instead: that call costs ~8 µs, several times a step per robot."""
+        return self.STATE_TABLE[self.state].top == top
 
     # -- timeline ------------------------------------------------------------------------
     def activity_of(self, state: str) -> str | None:
