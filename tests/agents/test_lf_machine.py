@@ -247,3 +247,22 @@ def test_the_utility_parameter_selects_the_function() -> None:
     original.assign([task("t", 10.0, 0.0), task("u", 12.0, 0.0)], team=TEAM)
     original.step()
     assert original.agent._my_utility() == pytest.approx(2 / 10.0)  # x 2 tasks left
+
+
+def test_the_role_round_decides_by_utility_then_rank() -> None:
+    from mrcomm.agents.role_round import RoleRound
+
+    rnd = RoleRound("robot_1")
+    rnd.open(3, utility=0.5, now=1.0)
+    assert rnd.alone and rnd.next_announce == 1.0
+    rnd.hear_utility("robot_2", 0.5)
+    rnd.hear_utility("robot_2", 9.0)  # the first utility of a round counts
+    assert rnd.has_every_score(("robot_1", "robot_2"))
+    ranks = {"robot_1": 1.0, "robot_2": 0.0}
+    assert rnd.best(ranks.__getitem__) == ("robot_2", 0.5)  # a tie: the lower rank
+    rnd.settle("robot_2", now=2.0)
+    assert rnd.roles == {"robot_1": L.ROLE_FOLLOWER} and not rnd.has_every_role()
+    rnd.hear_role("robot_2", L.ROLE_LEADER, "robot_2", now=2.5)
+    assert rnd.has_every_role() and rnd.confirmed_at == {}
+    rnd.hear_role("robot_3", L.ROLE_FOLLOWER, "robot_1", now=2.6)
+    assert rnd.confirmed_at == {"robot_3": 2.6} and rnd.scores["robot_3"] == 0.0

@@ -42,6 +42,7 @@ from mrcomm.agents.lf_machine import (
     ROLE_OF_TOP_STATE,
     LfParams,
 )
+from mrcomm.agents.role_round import RoleRound
 from mrcomm.agents.utility import UtilityInputs, utility_function
 from mrcomm.messaging.aon import AonEndpoint, MessageId
 from mrcomm.messaging.messages import (
@@ -80,14 +81,7 @@ class LeaderFollowerExecutor(TaskExecutor):
         kwargs["params"] = self.lf
         self._utility = utility_function(self.lf.utility)
         self.aon: AonEndpoint | None = None
-        self._round = 0
-        self._scores: dict[str, float] = {}
-        self._roles: dict[str, str] = {}
-        # Members that named this robot leader in the current round, and when.
-        self._confirmed_at: dict[str, float] = {}
         self.leader: str | None = None
-        self._decided_at = 0.0
-        self._next_announce = 0.0
         self._just_completed = False
         self._follow_target: tuple[float, float] | None = None
         self._next_refresh = 0.0
@@ -97,6 +91,7 @@ class LeaderFollowerExecutor(TaskExecutor):
         self._state_since_role = 0.0
         self._followers_were_out = False
         super().__init__(*args, **kwargs)
+        self.role_round = RoleRound(self.robot_id)
         self.bus.subscribe(TOPIC_UTILITY, self._on_utility)
         self.bus.subscribe(TOPIC_HEARTBEAT, self._on_heartbeat)
         self.bus.subscribe(TOPIC_ROLE, self._on_role)
@@ -172,18 +167,14 @@ class LeaderFollowerExecutor(TaskExecutor):
             ):
                 self.timeline.event(L.DISCONNECT_DETECTED, self._now, mate=mate)
                 self.send_status("", TaskState.DISCONNECT_ROLE)
-                self._open_round(self._round + 1)
+                self._open_round(self.role_round.number + 1)
                 return
 
     # -- role assignment -----------------------------------------------------------------
     def _open_round(self, round_no: int) -> None:
         self.base.cancel()
-        self._round = round_no
-        self._scores = {self.robot_id: self._my_utility()}
-        self._roles = {}
-        self._confirmed_at = {}
+        self.role_round.open(round_no, self._my_utility(), self._now)
         self.leader = None
-        self._next_announce = self._now
         if self.state == "assigning":
             self._state_since = self._now  # a newer round restarts the collection
         else:
@@ -206,36 +197,36 @@ class LeaderFollowerExecutor(TaskExecutor):
         elapsed = self._now - self._state_since
         members = (self.robot_id, *self.team)
         if self.leader is None:
-            if self._now >= self._next_announce:
+            if self._now >= self.role_round.next_announce:
                 self._announce_utility()
-            if len(self._scores) == len(members) or elapsed >= self.lf.assign_timeout:
+            if self.role_round.has_every_score(members) or elapsed >= self.lf.assign_timeout:
                 self._decide()
             return
-        if self._now >= self._next_announce:
+        if self._now >= self.role_round.next_announce:
             self._announce_role()
-        have_all = all(m in self._roles for m in self._scores)
-        if have_all or self._now - self._decided_at >= self.lf.roles_timeout:
+        late = self._now - self.role_round.decided_at >= self.lf.roles_timeout
+        if self.role_round.has_every_role() or late:
             self._take_role()
 
     def _decide(self) -> None:
-        if len(self._scores) == 1 and self.team:
+        if self.role_round.alone and self.team:
             self.trigger("regroup")  # nobody answered: go back towards the team
             return
-        best = max(self._scores, key=lambda r: (self._scores[r], -self._rank(r)))
-        if self._scores[best] <= 0.0:
+        best, utility = self.role_round.best(self._rank)
+        if utility <= 0.0:
             self._dissolve("no robot has work left")
             return
         self._settle(best)
 
     def _settle(self, leader: str) -> None:
         self.leader = leader
-        self._decided_at = self._now
-        self._roles[self.robot_id] = L.ROLE_LEADER if leader == self.robot_id else L.ROLE_FOLLOWER
-        self._next_announce = self._now
+        self.role_round.settle(leader, self._now)
 
     def _take_role(self) -> None:
         self._just_completed = False
-        self.timeline.event(L.ROLE_ASSIGNED, self._now, round=self._round, leader=self.leader)
+        self.timeline.event(
+            L.ROLE_ASSIGNED, self._now, round=self.role_round.number, leader=self.leader
+        )
         if self.leader == self.robot_id:
             self.trigger("become_leader")
             self._lead_next_task()
@@ -253,11 +244,11 @@ class LeaderFollowerExecutor(TaskExecutor):
                 incarnation=self.incarnation,
                 seq=self._seq,
                 stamp=self._now,
-                round=self._round,
-                utility=self._scores[self.robot_id],
+                round=self.role_round.number,
+                utility=self.role_round.scores[self.robot_id],
             ),
         )
-        self._next_announce = self._now + self.lf.announce_period
+        self.role_round.next_announce = self._now + self.lf.announce_period
 
     def _announce_role(self) -> None:
         assert self.leader is not None
@@ -269,23 +260,23 @@ class LeaderFollowerExecutor(TaskExecutor):
                 incarnation=self.incarnation,
                 seq=self._seq,
                 stamp=self._now,
-                round=self._round,
-                role=self._roles[self.robot_id],
+                round=self.role_round.number,
+                role=self.role_round.roles[self.robot_id],
                 leader=self.leader,
             ),
         )
-        self._next_announce = self._now + self.lf.announce_period
+        self.role_round.next_announce = self._now + self.lf.announce_period
 
     def _on_utility(self, message: Message) -> None:
         assert isinstance(message, UtilityMsg)
         if self._t0 is None or message.sender == self.robot_id:
             return
-        if message.round > self._round:
+        if message.round > self.role_round.number:
             self._open_round(message.round)  # join the newer round (idle: utility 0)
-        if message.round != self._round:
+        if message.round != self.role_round.number:
             return
         if self.state == "assigning":
-            self._scores.setdefault(message.sender, message.utility)
+            self.role_round.hear_utility(message.sender, message.utility)
         elif self.leader is not None:
             self._announce_role()  # it is still collecting: answer, never deadlock
 
@@ -293,14 +284,11 @@ class LeaderFollowerExecutor(TaskExecutor):
         assert isinstance(message, RoleMsg)
         if self._t0 is None or message.sender == self.robot_id:
             return
-        if message.round > self._round:
+        if message.round > self.role_round.number:
             self._open_round(message.round)
-        if message.round != self._round or self.state != "assigning":
+        if message.round != self.role_round.number or self.state != "assigning":
             return
-        self._roles[message.sender] = message.role
-        if message.leader == self.robot_id:
-            self._confirmed_at[message.sender] = self._now
-        self._scores.setdefault(message.sender, 0.0)
+        self.role_round.hear_role(message.sender, message.role, message.leader, self._now)
         if self.leader is None:
             self._settle(message.leader)  # decided by a member that had every score
 
@@ -348,7 +336,7 @@ class LeaderFollowerExecutor(TaskExecutor):
         on the utilities it had at the time-out), and two leaders each holding for the
         other's team would wait for ever; a mate that left the roles is not waited for
         either (its own link monitor opens a new round when it needs one)."""
-        confirmed = self._confirmed_at.get(mate)
+        confirmed = self.role_round.confirmed_at.get(mate)
         if confirmed is not None and self.team_view.heard.get(mate, -math.inf) <= confirmed:
             return True
         role = self.team_view.roles.get(mate)
@@ -513,7 +501,7 @@ class LeaderFollowerExecutor(TaskExecutor):
         and try again once someone is heard (emergent regrouping)."""
         heard_recently = self.team_view.heard_within(1.0, self._now)
         if heard_recently and self._now - self._state_since > 1.0:
-            self._open_round(self._round + 1)
+            self._open_round(self.role_round.number + 1)
             return
         if self._follow_target is None:
             pose = self.base.pose
