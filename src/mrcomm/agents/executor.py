@@ -140,7 +140,7 @@ class TaskExecutor:
     transitions: list[dict[str, Any]] = NB_TRANSITIONS
     initial = "unassigned"
     machine_class: type[Machine] = Machine
-    Params: type[ExecutorParams] = ExecutorParams
+    Params: ClassVar[type[ExecutorParams]] = ExecutorParams
     #: Leaf states stepped by no handler (``unassigned``: the step chooses a task).
     PASSIVE_STATES: ClassVar[frozenset[str]] = frozenset({"unassigned"})
     #: Each leaf state's entry (handler, leaf, top), built and checked per class.

@@ -77,9 +77,9 @@ class LeaderFollowerExecutor(TaskExecutor):
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         params = kwargs.get("params")
-        self.lf: LfParams = params if isinstance(params, LfParams) else LfParams()
-        kwargs["params"] = self.lf
-        self._utility = utility_function(self.lf.utility)
+        lf = params if isinstance(params, LfParams) else LfParams()
+        kwargs["params"] = lf
+        self._utility = utility_function(lf.utility)
         self.aon: AonEndpoint | None = None
         self.leader: str | None = None
         self._just_completed = False
@@ -95,6 +95,12 @@ class LeaderFollowerExecutor(TaskExecutor):
         self.bus.subscribe(TOPIC_UTILITY, self._on_utility)
         self.bus.subscribe(TOPIC_HEARTBEAT, self._on_heartbeat)
         self.bus.subscribe(TOPIC_ROLE, self._on_role)
+
+    @property
+    def lf(self) -> LfParams:
+        """This executor's parameters (``self.params``), typed as LF's."""
+        assert isinstance(self.params, LfParams)
+        return self.params
 
     # -- completion and communication ----------------------------------------------------
     @property

@@ -177,10 +177,14 @@ class AgentProcess:
                 link_sensor=sensor,
                 incarnation=incarnation,
             )
-            if settings.lease is not None and hasattr(self.executor, "lf"):
+            if (
+                settings.lease is not None
+                and "aon_lease" in type(self.executor.params).model_fields
+            ):
                 # The LF executor reads its AON lease when its assignment arrives.
-                lf: Any = self.executor
-                lf.lf = lf.params = lf.lf.model_copy(update={"aon_lease": settings.lease})
+                self.executor.params = self.executor.params.model_copy(
+                    update={"aon_lease": settings.lease}
+                )
             self.tail = TimelineTail(timeline, self.journal)
             self.resync = Resync(self.executor, endpoint, self._request_sync, wait=SYNC_WAIT)
         self.assigner: TaskAssigner | None = None
