@@ -65,12 +65,6 @@ class TopicCounts:
         else:
             self.dropped_range += 1
 
-    def add(self, other: TopicCounts) -> None:
-        self.sent += other.sent
-        self.received += other.received
-        self.dropped_loss += other.dropped_loss
-        self.dropped_range += other.dropped_range
-
     def as_dict(self) -> dict[str, int]:
         return {
             "sent": self.sent,

@@ -125,13 +125,6 @@ class InProcessNetwork:
             counts = self.counts[key] = TopicCounts()
         return counts
 
-    def counts_by_topic(self) -> dict[str, dict[str, int]]:
-        """Totals per topic over all agents."""
-        totals: dict[str, TopicCounts] = {}
-        for (_, topic), c in self.counts.items():
-            totals.setdefault(topic, TopicCounts()).add(c)
-        return {topic: c.as_dict() for topic, c in sorted(totals.items())}
-
     def counts_by_agent(self) -> dict[str, dict[str, dict[str, int]]]:
         """agent -> topic -> counts."""
         out: dict[str, dict[str, dict[str, int]]] = {}
