@@ -123,10 +123,15 @@ def test_display_and_latex_formatting(study: Any) -> None:
     table = st.comparison_table(study.runs, ["execution_phase_time"])
     shown = rp.display_frame("comparisons", table)
     assert list(shown["configuration"]) == ["AH+SLT+LF", "AH+SLT+NB"]
-    assert all(re.fullmatch(r"-?\d+\.\d{3}", z) for z in shown["Z"])
+    assert all(re.fullmatch(r"-?\d+\.\d{2}", z) for z in shown["Z"])
+    assert all(re.fullmatch(r"-?\d\.\d{2} \[-?\d\.\d{2}, -?\d\.\d{2}\]", r) for r in shown.iloc[:, 13])
+    assert set(shown["decision"]) <= {"H_A supported", "H0 not rejected"}
     latex = rp.to_latex("comparisons", table)
     assert r"\begin{tabular}" in latex and r"$\pm$" in latex and "±" not in latex
     assert r"$r=Z/\sqrt{n}$" in latex and "execution\\_phase\\_time" in latex
+    # booktabs, a caption, and numbers right-aligned: metric/config/H_A left, m and n right.
+    assert r"\toprule" in latex and r"\caption{" in latex
+    assert r"\begin{tabular}{lllrr" in latex
 
 
 def test_a_study_without_finished_runs_is_an_input_error(tmp_path: Path) -> None:

@@ -57,7 +57,7 @@ def test_exact_p_n5_without_ties_matches_enumeration() -> None:
     assert res.p == pytest.approx(exact_p_by_enumeration(x, y, "less"), abs=1e-12)
     # Splits of 10 into 5 + 5 with U = 0, 1, 2, 3, 4: 1 + 1 + 2 + 3 + 5 of 252.
     assert res.p == pytest.approx(12 / 252)
-    assert res.accepted == "HA"
+    assert res.direction == "SPL0 lower"
 
 
 def test_exact_p_n5_with_ties_enumerates_every_split() -> None:
@@ -86,9 +86,13 @@ def test_effect_size_conventions_by_hand() -> None:
     sigma = math.sqrt(5 * 5 * 11 / 12)  # 4.7871
     z = (0.0 - 12.5) / sigma  # -2.6112
     assert res.z == pytest.approx(z)
-    assert res.r == pytest.approx(z / math.sqrt(5))  # original: Z / √n, n per group
-    assert res.r_conv == pytest.approx(z / math.sqrt(10))  # conventional: Z / √(m+n)
-    assert (round(res.z, 4), round(res.r, 4), round(res.r_conv, 4)) == (-2.6112, -1.1677, -0.8257)
+    assert res.r_original == pytest.approx(z / math.sqrt(5))  # original: Z / √n, n per group
+    assert res.r == pytest.approx(z / math.sqrt(10))  # conventional: Z / √(m+n)
+    assert (round(res.z, 4), round(res.r_original, 4), round(res.r, 4)) == (
+        -2.6112,
+        -1.1677,
+        -0.8257,
+    )
     assert res.effect == "strong"
     assert res.p == pytest.approx(1 / 252)
 
@@ -98,8 +102,8 @@ def test_effect_size_uses_tie_corrected_z() -> None:
     res = st.mann_whitney(x, y, "less")
     z = (u_by_hand(x, y) - 10.0) / 3.944053188733078
     assert res.z == pytest.approx(z)
-    assert res.r == pytest.approx(z / 2.0)  # unequal groups: the smaller, n = 4
-    assert res.r_conv == pytest.approx(z / 3.0)
+    assert res.r_original == pytest.approx(z / 2.0)  # unequal groups: the smaller, n = 4
+    assert res.r == pytest.approx(z / 3.0)
 
 
 def test_large_samples_with_ties_use_the_normal_approximation() -> None:
@@ -134,7 +138,7 @@ def test_cohen_labels(r: float, label: str) -> None:
 
 def test_degenerate_and_tiny_samples() -> None:
     same = st.mann_whitney([0, 0, 0], [0, 0, 0, 0], "greater")
-    assert (same.p, same.z, same.r, same.accepted) == (1.0, 0.0, 0.0, "H0")
+    assert (same.p, same.z, same.r, same.direction) == (1.0, 0.0, 0.0, "none")
     assert same.u == 6.0
     tiny = st.mann_whitney([1.0], [2.0, 3.0], "less")
     assert math.isnan(tiny.p) and tiny.method == "too few"
@@ -236,3 +240,115 @@ def test_success_tables() -> None:
 def test_unknown_metric_is_an_input_error() -> None:
     with pytest.raises(InputError, match="did you mean 'delay_time'"):
         st.resolve_metrics(["delay_tme"])
+
+
+# ---- honest presentation: bounded r, reachable designs, corrected p, wording ----------------
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as hs  # noqa: E402
+
+_values = hs.lists(hs.integers(0, 4).map(float), min_size=2, max_size=12)
+
+
+@settings(max_examples=300, deadline=None)
+@given(_values, _values, hs.sampled_from(["less", "greater"]))
+def test_lead_effect_size_is_bounded_for_any_data(x: list[float], y: list[float], alt: str) -> None:
+    # Few distinct values: heavy ties, all-tied samples and complete separation all occur.
+    res = st.mann_whitney(x, y, alt)  # type: ignore[arg-type]
+    assert -1.0 <= res.r <= 1.0
+    assert res.r_low <= res.r_high or math.isnan(res.r_low)
+    assert -1.0 <= res.r_low and res.r_high <= 1.0 or math.isnan(res.r_low)
+
+
+def test_all_tied_samples_give_r_zero_and_no_direction() -> None:
+    res = st.mann_whitney([2.0] * 6, [2.0] * 6, "less")
+    assert (res.r, res.r_original, res.direction, res.p) == (0.0, 0.0, "none", 1.0)
+    # Complete separation of two constant samples: the extreme r stays below 1.
+    sep = st.mann_whitney([1.0] * 6, [2.0] * 6, "less")
+    assert sep.r == pytest.approx(-math.sqrt(11 / 12))
+    assert sep.r_original < -1.0  # the original convention exceeds 1, hence not the lead
+
+
+def test_direction_is_explicit_even_against_the_hypothesis() -> None:
+    # SPL0 clearly higher while H_A says lower: strong effect, p near 1, direction shown.
+    res = st.mann_whitney([6.0, 7.0, 8.0, 9.0, 10.0], [1.0, 2.0, 3.0, 4.0, 5.0], "less")
+    assert res.p == pytest.approx(1.0)
+    assert res.effect == "strong" and res.direction == "SPL0 higher" and res.r > 0
+
+
+@pytest.mark.parametrize(("m", "n", "expected"), [(3, 3, 1 / 20), (5, 5, 1 / 252), (2, 4, 1 / 15)])
+def test_minimum_attainable_p(m: int, n: int, expected: float) -> None:
+    assert st.min_attainable_p(m, n) == pytest.approx(expected)
+    # The most extreme data reach it exactly.
+    res = st.mann_whitney(list(range(m)), list(range(100, 100 + n)), "less")
+    assert res.p == pytest.approx(expected) and res.min_p == pytest.approx(expected)
+
+
+def _two_levels(per_group: int) -> pd.DataFrame:
+    rows = []
+    for spl in (0.0, 50.0):
+        for rep in range(per_group):
+            rows.append(
+                {
+                    "scenario": "s",
+                    "network": "ah",
+                    "threshold": "none",
+                    "behaviour": "nb",
+                    "spl": spl,
+                    "status": "ok",
+                    "successful": True,
+                    "execution_phase_time": (100.0 if spl else 10.0) + rep,
+                }
+            )
+    return pd.DataFrame(rows)
+
+
+def test_a_design_that_cannot_reach_alpha_is_flagged() -> None:
+    small = st.comparison_table(_two_levels(3), ["execution_phase_time"], correction="none")
+    row = small.iloc[0]
+    # Perfect separation, yet p = 0.05 = the minimum: not significant, and flagged.
+    assert row["p"] == pytest.approx(0.05) and not row["reachable"]
+    assert row["decision"] == st.NOT_REJECTED
+    (warning,) = st.unreachable(small)
+    assert "3 vs 3 runs cannot be significant" in warning and "0.05" in warning
+    big = st.comparison_table(_two_levels(5), ["execution_phase_time"], correction="none")
+    assert bool(big.iloc[0]["reachable"]) and big.iloc[0]["decision"] == st.SUPPORTED
+    assert st.unreachable(big) == []
+
+
+def test_holm_and_bh_against_a_hand_computation() -> None:
+    p = [0.01, 0.04, 0.03, 0.005, math.nan]
+    # Holm: sorted 0.005, 0.01, 0.03, 0.04 times 4, 3, 2, 1 = 0.02, 0.03, 0.06, 0.04,
+    # made non-decreasing: 0.02, 0.03, 0.06, 0.06.
+    holm = st.adjust_p(p, "holm")
+    assert holm[:4] == pytest.approx([0.03, 0.06, 0.06, 0.02]) and math.isnan(holm[4])
+    # BH: times 4/1, 4/2, 4/3, 4/4 = 0.02, 0.02, 0.04, 0.04 (already monotone).
+    assert st.adjust_p(p, "bh")[:4] == pytest.approx([0.02, 0.04, 0.04, 0.02])
+    assert st.adjust_p([0.6, 0.9], "holm") == pytest.approx([1.0, 1.0])  # capped at 1
+    assert st.adjust_p(p, "none")[:4] == pytest.approx(p[:4])
+    with pytest.raises(InputError, match="unknown correction"):
+        st.check_correction("bonferoni")
+
+
+def test_the_table_decides_on_the_corrected_p_with_not_rejected_wording() -> None:
+    runs = _two_levels(5)
+    runs["total_distance"] = [1.0, 2.0, 3.0, 4.0, 5.0, 3.5, 4.5, 5.5, 6.5, 7.5]
+    table = st.comparison_table(runs, ["execution_phase_time", "total_distance"])
+    assert list(table["metric"]) == ["execution_phase_time", "total_distance"]
+    assert table["p_adj"].tolist() == pytest.approx(list(st.adjust_p(table["p"].tolist())))
+    assert set(table["decision"]) <= {st.SUPPORTED, st.NOT_REJECTED}
+    assert table["decision"].tolist() == [
+        st.SUPPORTED if p < st.ALPHA else st.NOT_REJECTED for p in table["p_adj"]
+    ]
+    assert "accepted" not in " ".join(table.columns)
+
+
+def test_bootstrap_intervals_are_seeded_and_cover_the_estimate() -> None:
+    rng = np.random.default_rng(3)
+    x = rng.normal(10.0, 2.0, 20)
+    low, high = st.bootstrap_ci((x,), np.mean)
+    assert low < float(np.mean(x)) < high
+    assert (low, high) == st.bootstrap_ci((x,), np.mean)  # same data, same interval
+    assert math.isnan(st.bootstrap_ci((x[:1],), np.mean)[0])
+    desc = st.describe_table(_two_levels(5), ["execution_phase_time"])
+    assert (desc["mean_low"] <= desc["mean"]).all() and (desc["mean"] <= desc["mean_high"]).all()

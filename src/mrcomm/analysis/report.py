@@ -36,11 +36,19 @@ from mrcomm.experiment.tables import RUN_MODES
 from mrcomm.fileio import atomic_write_bytes
 
 TABLE_TITLES = {
-    "comparisons": "Mann-Whitney U, SPL0 vs SPLX (one-sided)",
+    "comparisons": "Mann-Whitney U, SPL0 vs SPLX (one-sided; p corrected across the table)",
     "normality": "Shapiro-Wilk normality per sample",
     "descriptive": "Descriptive statistics per configuration",
     "success_counts": "Successful missions (contingency tables)",
     "success_tests": "Chi-squared tests of mission success",
+}
+
+
+#: How the report names each p-value correction.
+CORRECTION_NAMES = {
+    "holm": "Holm (family-wise error rate)",
+    "bh": "Benjamini–Hochberg (false discovery rate)",
+    "none": "none",
 }
 
 
@@ -63,6 +71,24 @@ def _mean_sd(mean: Any, sd: Any) -> str:
     if mean is None or not math.isfinite(float(mean)):
         return "–"
     return f"{float(mean):.2f}" + ("" if not math.isfinite(float(sd)) else f" ± {float(sd):.2f}")
+
+
+def _median_iqr(median: Any, iqr: Any) -> str:
+    if median is None or not math.isfinite(float(median)):
+        return "–"
+    return f"{float(median):.2f} [{float(iqr):.2f}]"
+
+
+def _r_ci(r: pd.Series) -> str:
+    text = fmt_num(r["r"], 2)
+    if math.isfinite(float(r["r_low"])):
+        text += f" [{float(r['r_low']):.2f}, {float(r['r_high']):.2f}]"
+    return text
+
+
+def _p_adj(r: pd.Series) -> str:
+    flag = "" if bool(r["reachable"]) or not math.isfinite(float(r["min_p"])) else " †"
+    return fmt_p(r["p_adj"]) + flag
 
 
 def _config(r: pd.Series, multi: bool) -> str:
@@ -88,15 +114,19 @@ _COLUMNS: dict[str, list[Column]] = {
         ("H_A", lambda r, _: str(r["hypothesis"])),
         ("m", lambda r, _: str(r["m"])),
         ("n", lambda r, _: str(r["n"])),
+        ("SPL0 median [IQR]", lambda r, _: _median_iqr(r["median0"], r["iqr0"])),
+        ("SPLX median [IQR]", lambda r, _: _median_iqr(r["median_x"], r["iqr_x"])),
         ("SPL0 mean ± SD", lambda r, _: _mean_sd(r["mean0"], r["sd0"])),
         ("SPLX mean ± SD", lambda r, _: _mean_sd(r["mean_x"], r["sd_x"])),
         ("U (SPL0)", lambda r, _: fmt_num(r["u"], 1)),
+        ("Z", lambda r, _: fmt_num(r["z"], 2)),
         ("p", lambda r, _: fmt_p(r["p"])),
-        ("Z", lambda r, _: fmt_num(r["z"], 3)),
-        ("r=Z/√n", lambda r, _: fmt_num(r["r"], 3)),
-        ("r=Z/√(m+n)", lambda r, _: fmt_num(r["r_conv"], 3)),
+        ("p corr.", lambda r, _: _p_adj(r)),
+        ("r=Z/√(m+n) [95% CI]", lambda r, _: _r_ci(r)),
         ("effect", lambda r, _: str(r["effect"])),
-        ("accepted", lambda r, _: str(r["accepted"])),
+        ("direction", lambda r, _: str(r["direction"])),
+        ("r=Z/√n (original)", lambda r, _: fmt_num(r["r_original"], 2)),
+        ("decision", lambda r, _: str(r["decision"])),
         ("method", lambda r, _: _method(r["method"])),
     ],
     "normality": [
@@ -113,10 +143,12 @@ _COLUMNS: dict[str, list[Column]] = {
         _CFG,
         _SPL,
         ("n", lambda r, _: str(r["n"])),
-        *(
-            (k, (lambda key: lambda r, _: fmt_num(r[key]))(k.lower()))
-            for k in ("mean", "SD", "min", "median", "max")
-        ),
+        ("mean [95% CI]", lambda r, _: _with_ci(r, "mean")),
+        ("SD", lambda r, _: fmt_num(r["sd"])),
+        ("median [95% CI]", lambda r, _: _with_ci(r, "median")),
+        ("IQR", lambda r, _: fmt_num(float(r["q3"]) - float(r["q1"]))),
+        ("min", lambda r, _: fmt_num(r["min"])),
+        ("max", lambda r, _: fmt_num(r["max"])),
     ],
     "success_counts": [
         _CFG,
@@ -137,9 +169,28 @@ _COLUMNS: dict[str, list[Column]] = {
 }
 
 
-def display_frame(name: str, frame: pd.DataFrame) -> pd.DataFrame:
-    """Table ``name`` as rounded strings under readable headers."""
+def _with_ci(r: pd.Series, key: str) -> str:
+    text = fmt_num(r[key])
+    if math.isfinite(float(r[f"{key}_low"])):
+        text += f" [{float(r[f'{key}_low']):.2f}, {float(r[f'{key}_high']):.2f}]"
+    return text
+
+
+#: The columns a terminal shows (the rest are in CSV, LaTeX and the HTML report).
+COMPACT = {
+    "comparisons": (
+        *("metric", "configuration", "H_A", "m", "n", "SPL0 median [IQR]"),
+        *("SPLX median [IQR]", "p", "p corr.", "r=Z/√(m+n) [95% CI]", "effect", "decision"),
+    ),
+}
+
+
+def display_frame(name: str, frame: pd.DataFrame, compact: bool = False) -> pd.DataFrame:
+    """Table ``name`` as rounded strings under readable headers (``compact``: only the
+    columns a terminal has room for)."""
     columns = _COLUMNS[name]
+    if compact and name in COMPACT:
+        columns = [c for c in columns if c[0] in COMPACT[name]]
     multi = "scenario" in frame.columns and frame["scenario"].nunique() > 1
     rows = [[fn(row, multi) for _, fn in columns] for _, row in frame.iterrows()]
     return pd.DataFrame(rows, columns=[h for h, _ in columns])
@@ -149,6 +200,8 @@ def display_frame(name: str, frame: pd.DataFrame) -> pd.DataFrame:
 _LATEX = (
     ("r=Z/√(m+n)", r"$r=Z/\sqrt{m+n}$"),
     ("r=Z/√n", r"$r=Z/\sqrt{n}$"),
+    ("95%", r"95\,\%"),
+    ("†", r"$^\dagger$"),
     ("±", r"$\pm$"),
     ("χ²", r"$\chi^2$"),
     ("≥", r"$\geq$"),
@@ -159,11 +212,22 @@ _LATEX = (
 )
 
 
-def to_latex(name: str, frame: pd.DataFrame) -> str:
-    """A LaTeX table (booktabs) of the displayed table, captioned with its title; plain
-    ASCII apart from the caption, so pdflatex takes it."""
-    text = display_frame(name, frame).to_latex(
-        index=False, escape=True, caption=TABLE_TITLES[name], label=f"tab:{name}"
+def to_latex(name: str, frame: pd.DataFrame, caption: str = "") -> str:
+    """A LaTeX table (booktabs rules, words left-aligned, numbers right-aligned) of the
+    displayed table, captioned with its title (and ``caption``); plain ASCII apart from
+    the caption, so pdflatex takes it."""
+    shown = display_frame(name, frame)
+    align = "".join(
+        "r" if len(shown) and all(_is_number(str(v)) for v in shown[c]) else "l"
+        for c in shown.columns
+    )
+    text = shown.to_latex(
+        index=False,
+        escape=True,
+        caption=" ".join(filter(None, (TABLE_TITLES[name] + ".", caption))),
+        label=f"tab:{name}",
+        column_format=align,
+        position="htbp",
     )
     for symbol, latex in _LATEX:
         text = text.replace(symbol, latex)
@@ -280,10 +344,10 @@ def _is_number(text: str) -> bool:
 
 def _html_table(name: str, frame: pd.DataFrame) -> dict[str, Any]:
     shown = display_frame(name, frame)
-    accepted = frame["accepted"].tolist() if name == "comparisons" else [""] * len(frame)
+    decided = frame["decision"].tolist() if name == "comparisons" else [""] * len(frame)
     rows = [
-        {"cells": [(c, _is_number(c)) for c in cells], "cls": "sig" if flag == "HA" else ""}
-        for cells, flag in zip(shown.values.tolist(), accepted, strict=True)
+        {"cells": [(c, _is_number(c)) for c in cells], "cls": "sig" if flag == st.SUPPORTED else ""}
+        for cells, flag in zip(shown.values.tolist(), decided, strict=True)
     ]
     return {"columns": list(shown.columns), "rows": rows}
 
@@ -297,6 +361,7 @@ def build_report(
     timeline_runs: Sequence[str] | None = None,
     svg: bool = True,
     alpha: float = st.ALPHA,
+    correction: st.Correction = "holm",
 ) -> Report:
     """Compute tables and figures of ``data`` (a ``load_results`` Results) and write the
     report into ``out_dir`` (created if missing): report.html, figures/, tables/."""
@@ -304,7 +369,7 @@ def build_report(
     runs = frame_of(data, "runs")
     check_runs(runs, db_path)
     chosen = metrics_with_data(runs, metrics)
-    tables = st.study_tables(runs, chosen, alpha)
+    tables = st.study_tables(runs, chosen, alpha, correction)
     figures = build_figures(data, chosen, pick_timeline_runs(runs, timeline_runs), svg)
     status = runs["status"].value_counts().to_dict() if "status" in runs else {}
     meta = _meta(data)
@@ -322,6 +387,8 @@ def build_report(
         "schema_yaml": meta.get("schema_yaml", ""),
         "versions": _package_versions(),
         "alpha": alpha,
+        "correction": CORRECTION_NAMES[correction],
+        "design_warnings": st.unreachable(tables.comparisons, alpha),
         "n_runs": len(runs),
         "status": status,
         "errors": _failed_runs(runs),

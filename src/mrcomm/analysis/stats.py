@@ -1,10 +1,15 @@
-"""Statistics of a study (SPEC §10): every SPLX compared with the ideal case SPL0.
+"""Statistics of a study: every SPLX compared with the ideal case SPL0.
 
 Per metric and per configuration group (scenario, network, threshold, behaviour):
 
 * Mann–Whitney U, one-sided (H_A "SPL0 < SPLX"; "SPL0 > SPLX" for near collisions),
-  with U reported for the SPL0 sample, p, Z, the original's effect size r = Z/√n and the
-  conventional r = Z/√(m+n), Cohen's label and the hypothesis accepted at α;
+  with U reported for the SPL0 sample, p, Z, the conventional effect size
+  r = Z/√(m+n) (in [−1, 1]; it leads, with Cohen's label), the original study's
+  r = Z/√n (n per group; it can exceed 1, so it is shown only as a labelled second
+  column), the direction of the observed effect, a bootstrap confidence interval of r,
+  the smallest p the design can reach, p corrected across the comparisons of the table
+  (Holm by default, or Benjamini–Hochberg) and the decision at α on the corrected p:
+  "H_A supported" or "H0 not rejected" (never "accepted");
 * Shapiro–Wilk W and p per sample;
 * successful-mission contingency tables with chi-squared (and Fisher's exact test for
   the 2×2 SPL0-vs-SPLX tables).
@@ -19,6 +24,9 @@ Z (for the effect sizes) is ``(U − mn/2) / σ_U`` without continuity correctio
 tie-corrected σ_U = √(mn/12 · ((N+1) − Σ(t³−t)/(N(N−1)))), N = m+n, t the size of each
 group of tied values; without ties this is the SPEC's √(mn(m+n+1)/12).
 
+Bootstrap intervals are percentile intervals of ``BOOTSTRAP_RESAMPLES`` resamples drawn
+with a fixed seed (``BOOTSTRAP_SEED``), so the same data always give the same interval.
+
 Everything works on the ``runs`` DataFrame of the results database contract.
 """
 
@@ -27,7 +35,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, fields
-from typing import Literal
+from typing import Any, Literal, cast
 
 import numpy as np
 import pandas as pd
@@ -41,7 +49,16 @@ ALPHA = 0.05
 GROUP = ("scenario", "network", "threshold", "behaviour")
 #: Largest number of distinct splits enumerated for an exact test with ties.
 EXACT_PERMUTATIONS = 200_000
+#: Resamples and seed of every bootstrap confidence interval (percentile method).
+BOOTSTRAP_RESAMPLES = 2000
+BOOTSTRAP_SEED = 0
+CONFIDENCE = 0.95
 Alternative = Literal["less", "greater"]
+#: How p-values are corrected across the comparisons of one table.
+CORRECTIONS = ("holm", "bh", "none")
+Correction = Literal["holm", "bh", "none"]
+SUPPORTED = "H_A supported"
+NOT_REJECTED = "H0 not rejected"
 
 
 @dataclass(frozen=True)
@@ -110,8 +127,8 @@ def resolve_metrics(names: Sequence[str] | None, field: str = "--metric") -> lis
 
 
 def effect_label(r: float) -> str:
-    """Cohen's label of |r|: < 0.1 negligible, [0.1, 0.3) weak, [0.3, 0.5] medium,
-    > 0.5 strong (SPEC §10)."""
+    """Cohen's label of |r| (for the conventional r = Z/√(m+n)): < 0.1 negligible,
+    [0.1, 0.3) weak, [0.3, 0.5] medium, > 0.5 strong."""
     if not math.isfinite(r):
         return "n/a"
     a = abs(r)
@@ -137,6 +154,91 @@ def sigma_u(x: ArrayLike, y: ArrayLike) -> float:
     return math.sqrt(max(var, 0.0))
 
 
+def min_attainable_p(m: int, n: int) -> float:
+    """The smallest one-sided p any data can give with samples of m and n runs: the
+    most extreme split has probability 1/C(m+n, m) under H0 (ties only make it
+    larger). With 3 runs per group this is 1/20 = 0.05, so nothing can reach α = 0.05."""
+    if m < 1 or n < 1:
+        return math.nan
+    return 1.0 / math.comb(m + n, m)
+
+
+def check_correction(name: str) -> Correction:
+    """``name`` as a correction method, or an input error naming the choices."""
+    if name not in CORRECTIONS:
+        raise InputError(
+            f"unknown correction {name!r}; choose {', '.join(CORRECTIONS)}", field="--correction"
+        )
+    return cast(Correction, name)
+
+
+def adjust_p(p: Sequence[float], method: Correction = "holm") -> np.ndarray:
+    """p-values corrected for multiple comparisons (NaNs stay NaN and are not counted).
+
+    Holm: sort ascending, p_(i)·(k − i + 1) for i = 1..k, made non-decreasing, capped
+    at 1 (controls the family-wise error rate). Benjamini–Hochberg ("bh"): p_(i)·k/i,
+    made non-increasing from the largest down, capped at 1 (controls the false
+    discovery rate)."""
+    check_correction(method)
+    values = np.asarray(p, dtype=float)
+    out = np.full(values.shape, np.nan)
+    finite = np.flatnonzero(np.isfinite(values))
+    k = len(finite)
+    if k == 0 or method == "none":
+        out[finite] = values[finite]
+        return out
+    order = finite[np.argsort(values[finite], kind="stable")]
+    ranked = values[order]
+    i = np.arange(1, k + 1)
+    if method == "holm":
+        adjusted = np.maximum.accumulate(ranked * (k - i + 1))
+    else:
+        adjusted = np.minimum.accumulate((ranked * k / i)[::-1])[::-1]
+    out[order] = np.minimum(adjusted, 1.0)
+    return out
+
+
+def _r_batch(x: np.ndarray, y: np.ndarray, axis: int = -1) -> np.ndarray:
+    """The conventional r = Z/√(m+n) of samples along ``axis`` (vectorised, for the
+    bootstrap): U counted pair by pair, σ_U tie-corrected; r = 0 where every value ties."""
+    x = np.moveaxis(np.asarray(x, dtype=float), axis, -1)
+    y = np.moveaxis(np.asarray(y, dtype=float), axis, -1)
+    m, n = x.shape[-1], y.shape[-1]
+    big_n = m + n
+    diff = x[..., :, None] - y[..., None, :]
+    u = np.sum(diff > 0, axis=(-2, -1)) + 0.5 * np.sum(diff == 0, axis=(-2, -1))
+    pooled = np.concatenate([x, y], axis=-1)
+    # Σ(t³ − t) over tie groups = Σ_i c_i² − N, c_i the number of values equal to value i.
+    equal = np.sum(pooled[..., :, None] == pooled[..., None, :], axis=-1)
+    ties = np.sum(equal.astype(float) ** 2, axis=-1) - big_n
+    var = m * n / 12.0 * ((big_n + 1) - ties / (big_n * (big_n - 1)))
+    sigma = np.sqrt(np.maximum(var, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.where(sigma > 0, (u - m * n / 2.0) / sigma, 0.0)
+    return np.asarray(z / math.sqrt(big_n))
+
+
+def bootstrap_ci(
+    samples: Sequence[np.ndarray], statistic: Any, confidence: float = CONFIDENCE
+) -> tuple[float, float]:
+    """Percentile bootstrap interval of ``statistic(*samples, axis=-1)``, each sample
+    resampled independently, seeded (the same data give the same interval); NaN when a
+    sample has fewer than two values."""
+    if any(len(s) < 2 for s in samples):
+        return math.nan, math.nan
+    res = sps.bootstrap(
+        tuple(samples),
+        statistic,
+        n_resamples=BOOTSTRAP_RESAMPLES,
+        confidence_level=confidence,
+        method="percentile",
+        vectorized=True,
+        rng=np.random.default_rng(BOOTSTRAP_SEED),
+    )
+    low, high = res.confidence_interval
+    return float(low), float(high)
+
+
 @dataclass(frozen=True)
 class MannWhitney:
     """One SPL0-vs-SPLX comparison."""
@@ -145,12 +247,15 @@ class MannWhitney:
     n: int  # size of the SPLX sample
     alternative: str
     u: float  # U of the SPL0 sample (number of pairs with SPL0 > SPLX, ties count 1/2)
-    p: float
+    p: float  # uncorrected
     z: float  # (U − mn/2) / σ_U, tie-corrected, no continuity correction
-    r: float  # the original's effect size Z / √n (n: per-group sample size)
-    r_conv: float  # the conventional Z / √(m+n)
+    r: float  # the conventional effect size Z / √(m+n), in [−1, 1]
+    r_low: float  # bootstrap confidence interval of r
+    r_high: float
+    r_original: float  # the original study's Z / √n (n: per-group sample size); may exceed 1
     effect: str  # Cohen's label of |r|
-    accepted: str  # "HA" or "H0" at α
+    direction: str  # observed effect: "SPL0 lower", "SPL0 higher" or "none"
+    min_p: float  # the smallest p this design can give
     method: str  # how p was computed
 
 
@@ -158,7 +263,6 @@ def mann_whitney(
     spl0: ArrayLike,
     splx: ArrayLike,
     alternative: Alternative = "less",
-    alpha: float = ALPHA,
 ) -> MannWhitney:
     """One-sided Mann–Whitney U of SPL0 against SPLX (NaNs dropped).
 
@@ -170,15 +274,31 @@ def mann_whitney(
     y = np.asarray(splx, dtype=float)
     x, y = x[np.isfinite(x)], y[np.isfinite(y)]
     m, n = len(x), len(y)
+    nan = math.nan
     if m < 2 or n < 2:
-        nan = math.nan
-        return MannWhitney(m, n, alternative, nan, nan, nan, nan, nan, "n/a", "n/a", "too few")
+        return MannWhitney(
+            m, n, alternative, nan, nan, nan, nan, nan, nan, nan, "n/a", "n/a", nan, "too few"
+        )
+    min_p = min_attainable_p(m, n)
     sigma = sigma_u(x, y)
     if sigma == 0.0:
         # Every observation equal: no evidence either way, U sits at its mean.
         u = m * n / 2.0
         return MannWhitney(
-            m, n, alternative, u, 1.0, 0.0, 0.0, 0.0, "negligible", "H0", "degenerate (all equal)"
+            m,
+            n,
+            alternative,
+            u,
+            1.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            "negligible",
+            "none",
+            min_p,
+            "degenerate (all equal)",
         )
     has_ties = len(np.unique(np.concatenate([x, y]))) < m + n
     method: str | sps.PermutationMethod
@@ -194,19 +314,22 @@ def mann_whitney(
     res = sps.mannwhitneyu(x, y, alternative=alternative, method=method)
     u = float(res.statistic)  # scipy's statistic is U of the first sample (SPL0)
     z = (u - m * n / 2.0) / sigma
-    r = z / math.sqrt(min(m, n))
-    p = float(res.pvalue)
+    r = z / math.sqrt(m + n)
+    r_low, r_high = bootstrap_ci((x, y), _r_batch)
     return MannWhitney(
         m=m,
         n=n,
         alternative=alternative,
         u=u,
-        p=p,
+        p=float(res.pvalue),
         z=z,
         r=r,
-        r_conv=z / math.sqrt(m + n),
+        r_low=r_low,
+        r_high=r_high,
+        r_original=z / math.sqrt(min(m, n)),
         effect=effect_label(r),
-        accepted="HA" if p < alpha else "H0",
+        direction="SPL0 lower" if z < 0 else "SPL0 higher" if z > 0 else "none",
+        min_p=min_p,
         method=label,
     )
 
@@ -247,9 +370,14 @@ def _spl_name(spl: float) -> str:
 
 
 def comparison_table(
-    runs: pd.DataFrame, metrics: Sequence[str] | None = None, alpha: float = ALPHA
+    runs: pd.DataFrame,
+    metrics: Sequence[str] | None = None,
+    alpha: float = ALPHA,
+    correction: Correction = "holm",
 ) -> pd.DataFrame:
-    """Mann–Whitney SPL0 vs each SPLX, one row per (metric, group, SPLX)."""
+    """Mann–Whitney SPL0 vs each SPLX, one row per (metric, group, SPLX); p corrected
+    across every row of the table (``correction``), the decision taken on the corrected
+    p, and whether the design can reach α at all (``reachable``: min_p < α)."""
     rows = []
     runs = usable_runs(runs)
     for metric in resolve_metrics(metrics):
@@ -266,7 +394,7 @@ def comparison_table(
                 y = _sample(frame, spl, metric.name)
                 if len(x) == 0 and len(y) == 0:
                     continue  # metric undefined for this group (LF metric of NB runs)
-                res = mann_whitney(x, y, metric.alternative, alpha)
+                res = mann_whitney(x, y, metric.alternative)
                 op = "<" if metric.alternative == "less" else ">"
                 rows.append(
                     {
@@ -274,6 +402,10 @@ def comparison_table(
                         **dict(zip(GROUP, key, strict=False)),
                         "spl_x": float(spl),
                         "hypothesis": f"SPL0 {op} {_spl_name(spl)}",
+                        "median0": _median(x),
+                        "iqr0": _iqr(x),
+                        "median_x": _median(y),
+                        "iqr_x": _iqr(y),
                         "mean0": _mean(x),
                         "sd0": _sd(x),
                         "mean_x": _mean(y),
@@ -281,15 +413,53 @@ def comparison_table(
                         **asdict(res),
                     }
                 )
-    return pd.DataFrame(rows, columns=_COMPARISON_COLUMNS)
+    table = pd.DataFrame(rows, columns=_COMPARISON_COLUMNS[:-4])
+    table["correction"] = correction
+    table["p_adj"] = adjust_p(table["p"].to_numpy(dtype=float), correction)
+    table["reachable"] = table["min_p"] < alpha
+    table["decision"] = [
+        "n/a" if not math.isfinite(p) else SUPPORTED if p < alpha else NOT_REJECTED
+        for p in table["p_adj"]
+    ]
+    return table[_COMPARISON_COLUMNS]
 
 
 _COMPARISON_COLUMNS = [
     "metric",
     *GROUP,
-    *("spl_x", "hypothesis", "mean0", "sd0", "mean_x", "sd_x"),
+    *("spl_x", "hypothesis", "median0", "iqr0", "median_x", "iqr_x"),
+    *("mean0", "sd0", "mean_x", "sd_x"),
     *(f.name for f in fields(MannWhitney)),
+    *("correction", "p_adj", "reachable", "decision"),
 ]
+
+
+def unreachable(comparisons: pd.DataFrame, alpha: float = ALPHA) -> list[str]:
+    """One warning per distinct design (m, n) of the table that cannot reach α: its
+    smallest attainable p is not below α, so no comparison of that size can be
+    significant whatever the data."""
+    if comparisons.empty:
+        return []
+    bad = comparisons[~comparisons["reachable"].astype(bool) & comparisons["min_p"].notna()]
+    out = []
+    for (m, n), frame in bad.groupby(["m", "n"], sort=True):
+        out.append(
+            f"{len(frame)} comparison(s) with {m} vs {n} runs cannot be significant: the "
+            f"smallest attainable one-sided p is {frame['min_p'].iloc[0]:.4g} ≥ α = {alpha:g}; "
+            "run more repetitions"
+        )
+    return out
+
+
+def _median(a: np.ndarray) -> float:
+    return float(np.median(a)) if len(a) else math.nan
+
+
+def _iqr(a: np.ndarray) -> float:
+    if len(a) == 0:
+        return math.nan
+    q1, q3 = np.percentile(a, [25, 75])
+    return float(q3 - q1)
 
 
 def _mean(a: np.ndarray) -> float:
@@ -343,6 +513,8 @@ def describe_table(runs: pd.DataFrame, metrics: Sequence[str] | None = None) -> 
                 x = _sample(frame, spl, metric.name)
                 if len(x) == 0:
                     continue
+                mean_ci = bootstrap_ci((x,), np.mean)
+                median_ci = bootstrap_ci((x,), np.median)
                 rows.append(
                     {
                         "metric": metric.name,
@@ -350,13 +522,22 @@ def describe_table(runs: pd.DataFrame, metrics: Sequence[str] | None = None) -> 
                         "spl": float(spl),
                         "n": len(x),
                         "mean": _mean(x),
+                        "mean_low": mean_ci[0],
+                        "mean_high": mean_ci[1],
                         "sd": _sd(x),
                         "min": float(np.min(x)),
-                        "median": float(np.median(x)),
+                        "q1": float(np.percentile(x, 25)),
+                        "median": _median(x),
+                        "median_low": median_ci[0],
+                        "median_high": median_ci[1],
+                        "q3": float(np.percentile(x, 75)),
                         "max": float(np.max(x)),
                     }
                 )
-    cols = ["metric", *GROUP, "spl", "n", "mean", "sd", "min", "median", "max"]
+    cols = [
+        *("metric", *GROUP, "spl", "n", "mean", "mean_low", "mean_high", "sd"),
+        *("min", "q1", "median", "median_low", "median_high", "q3", "max"),
+    ]
     return pd.DataFrame(rows, columns=cols)
 
 
@@ -468,10 +649,13 @@ class StudyTables:
 
 
 def study_tables(
-    runs: pd.DataFrame, metrics: Sequence[str] | None = None, alpha: float = ALPHA
+    runs: pd.DataFrame,
+    metrics: Sequence[str] | None = None,
+    alpha: float = ALPHA,
+    correction: Correction = "holm",
 ) -> StudyTables:
     return StudyTables(
-        comparisons=comparison_table(runs, metrics, alpha),
+        comparisons=comparison_table(runs, metrics, alpha, correction),
         normality=normality_table(runs, metrics, alpha),
         descriptive=describe_table(runs, metrics),
         success_counts=success_counts(runs),

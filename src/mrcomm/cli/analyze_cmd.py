@@ -1,5 +1,5 @@
-"""``mrcomm analyze``: the statistics tables of a study (SPEC §10), printed as a
-terminal table, CSV or LaTeX."""
+"""``mrcomm analyze``: the statistics tables of a study, printed as a terminal table
+(fitting the terminal's width), CSV or LaTeX."""
 
 from __future__ import annotations
 
@@ -39,6 +39,10 @@ def analyze(
         typer.Option(help="Only the runs of this mode: sim | live (needed when both are stored)."),
     ] = None,
     alpha: Annotated[float, typer.Option(help="Significance level.")] = 0.05,
+    correction: Annotated[
+        str,
+        typer.Option(help="Correction of p across the comparisons of the table: holm | bh | none."),
+    ] = "holm",
 ) -> None:
     """Print the statistics of a study: Mann–Whitney SPL0 vs SPLX, Shapiro–Wilk,
     descriptive statistics and mission-success contingency tables."""
@@ -54,13 +58,14 @@ def analyze(
         )
     if not 0 < alpha < 1:
         raise InputError(f"must be between 0 and 1, got {alpha:g}", field="--alpha")
+    method = st.check_correction(correction)
     names = _tables(table)
     st.resolve_metrics(metric)  # unknown metric: fail before loading anything
     data = rp.load_study(db, experiment, mode)  # checks --mode before loading
     runs = data.runs
     rp.check_runs(runs, db)
-    tables = st.study_tables(runs, metrics_with_data(runs, metric), alpha)
-    console = Console(width=250) if fmt == "table" else None
+    tables = st.study_tables(runs, metrics_with_data(runs, metric), alpha, method)
+    console = Console() if fmt == "table" else None
     if console is not None and rp.study_mode(runs) == "live":
         console.print("[bold]Live runs[/] (every agent its own process over Zenoh)")
     for i, name in enumerate(names):
@@ -73,7 +78,16 @@ def analyze(
             typer.echo(rp.to_latex(name, frame), nl=False)
         else:
             assert console is not None
-            console.print(_rich_table(rp.TABLE_TITLES[name], rp.display_frame(name, frame)))
+            shown = rp.display_frame(name, frame, compact=True)
+            console.print(_rich_table(rp.TABLE_TITLES[name], shown))
+            if name == "comparisons":
+                console.print(
+                    f"p corrected: {rp.CORRECTION_NAMES[method]}; more columns "
+                    "(means, Z, direction, the original r = Z/√n): --format csv or latex",
+                    style="dim",
+                )
+                for warning in st.unreachable(frame, alpha):
+                    console.print(f"warning: {warning}", style="yellow", markup=False)
         if i < len(names) - 1 and fmt != "table":
             typer.echo("")
 
@@ -96,15 +110,20 @@ def _rich_table(title: str, frame: object) -> Table:
     import pandas as pd
 
     assert isinstance(frame, pd.DataFrame)
+    from mrcomm.analysis.stats import SUPPORTED
+
     out = Table(title=title, title_justify="left")
     for column in frame.columns:
         out.add_column(str(column), justify="left" if column in _TEXT else "right")
-    for row in frame.itertuples(index=False):
-        style = "green" if "accepted" in frame.columns and row[-2] == "HA" else None
-        out.add_row(*(str(c) for c in row), style=style)
+    decisions = frame["decision"] if "decision" in frame.columns else [None] * len(frame)
+    for row, decision in zip(frame.itertuples(index=False), decisions, strict=True):
+        out.add_row(*(str(c) for c in row), style="green" if decision == SUPPORTED else None)
     if frame.empty:
         out.caption = "no rows"
     return out
 
 
-_TEXT = {"metric", "configuration", "H_A", "effect", "accepted", "method", "comparison", "note"}
+_TEXT = {
+    *("metric", "configuration", "H_A", "effect", "decision", "direction"),
+    *("method", "comparison", "note"),
+}

@@ -36,6 +36,10 @@ def report(
     ] = None,
     svg: Annotated[bool, typer.Option(help="Also write every figure as SVG.")] = True,
     alpha: Annotated[float, typer.Option(help="Significance level.")] = 0.05,
+    correction: Annotated[
+        str,
+        typer.Option(help="Correction of p across the comparisons of the table: holm | bh | none."),
+    ] = "holm",
 ) -> None:
     """Write report.html, figures/*.png|svg and tables/*.csv into OUT."""
     # Imported here: matplotlib, scipy and DuckDB are not needed by the other commands.
@@ -49,10 +53,18 @@ def report(
     parent = out.expanduser().resolve().parent
     if not parent.is_dir():
         raise InputError(f"directory {parent} does not exist", file=out, field="--out")
+    method = st.check_correction(correction)
     st.resolve_metrics(metric)  # unknown metric: fail before loading anything
     data = rp.load_study(db, experiment, mode)  # checks --mode before loading
     result = rp.build_report(
-        data, out, db_path=db, metrics=metric, timeline_runs=timeline, svg=svg, alpha=alpha
+        data,
+        out,
+        db_path=db,
+        metrics=metric,
+        timeline_runs=timeline,
+        svg=svg,
+        alpha=alpha,
+        correction=method,
     )
     typer.echo(
         f"report: {result.html} ({len(result.figures)} figures, {len(result.tables)} tables, "
