@@ -124,7 +124,9 @@ def test_display_and_latex_formatting(study: Any) -> None:
     shown = rp.display_frame("comparisons", table)
     assert list(shown["configuration"]) == ["AH+SLT+LF", "AH+SLT+NB"]
     assert all(re.fullmatch(r"-?\d+\.\d{2}", z) for z in shown["Z"])
-    assert all(re.fullmatch(r"-?\d\.\d{2} \[-?\d\.\d{2}, -?\d\.\d{2}\]", r) for r in shown.iloc[:, 13])
+    assert all(
+        re.fullmatch(r"-?\d\.\d{2} \[-?\d\.\d{2}, -?\d\.\d{2}\]", r) for r in shown.iloc[:, 13]
+    )
     assert set(shown["decision"]) <= {"H_A supported", "H0 not rejected"}
     latex = rp.to_latex("comparisons", table)
     assert r"\begin{tabular}" in latex and r"$\pm$" in latex and "±" not in latex

@@ -257,7 +257,7 @@ def test_lead_effect_size_is_bounded_for_any_data(x: list[float], y: list[float]
     res = st.mann_whitney(x, y, alt)  # type: ignore[arg-type]
     assert -1.0 <= res.r <= 1.0
     assert res.r_low <= res.r_high or math.isnan(res.r_low)
-    assert -1.0 <= res.r_low and res.r_high <= 1.0 or math.isnan(res.r_low)
+    assert (res.r_low >= -1.0 and res.r_high <= 1.0) or math.isnan(res.r_low)
 
 
 def test_all_tied_samples_give_r_zero_and_no_direction() -> None:

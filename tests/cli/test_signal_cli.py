@@ -46,6 +46,7 @@ def _small_csv(tmp_path: Path) -> Path:
 def test_fit_writes_model_and_prints_summary(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], tmp_path: Path
 ) -> None:
+    (tmp_path / "sub").mkdir()
     out = tmp_path / "sub" / "model.json"
     code, stdout, _ = mrcomm(
         monkeypatch, capsys, "signal", "fit", str(_small_csv(tmp_path)), "--out", str(out)
@@ -126,7 +127,7 @@ def test_bad_inputs_exit_2_and_write_nothing(
         (("signal", "show", str(bad_model)), "bad.json: not a JSON signal model"),
         (("signal", "plot", str(bad_model), "--out", str(fig)), "bad.json: not a JSON"),
         (("signal", "plot", "--csv", str(bad_csv), "--out", str(fig)), "bad.csv: line 3"),
-        (("signal", "plot", "--out", str(tmp_path / "fig.gif")), "unsupported figure format 'gif'"),
+        (("signal", "plot", "--out", str(tmp_path / "fig.gif")), "unsupported extension '.gif'"),
     ]
     for args, expected in cases:
         code, _, stderr = mrcomm(monkeypatch, capsys, *args)

@@ -10,8 +10,8 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from mrcomm.cli.files import check_writable
 from mrcomm.errors import InputError
+from mrcomm.output_paths import DATABASE_SUFFIXES, check_output_file
 
 if TYPE_CHECKING:
     from mrcomm.experiment.adhoc import StoredRun
@@ -35,7 +35,7 @@ def check_db(db: Path | None, experiment: str | None) -> None:
         return
     from mrcomm.experiment.adhoc import DEFAULT_EXPERIMENT, check_target
 
-    check_writable(db, "--db")
+    check_output_file(db, "--db", DATABASE_SUFFIXES)
     check_target(db, experiment or DEFAULT_EXPERIMENT)
 
 

@@ -9,8 +9,8 @@ import typer
 
 from mrcomm.agents.behaviours import behaviour_class
 from mrcomm.agents.diagram import graphviz_available, mermaid, render
-from mrcomm.cli.files import check_writable, write_atomically
-from mrcomm.errors import InputError
+from mrcomm.fileio import atomic_write
+from mrcomm.output_paths import check_output_file
 
 _FORMATS = {".svg": "svg", ".png": "png", ".mmd": "mermaid", ".md": "mermaid"}
 
@@ -24,22 +24,18 @@ def fsm(
     """Write the behaviour's (hierarchical) state machine as a diagram. Without graphviz
     installed, an .svg/.png request falls back to Mermaid text next to it (.mmd)."""
     behaviour_class(behaviour)  # unknown name -> one-line error
-    fmt = _FORMATS.get(out.suffix.lower())
-    if fmt is None:
-        raise InputError(
-            f"unsupported diagram format {out.suffix!r}; use .svg, .png or .mmd", field="--out"
-        )
-    check_writable(out, "--out")
+    check_output_file(out, "--out", _FORMATS)
+    fmt = _FORMATS[out.suffix.lower()]
     if fmt != "mermaid" and not graphviz_available():
         fallback = out.with_suffix(".mmd")
         typer.echo(f"graphviz (dot) is not installed: writing Mermaid text to {fallback}", err=True)
         out, fmt = fallback, "mermaid"
     if fmt == "mermaid":
         text = mermaid(behaviour)
-        write_atomically(out, lambda tmp: _write_text(tmp, text + "\n"))
+        atomic_write(out, lambda tmp: _write_text(tmp, text + "\n"))
     else:
         data = render(behaviour, fmt)
-        write_atomically(out, lambda tmp: _write_bytes(tmp, data))
+        atomic_write(out, lambda tmp: _write_bytes(tmp, data))
     typer.echo(f"wrote {out}")
 
 

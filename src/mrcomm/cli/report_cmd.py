@@ -10,6 +10,7 @@ from typing import Annotated
 import typer
 
 from mrcomm.errors import InputError
+from mrcomm.output_paths import check_output_dir
 
 
 def report(
@@ -48,11 +49,7 @@ def report(
 
     if not 0 < alpha < 1:
         raise InputError(f"must be between 0 and 1, got {alpha:g}", field="--alpha")
-    if out.exists() and not out.is_dir():
-        raise InputError("exists and is not a directory", file=out, field="--out")
-    parent = out.expanduser().resolve().parent
-    if not parent.is_dir():
-        raise InputError(f"directory {parent} does not exist", file=out, field="--out")
+    check_output_dir(out, "--out")
     method = st.check_correction(correction)
     st.resolve_metrics(metric)  # unknown metric: fail before loading anything
     data = rp.load_study(db, experiment, mode)  # checks --mode before loading

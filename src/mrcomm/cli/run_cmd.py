@@ -12,8 +12,9 @@ from rich.table import Table
 
 from mrcomm.cli.db_option import DbOpt, ExperimentOpt, check_db, store_run, stored_json
 from mrcomm.cli.display import fmt
-from mrcomm.cli.files import check_writable, write_atomically
 from mrcomm.cli.run_options import with_run_options
+from mrcomm.fileio import atomic_write
+from mrcomm.output_paths import FIGURE_SUFFIXES, RECORDING_SUFFIXES, check_output_file
 from mrcomm.run.result import MissionResult
 from mrcomm.sim.mission import run_mission
 
@@ -38,20 +39,22 @@ def run(
     """Run one mission in simulation (faster than real time); with --db, store it in a
     results database (mode sim)."""
     config = run
+    # Every output is checked before the mission: none can fail at its end.
     if plot is not None:
-        check_writable(plot, "--plot")
+        check_output_file(plot, "--plot", FIGURE_SUFFIXES)
+    if record is not None:
+        check_output_file(record, "--record", RECORDING_SUFFIXES)
     check_db(db, experiment)
     if record is not None:
         from mrcomm.experiment.recording import run_and_record
 
-        check_writable(record, "--record")
         result = run_and_record(config, None, record)
     else:
         result = run_mission(config)
     if plot is not None:
         from mrcomm.analysis.mission_plot import save_mission_plot
 
-        write_atomically(plot, lambda tmp: save_mission_plot(result, tmp, fmt=plot.suffix[1:]))
+        atomic_write(plot, lambda tmp: save_mission_plot(result, tmp, fmt=plot.suffix[1:]))
     stored = store_run(
         db, experiment, result, if_lost="the run is deterministic: run the command again"
     )

@@ -17,6 +17,7 @@ from typing import Annotated, Any
 import typer
 
 from mrcomm.errors import InputError
+from mrcomm.output_paths import FIGURE_SUFFIXES, check_output_file
 
 signal_app = typer.Typer(
     help="SSD signal models: fit from RSSI measurements, show, plot.",
@@ -111,6 +112,7 @@ def fit_cmd(
     from mrcomm.net.signal.pathloss import fit_log_distance
     from mrcomm.net.signal.svr import fit, save_model
 
+    check_output_file(out, "--out", (".json",))
     calibration = load_calibration(csv)
     model = fit(calibration, gamma=gamma, C=c, epsilon=epsilon, threshold_dbm=threshold)
     try:
@@ -160,9 +162,9 @@ def plot_cmd(
     """Plot readings, per-distance means, both fitted curves and the threshold."""
     from mrcomm.net.signal.bundled import bundled_calibration_path
     from mrcomm.net.signal.calibration import load_calibration
-    from mrcomm.net.signal.plot import plot_format, plot_model
+    from mrcomm.net.signal.plot import plot_model
 
-    plot_format(out)  # reject a bad suffix before any work
+    check_output_file(out, "--out", FIGURE_SUFFIXES)  # before any work
     loaded, _ = _load(model)
     if csv is None and model is None:
         csv = bundled_calibration_path()

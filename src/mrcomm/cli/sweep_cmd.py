@@ -25,9 +25,9 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from mrcomm.cli.files import check_writable
 from mrcomm.cli.run_options import SetOpt, parse_assignments
 from mrcomm.errors import InputError
+from mrcomm.output_paths import DATABASE_SUFFIXES, check_output_dir, check_output_file
 
 if TYPE_CHECKING:
     from mrcomm.experiment.runner import SweepPlan, SweepReport
@@ -84,7 +84,7 @@ def sweep(
         raise InputError("give --jobs or --scheduler, not both (the cluster sets its workers)")
     if not run_timeout > 0:
         raise InputError(f"must be positive, got {run_timeout:g}", field="--run-timeout")
-    check_writable(db, "--db")
+    check_output_file(db, "--db", DATABASE_SUFFIXES)
     if record is not None:
         _check_record_dir(record)
     plan = plan_sweep(experiment, db, repetitions=reps, record_dir=record)
@@ -107,7 +107,7 @@ def sweep(
             return pools[-1]
 
     if record is not None:
-        record.mkdir(exist_ok=True)
+        record.mkdir(parents=True, exist_ok=True)
     interrupted = False
     try:
         with _Display(console, plan) as display:
@@ -152,14 +152,13 @@ def export(
     from mrcomm.experiment.export import check_format, export_tables
 
     check_format(fmt)
+    check_output_dir(out, "--out")
     written = export_tables(db, fmt, out)
     typer.echo(f"wrote {len(written)} tables to {out}: {', '.join(p.name for p in written)}")
 
 
 def _check_record_dir(record: Path) -> None:
-    if record.exists() and not record.is_dir():
-        raise InputError("exists and is not a directory", file=record, field="--record")
-    check_writable(record, "--record")
+    check_output_dir(record, "--record")
     try:
         from mrcomm.experiment import recording  # noqa: F401
     except ImportError as err:

@@ -13,6 +13,7 @@ from mrcomm.errors import InputError, did_you_mean
 from mrcomm.experiment.store import open_readonly
 from mrcomm.experiment.tables import TABLES
 from mrcomm.fileio import atomic_write
+from mrcomm.output_paths import check_output_dir
 
 FORMATS = {"csv": "(FORMAT csv, HEADER)", "parquet": "(FORMAT parquet)"}
 
@@ -30,12 +31,8 @@ def export_tables(db_path: Path, fmt: str, out_dir: Path) -> list[Path]:
     check_format(fmt)
     con = open_readonly(db_path)  # refuses a missing or incompatible database first
     try:
-        parent = out_dir.expanduser().resolve().parent
-        if not parent.is_dir():
-            raise InputError(f"directory {parent} does not exist", file=out_dir, field="--out")
-        if out_dir.exists() and not out_dir.is_dir():
-            raise InputError("exists and is not a directory", file=out_dir, field="--out")
-        out_dir.mkdir(exist_ok=True)
+        check_output_dir(out_dir, "--out")
+        out_dir.mkdir(parents=True, exist_ok=True)
         written = []
         for table in TABLES:
             target = out_dir / f"{table}.{fmt}"
