@@ -5,6 +5,7 @@ the statistics, nothing written on failure; run choice for timelines and RSSI.""
 from __future__ import annotations
 
 import base64
+import json
 import re
 from pathlib import Path
 from typing import Any
@@ -143,3 +144,21 @@ def test_a_study_without_finished_runs_is_an_input_error(tmp_path: Path) -> None
     with pytest.raises(InputError, match="no runs"):
         rp.build_report(type("Data", (), {"runs": runs.iloc[0:0]})(), tmp_path / "out")
     assert not (tmp_path / "out").exists()
+
+
+def test_provenance_of_every_run_is_loaded_and_reported(built: rp.Report, study: Any) -> None:
+    from mrcomm.run.provenance import file_hash, git_commit
+
+    runs = study.runs
+    assert (runs["mrcomm_version"] == mrcomm.__version__).all()
+    assert (runs["git_commit"] == git_commit()).all()  # this checkout's commit (or "")
+    assert runs["machine"].str.contains("CPUs").all()
+    hashes = json.loads(runs["input_hashes"].iloc[0])
+    from tests.conftest import S1_PATH
+
+    assert hashes["scenario"] == file_hash(S1_PATH)
+    assert {"scenario", "map", "map_image", "tasks"} <= set(hashes)
+    assert runs["fingerprint"].nunique() == len(runs)  # every run its own
+    html = built.html.read_text()
+    assert "Provenance" in html and hashes["map_image"] in html
+    assert f'<td class="text">{mrcomm.__version__}</td>' in html

@@ -45,14 +45,20 @@ def test_run_db_then_report_and_mode_selection(
         )  # fmt: skip
         assert proc.returncode == 0, proc.stderr
         stored.append(json.loads(proc.stdout)["stored"])
-    assert [s["repetition"] for s in stored] == [1, 2, 1]
+    # The same command twice: the same run (deterministic), stored once.
+    assert [s["repetition"] for s in stored] == [1, 1, 1]
+    assert [s["new"] for s in stored] == [True, False, True]
+    assert stored[0]["run_id"] == stored[1]["run_id"]
     assert stored[0]["config_id"] == stored[1]["config_id"] != stored[2]["config_id"]
     assert all(s["mode"] == "sim" and s["experiment"] == "adhoc" for s in stored)
-    proc = in_process(capsys, monkeypatch, *RUN, "--db", str(db))  # human output says where
-    assert proc.returncode == 0 and f"stored as {stored[0]['config_id']}-r003" in proc.stdout
+    nb_seed_1 = (*RUN, "--behaviour", "nb", "--seed", "1", "--db", str(db))
+    proc = in_process(capsys, monkeypatch, *nb_seed_1)  # human output says what happened
+    assert proc.returncode == 0 and f"already stored as {stored[0]['run_id']}" in proc.stdout
+    proc = in_process(capsys, monkeypatch, *nb_seed_1, "--keep-duplicate")
+    assert proc.returncode == 0 and f"stored as {stored[0]['config_id']}-r002" in proc.stdout
     con = duckdb.connect(str(db), read_only=True)
     assert con.execute("SELECT count(*), min(mode), max(mode) FROM runs").fetchone() == (
-        4, "sim", "sim",
+        3, "sim", "sim",
     )  # fmt: skip
     con.close()
 
@@ -66,7 +72,7 @@ def test_run_db_then_report_and_mode_selection(
     config = make_config(None, scenario=S1_PATH, network="ah", threshold="slt", max_time=40)
     sim = run_mission(config, s1_resources)  # type: ignore[arg-type]
     live = dataclasses.replace(sim, config={**sim.config, "mode": "live", "speed": 10.0})
-    store_result(db, live)
+    store_result(db, live, run_fingerprint="a live record")
     for command in ("report", "analyze"):
         args = [command, "--db", str(db)] + (["--out", str(out)] if command == "report" else [])
         one_line_error(in_process(capsys, monkeypatch, *args), "--mode", "live, sim")
@@ -89,7 +95,7 @@ def test_run_db_then_report_and_mode_selection(
     )  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     sim_counts = pd.read_csv(io.StringIO(proc.stdout.split("\n", 1)[1]))
-    assert sorted(sim_counts["runs"]) == [1, 3]  # LF once, NB three times: no live run
+    assert sorted(sim_counts["runs"]) == [1, 2]  # LF once, NB twice (a kept copy): no live run
     proc = in_process(capsys, monkeypatch, "analyze", "--db", str(db), "--mode", "live")
     assert proc.returncode == 0 and proc.stdout.startswith("Live runs"), proc.stderr
 

@@ -6,6 +6,7 @@ still resume."""
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -56,11 +57,18 @@ def runs(db: Path) -> list[dict[str, Any]]:
         con.close()
 
 
-def test_the_same_run_twice_gives_repetitions_1_and_2(tmp_path: Path, sim: MissionResult) -> None:
+def test_the_same_run_is_stored_once_unless_a_duplicate_is_asked_for(
+    tmp_path: Path, sim: MissionResult
+) -> None:
     db = tmp_path / "r.duckdb"
     first = store_result(db, sim)
-    second = store_result(db, sim)
-    assert (first.repetition, second.repetition) == (1, 2)
+    again = store_result(db, sim)
+    # Same configuration, seed and inputs: the same result, already stored.
+    assert not again.new and again.run_id == first.run_id and again.repetition == 1
+    assert "already stored as" in again.describe()
+    assert len(runs(db)) == 1
+    second = store_result(db, sim, keep_duplicate=True)
+    assert second.new and (first.repetition, second.repetition) == (1, 2)
     assert first.config_id == second.config_id and first.config_id.startswith("AH_LF_SPL0_SLT-")
     assert second.run_id == f"{first.config_id}-r002"
     rows = runs(db)
@@ -89,19 +97,32 @@ def test_the_same_run_twice_gives_repetitions_1_and_2(tmp_path: Path, sim: Missi
     assert '"max_time": 20.0' in options and '"scenario": "/' in options  # absolute path
 
 
+def test_a_live_run_is_stored_once_per_record(tmp_path: Path, sim: MissionResult) -> None:
+    db = tmp_path / "r.duckdb"
+    first = store_result(db, as_live(sim), run_fingerprint="record-a")
+    same_record = store_result(db, as_live(sim), run_fingerprint="record-a")
+    other_record = store_result(db, as_live(sim), run_fingerprint="record-b")
+    assert not same_record.new and same_record.run_id == first.run_id
+    assert other_record.new and other_record.repetition == 2  # another live run, same seed
+    with pytest.raises(ValueError, match="fingerprint of its record"):
+        store_result(db, as_live(sim))
+
+
 def test_ids_differ_by_mode_options_and_experiment(tmp_path: Path, sim: MissionResult) -> None:
     db = tmp_path / "r.duckdb"
+    records = iter(f"record-{i}" for i in range(100))
+    store_live = functools.partial(_store_live, records)
     sim_run = store_result(db, sim)
-    live = store_result(db, as_live(sim, speed=10.0))
+    live = store_live(db, as_live(sim, speed=10.0))
     assert live.config_id != sim_run.config_id and live.mode == "live"
     assert live.config_id.startswith("AH_LF_SPL0_SLT_LIVE-") and live.repetition == 1
     # Another speed or a lease is another configuration ...
-    faster = store_result(db, as_live(sim, speed=20.0))
-    leased = store_result(db, as_live(sim, speed=10.0), live_options={"lease": 30.0})
+    faster = store_live(db, as_live(sim, speed=20.0))
+    leased = store_live(db, as_live(sim, speed=10.0), live_options={"lease": 30.0})
     assert len({live.config_id, faster.config_id, leased.config_id}) == 3
     # ... while options at their default are not part of the id: `collect` (which sees
     # the record's speed only) and `live` (which gives every option) agree.
-    again = store_result(
+    again = store_live(
         db, as_live(sim, speed=10.0), live_options={"speed": 10.0, "protocol": "tcp", "acl": False}
     )
     assert again.config_id == live.config_id and again.repetition == 2
@@ -122,6 +143,10 @@ def test_ids_differ_by_mode_options_and_experiment(tmp_path: Path, sim: MissionR
     assert res.runs["run_id"].tolist() == [other.run_id]
     assert res.configs["config_id"].tolist() == [other.config_id]
     res.close()
+
+
+def _store_live(records: Any, db: Path, result: MissionResult, **kwargs: Any) -> Any:
+    return store_result(db, result, run_fingerprint=next(records), **kwargs)
 
 
 def test_paths_are_absolute_so_the_working_directory_does_not_matter(
@@ -181,7 +206,7 @@ def test_a_failed_write_leaves_no_trace(
 
     monkeypatch.setattr(store_module, "_frame", fail_on_events)
     with pytest.raises(RuntimeError, match="disk full"):
-        store_result(db, as_live(sim, speed=10.0), experiment="other")
+        store_result(db, as_live(sim, speed=10.0), experiment="other", run_fingerprint="r")
     monkeypatch.undo()
     assert snapshot(db) == before
     info = inspect_database(db)
@@ -198,7 +223,9 @@ def test_a_sweep_into_the_same_database_still_resumes(tmp_path: Path, sim: Missi
         execute_sweep(
             dataclasses.replace(plan, todo=plan.todo[:4]), pool, max_in_flight=2, run_fn=fake_ok
         )
-    stored = store_result(db, as_live(sim, speed=10.0))  # an ad-hoc run in between
+    stored = store_result(
+        db, as_live(sim, speed=10.0), run_fingerprint="r"
+    )  # an ad-hoc run in between
     resumed = plan_sweep(exp, db)
     assert [s.run_id for s in resumed.todo] == [s.run_id for s in plan.todo[4:]]
     with ThreadPoolExecutor(2) as pool:

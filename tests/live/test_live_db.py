@@ -32,9 +32,15 @@ def test_live_and_collect_store_the_run_with_mode_live(tmp_path: Path) -> None:
     stored = live["stored"]
     assert stored["mode"] == "live" and stored["repetition"] == 1
     assert stored["config_id"].startswith("WLAN_NB_SPL0_LIVE-")
-    # The same record collected again: the same configuration (its speed is in the
-    # record), the next repetition.
+    # The same record collected again: the same run (its speed is in the record), which
+    # is stored already; kept as a duplicate only on request (the next repetition).
     done = mrcomm("collect", str(records), "--db", str(db), "--json", timeout=60)
+    assert done.returncode == 0, done.stderr[-2000:]
+    same = json.loads(done.stdout)["stored"]
+    assert same["run_id"] == stored["run_id"] and same["new"] is False
+    done = mrcomm(
+        "collect", str(records), "--db", str(db), "--json", "--keep-duplicate", timeout=60
+    )
     assert done.returncode == 0, done.stderr[-2000:]
     again = json.loads(done.stdout)["stored"]
     assert again["config_id"] == stored["config_id"] and again["repetition"] == 2

@@ -328,6 +328,30 @@ def _package_versions() -> dict[str, str]:
     return out
 
 
+PROVENANCE_COLUMNS = ("mrcomm_version", "git_commit", "machine", "input_hashes")
+
+
+def provenance_rows(runs: pd.DataFrame) -> list[list[str]]:
+    """Who made the runs: one row per distinct (configuration label, MRComm version,
+    commit, machine, input hashes) with its number of runs."""
+    if not set(PROVENANCE_COLUMNS) <= set(runs.columns):
+        return []
+    keys = ["label", *PROVENANCE_COLUMNS]
+    frame = runs.reindex(columns=keys).fillna("").astype(str)
+    rows = []
+    for key, group in frame.groupby(keys, sort=True):
+        label, version, commit, machine, hashes = (str(k) for k in key)
+        try:
+            files = json.loads(hashes) if hashes else {}
+        except ValueError:
+            files = {}
+        listed = ", ".join(f"{role} {digest}" for role, digest in sorted(files.items()))
+        rows.append(
+            [label, str(len(group)), version, commit or "(not a checkout)", machine, listed]
+        )
+    return rows
+
+
 def _failed_runs(runs: pd.DataFrame) -> list[list[str]]:
     bad = runs[runs["status"] != "ok"] if "status" in runs else runs.iloc[0:0]
     return bad.reindex(columns=["run_id", "status", "error"]).fillna("").astype(str).values.tolist()
@@ -392,6 +416,7 @@ def build_report(
         "n_runs": len(runs),
         "status": status,
         "errors": _failed_runs(runs),
+        "provenance": provenance_rows(runs),
         "configs": _config_rows(frame_of(data, "configs")),
         "config_columns": [
             *(c for c in frame_of(data, "configs").columns if c != "options"),

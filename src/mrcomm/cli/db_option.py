@@ -21,6 +21,14 @@ DbOpt = Annotated[
     Path | None,
     typer.Option(help="Also store the run in this results database (DuckDB; created if new)."),
 ]
+KeepDuplicateOpt = Annotated[
+    bool,
+    typer.Option(
+        "--keep-duplicate",
+        help="With --db: store the run even if the same run (configuration, seed and "
+        "inputs; live: the same record) is stored already.",
+    ),
+]
 ExperimentOpt = Annotated[
     str | None,
     typer.Option(help="Experiment the run is stored under in --db (default: adhoc)."),
@@ -45,6 +53,8 @@ def store_run(
     result: MissionResult,
     *,
     live_options: dict[str, Any] | None = None,
+    run_fingerprint: str | None = None,
+    keep_duplicate: bool = False,
     if_lost: str = "",
 ) -> StoredRun | None:
     """Store the finished run in ``db`` (None: nothing to do). ``if_lost`` tells the
@@ -55,7 +65,12 @@ def store_run(
 
     try:
         return store_result(
-            db, result, experiment=experiment or DEFAULT_EXPERIMENT, live_options=live_options
+            db,
+            result,
+            experiment=experiment or DEFAULT_EXPERIMENT,
+            live_options=live_options,
+            run_fingerprint=run_fingerprint,
+            keep_duplicate=keep_duplicate,
         )
     except InputError as err:
         if not if_lost:
@@ -72,4 +87,5 @@ def stored_json(stored: StoredRun) -> dict[str, Any]:
         "run_id": stored.run_id,
         "repetition": stored.repetition,
         "mode": stored.mode,
+        "new": stored.new,
     }

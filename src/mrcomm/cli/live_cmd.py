@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from mrcomm.cli.db_option import DbOpt, ExperimentOpt, check_db, store_run
+from mrcomm.cli.db_option import DbOpt, ExperimentOpt, KeepDuplicateOpt, check_db, store_run
 from mrcomm.cli.run_cmd import show_result
 from mrcomm.cli.run_options import with_run_options
 from mrcomm.errors import InputError
@@ -202,6 +202,7 @@ def live(
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
     db: DbOpt = None,
     experiment: ExperimentOpt = None,
+    keep_duplicate: KeepDuplicateOpt = False,
     agent_clock: Annotated[
         str,
         typer.Option(
@@ -248,6 +249,8 @@ def live(
         experiment,
         result,
         live_options=live_options,
+        run_fingerprint=report["record_fingerprint"],
+        keep_duplicate=keep_duplicate,
         if_lost=f"the records stay in {directory}: store them with mrcomm collect "
         f"{directory} --db ...",
     )
@@ -264,6 +267,7 @@ def collect_cmd(
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
     db: DbOpt = None,
     experiment: ExperimentOpt = None,
+    keep_duplicate: KeepDuplicateOpt = False,
 ) -> None:
     """Merge the records every process of a live run wrote into one result; with --db,
     store it in a results database (mode live)."""
@@ -273,5 +277,12 @@ def collect_cmd(
     result, report = collect(record_dir)
     # The record says how its agents were clocked (the other live options it cannot).
     host = any(p["host_clock"] for p in report["processes"].values())
-    stored = store_run(db, experiment, result, live_options={"agent_clock": "host"} if host else {})
+    stored = store_run(
+        db,
+        experiment,
+        result,
+        live_options={"agent_clock": "host"} if host else {},
+        run_fingerprint=report["record_fingerprint"],
+        keep_duplicate=keep_duplicate,
+    )
     show_result(result, live_summary(result, report), stored, as_json)

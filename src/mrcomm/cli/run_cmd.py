@@ -10,7 +10,14 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from mrcomm.cli.db_option import DbOpt, ExperimentOpt, check_db, store_run, stored_json
+from mrcomm.cli.db_option import (
+    DbOpt,
+    ExperimentOpt,
+    KeepDuplicateOpt,
+    check_db,
+    store_run,
+    stored_json,
+)
 from mrcomm.cli.display import fmt
 from mrcomm.cli.run_options import with_run_options
 from mrcomm.fileio import atomic_write
@@ -35,6 +42,7 @@ def run(
     ] = None,
     db: DbOpt = None,
     experiment: ExperimentOpt = None,
+    keep_duplicate: KeepDuplicateOpt = False,
 ) -> None:
     """Run one mission in simulation (faster than real time); with --db, store it in a
     results database (mode sim)."""
@@ -56,7 +64,11 @@ def run(
 
         atomic_write(plot, lambda tmp: save_mission_plot(result, tmp, fmt=plot.suffix[1:]))
     stored = store_run(
-        db, experiment, result, if_lost="the run is deterministic: run the command again"
+        db,
+        experiment,
+        result,
+        keep_duplicate=keep_duplicate,
+        if_lost="the run is deterministic: run the command again",
     )
     show_result(result, result.summary(), stored, as_json)
 

@@ -8,8 +8,10 @@
   given except the seed. Options at their default are left out (as in sweeps: a new
   RunConfig field keeps the ids); paths are absolute. A live configuration therefore
   never shares an id with a simulated one, and its label ends in ``_LIVE``.
-* The repetition is the next free number of that configuration (storing the same
-  command twice gives repetitions 1 and 2); the seed is the run's own.
+* The repetition is the next free number of that configuration; the seed is the
+  run's own. A run already stored is not stored again: a simulated run with the same
+  configuration, seed and input files (it would give the same result), or a live run
+  from the same record (``collect`` twice). ``keep_duplicate`` stores it anyway.
 * The experiment's ``schema_yaml`` lists every run stored in it with its mode, seed,
   options and the command that reproduces it.
 
@@ -35,6 +37,7 @@ from mrcomm.experiment.seeds import make_config_id, make_run_id
 from mrcomm.experiment.store import ResultStore, inspect_database
 from mrcomm.experiment.tables import RUN_MODES
 from mrcomm.run.config import RunConfig, make_config, param_assignments
+from mrcomm.run.provenance import fingerprint, input_hashes
 from mrcomm.run.result import MissionResult
 
 #: ``experiments.schema_path`` of an ad-hoc experiment (sweeps hold their schema file).
@@ -68,8 +71,16 @@ class StoredRun:
     run_id: str
     repetition: int
     mode: str
+    #: False: the same run was already stored (as ``run_id``); nothing was written.
+    new: bool = True
 
     def describe(self) -> str:
+        if not self.new:
+            return (
+                f"already stored as {self.run_id} (same configuration, seed and inputs"
+                f"{' and record' if self.mode == 'live' else ''}) in {self.db_path}: "
+                "not stored again (--keep-duplicate stores a copy)"
+            )
         return (
             f"stored as {self.run_id} (experiment {self.experiment}, mode {self.mode}) "
             f"in {self.db_path}"
@@ -101,10 +112,14 @@ def store_result(
     *,
     experiment: str = DEFAULT_EXPERIMENT,
     live_options: dict[str, Any] | None = None,
+    run_fingerprint: str | None = None,
+    keep_duplicate: bool = False,
 ) -> StoredRun:
     """Store one finished run. The mode is the result's own (``config['mode']``, 'sim'
     when absent); ``live_options`` are the live command's options beyond RunConfig
-    (:data:`LIVE_DEFAULTS`; a live result's recorded speed is taken from it)."""
+    (:data:`LIVE_DEFAULTS`; a live result's recorded speed is taken from it).
+    ``run_fingerprint`` identifies a live run (its record; see
+    :func:`mrcomm.live.collect.record_fingerprint`); a simulated run's is computed."""
     check_target(db_path, experiment)
     mode = str(result.config.get("mode", "sim"))
     if mode not in RUN_MODES:
@@ -131,8 +146,19 @@ def store_result(
         config.model_copy(update={"seed": 0}),
         extra_options=extra,
     )
+    if mode == "live" and run_fingerprint is None:
+        raise ValueError("a live run is stored with the fingerprint of its record")
     store = ResultStore.open(db_path)
     try:
+        run_fingerprint = run_fingerprint or fingerprint(
+            config_id, config.seed, input_hashes(config)
+        )
+        earlier = store.run_with_fingerprint(run_fingerprint)
+        if earlier is not None and not keep_duplicate:
+            run_id, repetition = earlier
+            return StoredRun(
+                Path(db_path), experiment, config_id, run_id, repetition, mode, new=False
+            )
         # Numbered with the write lock held: no other writer can take the same number.
         repetition = store.next_repetition(config_id)
         spec = RunSpec(
@@ -162,7 +188,7 @@ def store_result(
             base_seed=0,
             configurations=(configuration,),
         )
-        rows = result_rows(spec, result, result.wall_time_s)
+        rows = result_rows(spec, result, result.wall_time_s, run_fingerprint)
         store.write_run(rows, experiment=registered)
     finally:
         store.close()

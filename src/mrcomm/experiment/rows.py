@@ -1,7 +1,8 @@
 """Turn one run's outcome into the rows of the results tables (tables.py).
 
 Runs in the worker process, so that only small, plain tuples travel back to the
-parent (never the MissionResult with its scenario and map). Column orders are those of
+parent (never the MissionResult with its scenario and map), and so that the machine
+recorded is the one that ran the mission. Column orders are those of
 :mod:`mrcomm.experiment.tables`; ``finished_at`` is left to the parent, which stamps
 it when it writes the run.
 """
@@ -14,6 +15,7 @@ from typing import Any
 
 from mrcomm.experiment.schema import RunSpec
 from mrcomm.experiment.tables import RUN_AON_COLUMNS, RUN_METRIC_COLUMNS, RUN_TABLES
+from mrcomm.run.provenance import fingerprint, provenance
 from mrcomm.run.result import MissionResult
 
 #: table name -> rows (tuples in the table's column order).
@@ -49,14 +51,36 @@ def _number(value: Any) -> float | None:
     return None
 
 
+def _provenance_part(spec: RunSpec, run_fingerprint: str | None = None) -> tuple[Any, ...]:
+    """The provenance columns; the fingerprint is the configuration's, seed's and
+    inputs' unless the caller knows better (a live run: its record)."""
+    info = provenance(spec.config)
+    hashes = info["input_hashes"]
+    return (
+        info["mrcomm_version"],
+        info["git_commit"],
+        info["machine"],
+        json.dumps(hashes, sort_keys=True),
+        run_fingerprint or fingerprint(spec.config_id, spec.seed, hashes),
+    )
+
+
 def failure_rows(spec: RunSpec, status: str, error: str, wall_time_s: float | None) -> Rows:
     """Rows of a run that crashed or ran out of time: a runs row, nothing else."""
     n_rest = len(RUN_METRIC_COLUMNS) + len(RUN_AON_COLUMNS) + 1  # + finished_at
-    runs = (*_config_part(spec, status, error), None, wall_time_s, *([None] * n_rest))
+    runs = (
+        *_config_part(spec, status, error),
+        None,
+        wall_time_s,
+        *([None] * n_rest),
+        *_provenance_part(spec),
+    )
     return {"runs": [runs]}
 
 
-def result_rows(spec: RunSpec, result: MissionResult, wall_time_s: float) -> Rows:
+def result_rows(
+    spec: RunSpec, result: MissionResult, wall_time_s: float, run_fingerprint: str | None = None
+) -> Rows:
     """Every table's rows for a finished mission."""
     rid = spec.run_id
     mission = result.mission
@@ -73,6 +97,7 @@ def result_rows(spec: RunSpec, result: MissionResult, wall_time_s: float) -> Row
         *metrics,
         *aon,
         None,  # finished_at: stamped by the parent
+        *_provenance_part(spec, run_fingerprint),
     )
     rows: Rows = {"runs": [runs]}
     rows["robot_metrics"] = [

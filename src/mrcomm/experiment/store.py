@@ -305,6 +305,15 @@ class ResultStore:
         ).fetchone()
         return int(row[0]) + 1 if row and row[0] is not None else 1
 
+    def run_with_fingerprint(self, fingerprint: str) -> tuple[str, int] | None:
+        """(run_id, repetition) of a finished run stored with ``fingerprint``."""
+        row = self.con.execute(
+            "SELECT run_id, repetition FROM runs WHERE fingerprint = ? AND status = 'ok' "
+            "ORDER BY run_id LIMIT 1",
+            [fingerprint],
+        ).fetchone()
+        return None if row is None else (str(row[0]), int(row[1]))
+
     def experiment_yaml(self, name: str) -> str | None:
         """The ``schema_yaml`` stored for experiment ``name`` (None: not registered)."""
         row = self.con.execute(

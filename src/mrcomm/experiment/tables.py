@@ -9,7 +9,7 @@ from __future__ import annotations
 
 #: Bumped whenever a table or column changes meaning; a database written with another
 #: version is refused before it is touched.
-SCHEMA_VERSION = "1"
+SCHEMA_VERSION = "2"
 
 Columns = tuple[tuple[str, str], ...]
 
@@ -92,11 +92,23 @@ RUN_AON_COLUMNS: tuple[tuple[str, str, str], ...] = (
     ("aon_max_finish_time", "DOUBLE", "max_finish_time"),
 )
 
+#: Where a run came from (mrcomm.run.provenance): the software, the inputs, the machine,
+#: and the fingerprint (configuration id, seed, input hashes; for a live run: its
+#: record) that makes storing the same run twice detectable.
+RUN_PROVENANCE_COLUMNS: Columns = (
+    ("mrcomm_version", "TEXT"),
+    ("git_commit", "TEXT"),
+    ("machine", "TEXT"),
+    ("input_hashes", "JSON"),
+    ("fingerprint", "TEXT"),
+)
+
 RUNS: Columns = (
     *RUN_CONFIG_COLUMNS,
     *((c, t) for c, t, _ in RUN_METRIC_COLUMNS),
     *((c, t) for c, t, _ in RUN_AON_COLUMNS),
     ("finished_at", "TIMESTAMP"),
+    *RUN_PROVENANCE_COLUMNS,
 )
 
 ROBOT_METRICS: Columns = (

@@ -18,6 +18,7 @@ stepped on their host's clock, how that clock fared (``host_clock``).
 
 from __future__ import annotations
 
+import hashlib
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -90,6 +91,17 @@ def read_journals(record_dir: Path) -> list[JournalData]:
     return sorted(out, key=lambda j: (j.process, j.incarnation))
 
 
+def record_fingerprint(record_dir: Path) -> str:
+    """What identifies a live run: a SHA-256 (16 hex digits) of its journals' names and
+    contents. ``collect`` of the same records gives the same fingerprint, so the run is
+    stored once."""
+    digest = hashlib.sha256()
+    for path in sorted(record_dir.glob("*.jsonl")):
+        digest.update(path.name.encode() + b"\0")
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
 def collect(record_dir: Path) -> tuple[MissionResult, dict[str, Any]]:
     """The run's result (as ``mrcomm run`` gives it) and its live-only report."""
     journals = read_journals(record_dir)
@@ -144,7 +156,9 @@ def collect(record_dir: Path) -> tuple[MissionResult, dict[str, Any]]:
             config_extra={"mode": "live", "speed": start.get("speed")},
         )
     )
-    return result, _live_report(journals, world, by_process)
+    report = _live_report(journals, world, by_process)
+    report["record_fingerprint"] = record_fingerprint(record_dir)
+    return result, report
 
 
 # -- timelines -------------------------------------------------------------------------
