@@ -27,6 +27,11 @@ class InputError(Exception):
         return " ".join(text.split())
 
 
+class Interrupted(Exception):
+    """Ctrl-C, after the command has saved what it could: the message says what was
+    kept (the CLI prints it in one line, exit status 130)."""
+
+
 def did_you_mean(word: str, choices: Iterable[str]) -> str:
     """Return ' (did you mean 'x'?)' when a close match exists, else ''."""
     close = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)

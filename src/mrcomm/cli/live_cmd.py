@@ -13,6 +13,7 @@ team's Zenoh network; bad input is a one-line error with exit status 2.
 
 from __future__ import annotations
 
+import shutil
 import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
@@ -20,9 +21,10 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from mrcomm.cli.db_option import DbOpt, ExperimentOpt, KeepDuplicateOpt, check_db, store_run
+from mrcomm.cli.live_display import LiveDisplay
 from mrcomm.cli.run_cmd import show_result
 from mrcomm.cli.run_options import with_run_options
-from mrcomm.errors import InputError
+from mrcomm.errors import InputError, Interrupted
 from mrcomm.net.zenoh_config import ZenohOptions, make_options
 
 if TYPE_CHECKING:
@@ -235,7 +237,22 @@ def live(
         run, zenoh, directory, speed=speed, lease=lease, agent_clock=agent_clock
     )
     tls = TlsLayout(tls_dir, acl=acl) if tls_dir is not None else None
-    result, report = run_live(settings, tls=tls)
+    from mrcomm.world.scenario import load_scenario
+
+    scenario = load_scenario(run.scenario)
+    display = LiveDisplay(directory, run.max_time, len(scenario.tasks), len(scenario.robots))
+    try:
+        with display:
+            result, report = run_live(settings, tls=tls, on_progress=display.update)
+    except KeyboardInterrupt:
+        if record_dir is None:
+            shutil.rmtree(directory, ignore_errors=True)
+            raise Interrupted(
+                "interrupted; every process stopped, the partial records removed"
+            ) from None
+        raise Interrupted(
+            f"interrupted; every process stopped, the partial records kept in {directory}"
+        ) from None
     live_options = {
         "speed": speed,
         "lease": lease,

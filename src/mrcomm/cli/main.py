@@ -1,56 +1,130 @@
-"""Entry point of the ``mrcomm`` command: mounts every sub-command and turns bad input
-(:class:`~mrcomm.errors.InputError`, or a usage error) into a one-line error with exit
-status 2 and no traceback."""
+"""Entry point of the ``mrcomm`` command: lists every sub-command, imports a
+sub-command's module only when that command runs (so ``mrcomm --help`` and
+``mrcomm --version`` answer at once, without loading numpy, scipy or Zenoh), and turns
+bad input (:class:`~mrcomm.errors.InputError`, or a usage error) into a one-line error
+with exit status 2 and no traceback. Ctrl-C ends any command with one line and exit
+status 130."""
 
 from __future__ import annotations
 
+import importlib
 import sys
+from typing import Any, NamedTuple
 
 import typer
+from typer.core import TyperGroup
 
-from mrcomm.cli.analyze_cmd import analyze
-from mrcomm.cli.check_cmd import check
-from mrcomm.cli.fsm_cmd import fsm
-from mrcomm.cli.live_cmd import agent, collect_cmd, live, world
-from mrcomm.cli.pulse_cmd import pulse
-from mrcomm.cli.replay_cmd import replay
-from mrcomm.cli.report_cmd import report
-from mrcomm.cli.run_cmd import run
-from mrcomm.cli.signal_cmd import signal_app
-from mrcomm.cli.sweep_cmd import export, sweep
-from mrcomm.cli.variants_cmd import variants
-from mrcomm.errors import InputError
+import mrcomm
+from mrcomm.errors import InputError, Interrupted
+
+#: Exit status after Ctrl-C (128 + SIGINT, as shells report it).
+EXIT_INTERRUPTED = 130
+
+
+class Command(NamedTuple):
+    module: str
+    attribute: str
+    #: The line ``mrcomm --help`` shows: kept here so that listing the commands imports
+    #: none of them (tests/cli/test_main_cli.py loads every entry).
+    summary: str
+
+
+_CLI = "mrcomm.cli."
+#: Every sub-command, in the order ``mrcomm --help`` lists them.
+COMMANDS: dict[str, Command] = {
+    "run": Command(
+        _CLI + "run_cmd", "run", "Run one mission in simulation (faster than real time)"
+    ),
+    "sweep": Command(
+        _CLI + "sweep_cmd", "sweep", "Run every configuration x repetition of an experiment"
+    ),
+    "analyze": Command(_CLI + "analyze_cmd", "analyze", "Print the statistics of a study"),
+    "report": Command(
+        _CLI + "report_cmd", "report", "Write a study's HTML report, figures and tables"
+    ),
+    "export": Command(
+        _CLI + "sweep_cmd", "export", "Export every results table to CSV or Parquet files"
+    ),
+    "live": Command(_CLI + "live_cmd", "live", "Run one mission live over Zenoh"),
+    "world": Command(
+        _CLI + "live_cmd", "world", "Simulate every robot's base and publish the clock (live)"
+    ),
+    "agent": Command(_CLI + "live_cmd", "agent", "Run one robot's agent over Zenoh"),
+    "collect": Command(
+        _CLI + "live_cmd", "collect_cmd", "Merge the records of a live run into one result"
+    ),
+    "replay": Command(_CLI + "replay_cmd", "replay", "Summarise a recorded mission (MCAP)"),
+    "pulse": Command(_CLI + "pulse_cmd", "pulse", "ESD pulse: publish the measured RSSI"),
+    "signal": Command(_CLI + "signal_cmd", "signal_app", "SSD signal models: fit, show, plot"),
+    "fsm": Command(_CLI + "fsm_cmd", "fsm", "Write a behaviour's state machine as a diagram"),
+    "variants": Command(
+        _CLI + "variants_cmd", "variants", "List every registered variant with its parameters"
+    ),
+    "check": Command(
+        _CLI + "check_cmd", "check", "Check that a variant keeps the contract of every variant"
+    ),
+}
+
+
+class LazyGroup(TyperGroup):
+    """The ``mrcomm`` group: commands built from :data:`COMMANDS` on first use."""
+
+    def list_commands(self, ctx: Any) -> list[str]:
+        return list(COMMANDS)
+
+    def get_command(self, ctx: Any, cmd_name: str) -> Any:
+        entry = COMMANDS.get(cmd_name)
+        if entry is None:
+            return None
+        target = getattr(importlib.import_module(entry.module), entry.attribute)
+        if isinstance(target, typer.Typer):
+            return typer.main.get_group(target)
+        app = typer.Typer(rich_markup_mode=None, pretty_exceptions_enable=False)
+        app.command(cmd_name)(target)
+        return typer.main.get_command(app)
+
+    def format_commands(self, ctx: Any, formatter: Any) -> None:
+        # The summaries from the table: asking each command would import them all.
+        rows = [(name, entry.summary + ".") for name, entry in COMMANDS.items()]
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+
+def _version(ctx: Any, _: Any, value: bool) -> None:
+    if value:
+        typer.echo(f"mrcomm {mrcomm.__version__}")
+        ctx.exit()
+
 
 cli = typer.Typer(
     name="mrcomm",
-    help="MRComm: multi-robot teams under degraded communication.",
+    cls=LazyGroup,
+    help="MRComm: simulate multi-robot missions under degraded communication and measure "
+    "what the network did to the team. Acronyms and metrics: docs/GLOSSARY.md.",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
+    rich_markup_mode=None,
 )
 
 
 @cli.callback()
-def _group() -> None:
+def _group(
+    version: bool = typer.Option(
+        False,
+        "--version",
+        help="Print the version and exit.",
+        callback=_version,
+        is_eager=True,
+    ),
+) -> None:
     """MRComm: simulate multi-robot missions under degraded communication and measure
-    what the network did to the team."""
+    what the network did to the team. Acronyms and metrics: docs/GLOSSARY.md."""
 
 
-cli.command("run")(run)
-cli.command("fsm")(fsm)
-cli.command("world")(world)
-cli.command("agent")(agent)
-cli.command("live")(live)
-cli.command("collect")(collect_cmd)
-cli.command("sweep")(sweep)
-cli.command("export")(export)
-cli.command("replay")(replay)
-cli.add_typer(signal_app, name="signal")
-cli.command("pulse")(pulse)
-cli.command("analyze")(analyze)
-cli.command("report")(report)
-cli.command("variants")(variants)
-cli.command("check")(check)
+def _interrupted(message: str = "interrupted") -> None:
+    typer.echo(f"mrcomm: {message}", err=True)
+    sys.exit(EXIT_INTERRUPTED)
 
 
 def app() -> None:
@@ -60,11 +134,12 @@ def app() -> None:
     except InputError as err:
         typer.echo(f"mrcomm: error: {err.one_line()}", err=True)
         sys.exit(2)
+    except Interrupted as stop:
+        _interrupted(str(stop))
     except typer.Exit as err:
         sys.exit(err.exit_code)
-    except typer.Abort:
-        typer.echo("mrcomm: aborted", err=True)
-        sys.exit(130)
+    except (typer.Abort, KeyboardInterrupt):
+        _interrupted()
     except typer.TyperException as err:
         ctx = getattr(err, "ctx", None)
         if type(err).__name__ == "NoArgsIsHelpError" and ctx is not None:
@@ -74,4 +149,6 @@ def app() -> None:
         message = " ".join(err.format_message().split())
         typer.echo(f"mrcomm: error: {message}", err=True)
         sys.exit(err.exit_code)
+    if code == EXIT_INTERRUPTED:  # Typer turns Ctrl-C into this exit code, silently
+        _interrupted()
     sys.exit(code if isinstance(code, int) else 0)

@@ -22,6 +22,7 @@ from mrcomm.output_paths import FIGURE_SUFFIXES, check_output_file
 signal_app = typer.Typer(
     help="SSD signal models: fit from RSSI measurements, show, plot.",
     no_args_is_help=True,
+    rich_markup_mode=None,
 )
 
 SAMPLE_DISTANCES = (1.0, 2.0, 4.0, 8.0)

@@ -26,7 +26,7 @@ from rich.progress import (
 )
 
 from mrcomm.cli.run_options import SetOpt, parse_assignments
-from mrcomm.errors import InputError
+from mrcomm.errors import InputError, Interrupted
 from mrcomm.output_paths import DATABASE_SUFFIXES, check_output_dir, check_output_file
 
 if TYPE_CHECKING:
@@ -128,12 +128,9 @@ def sweep(
         if close is not None:
             close()
     if interrupted:
-        typer.echo(
-            f"mrcomm: interrupted; finished runs are stored in {db}: "
-            "run the same command again to resume",
-            err=True,
+        raise Interrupted(
+            f"interrupted; finished runs are stored in {db}: run the same command again to resume"
         )
-        raise typer.Exit(130)
     typer.echo(_summary(plan, report))
     for run_id, status, message in report.failures[:10]:
         typer.echo(f"  {status}: {run_id}: {message}")

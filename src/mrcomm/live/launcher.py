@@ -21,6 +21,7 @@ import socket
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
@@ -39,6 +40,7 @@ from mrcomm.world.scenario import load_scenario
 
 _CLI = "from mrcomm.cli.main import app; app()"
 EXIT_GRACE = 15.0  # wall s the agents get to finish after the world has ended
+PROGRESS_PERIOD = 0.5  # wall s between progress callbacks while a mission runs
 
 
 @dataclass
@@ -226,16 +228,26 @@ class LiveTeam:
         s = self.settings
         return s.start_timeout + s.run.max_time / s.speed + 60.0
 
-    def wait(self, timeout: float | None = None) -> None:
+    def wait(
+        self, timeout: float | None = None, on_progress: Callable[[], None] | None = None
+    ) -> None:
         """Wait for the world to end the mission and the agents to finish; a failed
-        world (bad input, team never ready) raises its one-line error."""
+        world (bad input, team never ready) raises its one-line error. ``on_progress``
+        is called about every ``PROGRESS_PERIOD`` s of wall time meanwhile."""
         deadline = time.monotonic() + (timeout if timeout is not None else self.mission_timeout())
         world = self.children[WORLD_ID].process
-        try:
-            world.wait(timeout=max(deadline - time.monotonic(), 0.1))
-        except subprocess.TimeoutExpired:
-            self.stop()
-            raise TimeoutError("the live mission did not end in time (see the logs)") from None
+        while True:
+            left = deadline - time.monotonic()
+            try:
+                world.wait(timeout=max(min(left, PROGRESS_PERIOD), 0.01))
+                break
+            except subprocess.TimeoutExpired:
+                if left <= PROGRESS_PERIOD:
+                    self.stop()
+                    message = "the live mission did not end in time (see the logs)"
+                    raise TimeoutError(message) from None
+                if on_progress is not None:
+                    on_progress()
         if world.returncode != 0:
             self.stop()
             raise InputError(self.first_error() or f"world exited with status {world.returncode}")
@@ -289,10 +301,14 @@ def free_port(host: str, *, udp: bool = False) -> int:
 
 
 def run_live(
-    settings: LiveSettings, *, tls: TlsLayout | None = None
+    settings: LiveSettings,
+    *,
+    tls: TlsLayout | None = None,
+    on_progress: Callable[[], None] | None = None,
 ) -> tuple[MissionResult, dict[str, Any]]:
-    """Launch, wait for the end of the mission, collect: the live ``mrcomm run``."""
+    """Launch, wait for the end of the mission, collect: the live ``mrcomm run``. Any
+    exception (Ctrl-C too) stops every process first."""
     with LiveTeam(settings, tls=tls) as team:
         team.start()
-        team.wait()
+        team.wait(on_progress=on_progress)
         return team.collect()
