@@ -83,3 +83,38 @@ def test_no_ray_is_cast_for_a_threshold_without_signal_model() -> None:
     model = LinkModel(("a", "b"), grid, AdHoc(), DistanceThreshold(4.0))
     state = model.update(np.array([[4.0, 1.0], [6.0, 1.0]]), 0.0)
     assert model.casts == 0 and state.line_of_sight is None and state.rssi is None
+
+
+def test_link_state_intervals_per_pair() -> None:
+    """Each robot pair's warning / out-of-range intervals, the worse direction counting,
+    open intervals closed at the end, connected time not listed."""
+    import numpy as np
+
+    from mrcomm.net.links import LinkRecorder, LinkState
+
+    ids = ("a", "b", "c")
+    recorder = LinkRecorder(ids, robots=3)
+    ok = np.ones((3, 3), dtype=bool)
+    calm = np.zeros((3, 3), dtype=bool)
+
+    def step(now: float, warning: np.ndarray, connected: np.ndarray) -> None:
+        state = LinkState(ids, np.zeros((3, 3)), None, None, warning, connected)
+        recorder.record(state, 0.5, now)
+
+    warn_ab = calm.copy()
+    warn_ab[0, 1] = True  # one direction is enough
+    cut_bc = ok.copy()
+    cut_bc[2, 1] = False
+    step(0.0, calm, ok)
+    step(0.5, warn_ab, ok)
+    step(1.0, warn_ab, cut_bc)
+    step(1.5, calm, cut_bc)
+    step(2.0, calm, ok)
+    step(2.5, warn_ab, ok)
+    assert recorder.state_intervals(end=3.0) == [
+        ("a", "b", "warning", 0.5, 1.5),
+        ("b", "c", "out of range", 1.0, 2.0),
+        ("a", "b", "warning", 2.5, 3.0),
+    ]
+    # Time in warning agrees with the per-pair summary.
+    assert recorder.summaries()["a->b"]["time_in_warning"] == 1.5

@@ -30,6 +30,8 @@ _ORDER = {
     "intervals": "run_id, robot, track, t_start",
     "events": "run_id, robot, t",
     "rssi": "run_id, t, src, dst",
+    "link_states": "run_id, t_start, robot_a, robot_b",
+    "trajectories": "run_id, robot, t",
 }
 
 
@@ -46,6 +48,8 @@ class Results:
     intervals: pd.DataFrame
     events: pd.DataFrame
     rssi: pd.DataFrame
+    link_states: pd.DataFrame
+    trajectories: pd.DataFrame
     #: Read-only DuckDB connection for raw SQL.
     con: duckdb.DuckDBPyConnection
 

@@ -14,7 +14,12 @@ import math
 from typing import Any
 
 from mrcomm.experiment.schema import RunSpec
-from mrcomm.experiment.tables import RUN_AON_COLUMNS, RUN_METRIC_COLUMNS, RUN_TABLES
+from mrcomm.experiment.tables import (
+    RUN_AON_COLUMNS,
+    RUN_METRIC_COLUMNS,
+    RUN_TABLES,
+    TRAJECTORY_STORE_PERIOD,
+)
 from mrcomm.run.provenance import fingerprint, provenance
 from mrcomm.run.result import MissionResult
 
@@ -151,6 +156,15 @@ def result_rows(
         for e in timeline.events
     ]
     rows["rssi"] = [(rid, t, src, dst, rssi) for t, src, dst, rssi in result.rssi_series]
+    rows["link_states"] = [(rid, *interval) for interval in result.link_states]
+    every = TRAJECTORY_STORE_PERIOD
+    rows["trajectories"] = [
+        (rid, robot, t, x, y)
+        for robot, samples in result.trajectories.items()
+        for t, x, y in samples
+        # Samples on the store period's grid (the recorded ones are finer).
+        if abs(t / every - round(t / every)) < 1e-6
+    ]
     return rows
 
 

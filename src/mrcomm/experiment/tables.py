@@ -161,6 +161,25 @@ RSSI: Columns = (
     ("rssi", "DOUBLE"),
 )
 
+#: When each robot pair's link was in warning or out of range (connected otherwise).
+LINK_STATES: Columns = (
+    ("run_id", "TEXT"),
+    ("robot_a", "TEXT"),
+    ("robot_b", "TEXT"),
+    ("state", "TEXT"),
+    ("t_start", "DOUBLE"),
+    ("t_end", "DOUBLE"),
+)
+#: Every robot's position, sampled every TRAJECTORY_STORE_PERIOD simulated s.
+TRAJECTORIES: Columns = (
+    ("run_id", "TEXT"),
+    ("robot", "TEXT"),
+    ("t", "DOUBLE"),
+    ("x", "DOUBLE"),
+    ("y", "DOUBLE"),
+)
+TRAJECTORY_STORE_PERIOD = 1.0
+
 #: Tables written once per run, in one transaction (``runs`` first).
 RUN_TABLES: dict[str, Columns] = {
     "runs": RUNS,
@@ -171,6 +190,8 @@ RUN_TABLES: dict[str, Columns] = {
     "intervals": INTERVALS,
     "events": EVENTS,
     "rssi": RSSI,
+    "link_states": LINK_STATES,
+    "trajectories": TRAJECTORIES,
 }
 
 #: Every table, in creation order.

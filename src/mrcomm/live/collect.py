@@ -153,6 +153,10 @@ def collect(record_dir: Path) -> tuple[MissionResult, dict[str, Any]]:
                 for line in world.of("rssi")
                 for a, b, v in line["v"]
             ],
+            link_states=[
+                (str(a), str(b), str(state), float(t0), float(t1))
+                for a, b, state, t0, t1 in truth.get("link_states", [])
+            ],
             config_extra={"mode": "live", "speed": start.get("speed")},
         )
     )

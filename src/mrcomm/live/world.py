@@ -285,6 +285,7 @@ class WorldProcess:
             wall_time=self.wall_time,
             robots=truth,
             links=self.link_recorder.summaries(),
+            link_states=self.link_recorder.state_intervals(end),
         )
 
 

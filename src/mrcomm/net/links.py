@@ -153,6 +153,10 @@ class LinkModel:
         return sight
 
 
+#: Link states of a robot pair by code (0, connected, is not recorded as an interval).
+PAIR_STATES = {1: "warning", 2: "out of range"}
+
+
 class LinkRecorder:
     """What a run's link states add up to — the ground truth recorded by the simulation
     and by the live world alike:
@@ -162,7 +166,9 @@ class LinkRecorder:
     * per robot (the first ``robots`` ids): its closest and furthest team mate over the
       run (:attr:`min_separation`, :attr:`max_separation`);
     * the RSSI of every robot pair at the pulse rate (2 Hz), where the threshold has one
-      (:attr:`rssi_series`)."""
+      (:attr:`rssi_series`);
+    * per unordered robot pair, the intervals its link spent in warning or out of range
+      (:meth:`state_intervals`; the worse of the two directions)."""
 
     def __init__(
         self,
@@ -189,6 +195,12 @@ class LinkRecorder:
         self.max_distance = np.zeros((n, n))
         self.warning_onsets = np.zeros((n, n), dtype=np.int64)
         self._prev_warning = np.zeros((n, n), dtype=np.bool_)
+        # Link state per unordered robot pair (upper triangle): 0 connected, 1 warning,
+        # 2 out of range; with when the current state began.
+        self._pairs = np.triu_indices(robots, k=1)
+        self._pair_state = np.zeros(len(self._pairs[0]), dtype=np.int8)
+        self._pair_since = np.zeros(len(self._pairs[0]))
+        self._closed: list[tuple[str, str, str, float, float]] = []
 
     def record(self, state: LinkState, dt: float, now: float) -> list[tuple[str, str, float]]:
         """Add one step of ``dt`` s; return the RSSI samples taken now (usually none)."""
@@ -198,6 +210,7 @@ class LinkRecorder:
         self._prev_warning = state.warning
         np.fmin(self.min_distance, state.distance, out=self.min_distance)
         np.fmax(self.max_distance, state.distance, out=self.max_distance)
+        self._track_pair_states(state, now)
         n = self.robots
         if n >= 2:
             d = state.distance[:n, :n]
@@ -221,6 +234,38 @@ class LinkRecorder:
         ]
         self.rssi_series.extend((now, a, b, v) for a, b, v in samples)
         return samples
+
+    def _track_pair_states(self, state: LinkState, start: float) -> None:
+        """Close the intervals of pairs whose state changed with the step that began at
+        ``start`` (the step's states hold from its start)."""
+        i, j = self._pairs
+        if len(i) == 0:
+            return
+        out = ~state.connected[i, j] | ~state.connected[j, i]
+        warn = state.warning[i, j] | state.warning[j, i]
+        codes = np.where(out, 2, np.where(warn, 1, 0)).astype(np.int8)
+        for k in np.flatnonzero(codes != self._pair_state).tolist():
+            self._close(k, start)
+            self._pair_state[k] = codes[k]
+            self._pair_since[k] = start
+
+    def _close(self, k: int, end: float) -> None:
+        code = int(self._pair_state[k])
+        if code and end > self._pair_since[k]:
+            a, b = self.ids[self._pairs[0][k]], self.ids[self._pairs[1][k]]
+            since = round(float(self._pair_since[k]), 6)
+            self._closed.append((a, b, PAIR_STATES[code], since, round(end, 6)))
+
+    def state_intervals(self, end: float) -> list[tuple[str, str, str, float, float]]:
+        """(robot a, robot b, "warning" | "out of range", start s, end s) of every robot
+        pair's link, in time order, the open ones closed at ``end``."""
+        closed = list(self._closed)
+        for k in np.flatnonzero(self._pair_state).tolist():
+            a, b = self.ids[self._pairs[0][k]], self.ids[self._pairs[1][k]]
+            since = round(float(self._pair_since[k]), 6)
+            if end > since:
+                closed.append((a, b, PAIR_STATES[int(self._pair_state[k])], since, round(end, 6)))
+        return sorted(closed, key=lambda row: (row[3], row[0], row[1]))
 
     def separation(self, robot: int) -> tuple[float | None, float | None]:
         """Robot ``robot``'s closest and furthest team mate over the run, m (6

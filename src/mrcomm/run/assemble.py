@@ -76,6 +76,9 @@ class RunFacts:
     trajectories: dict[str, list[tuple[float, float, float]]]
     #: (time, from, to, rssi dBm) samples of robot pairs.
     rssi_series: list[tuple[float, str, str, float]]
+    #: (robot a, robot b, state, start, end): when each pair's link warned or was out of
+    #: range (:meth:`mrcomm.net.links.LinkRecorder.state_intervals`).
+    link_states: list[tuple[str, str, str, float, float]] = field(default_factory=list)
     #: Configuration entries only one mode has (a live run's mode and speed).
     config_extra: dict[str, Any] = field(default_factory=dict)
 
@@ -137,6 +140,7 @@ def assemble(facts: RunFacts) -> MissionResult:
         trajectories=facts.trajectories,
         scenario=facts.scenario,
         rssi_series=[(round(t, 3), a, b, round(v, 3)) for t, a, b, v in facts.rssi_series],
+        link_states=list(facts.link_states),
     )
 
 

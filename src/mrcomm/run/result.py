@@ -3,7 +3,7 @@ message counts, AON statistics, link summaries, timelines and trajectories."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from mrcomm.metrics.timeline import Timeline
@@ -28,6 +28,8 @@ class MissionResult:
     scenario: Scenario
     #: (time, from, to, rssi dBm) for robot pairs at 2 Hz, when the threshold has RSSI.
     rssi_series: list[tuple[float, str, str, float]]
+    #: (robot a, robot b, "warning" | "out of range", start s, end s) per robot pair.
+    link_states: list[tuple[str, str, str, float, float]] = field(default_factory=list)
 
     def summary(self) -> dict[str, Any]:
         return {

@@ -168,6 +168,7 @@ class Mission:
                 links=self.link_recorder.summaries(),
                 trajectories=self.trajectories,
                 rssi_series=list(self.link_recorder.rssi_series),
+                link_states=self.link_recorder.state_intervals(end),
             )
         )
 
