@@ -71,6 +71,9 @@ class VariantSpec:
     metrics: tuple[str, ...] = ()
     #: Behaviours: whether task statuses travel with AON.
     uses_aon: bool = False
+    #: Behaviours: whether it acts on the threshold's warnings (False: the threshold
+    #: only shapes the recorded link statistics; runs with other thresholds are alike).
+    uses_threshold: bool = True
     #: Where the variant came from: the distribution that registered it.
     origin: str = "mrcomm"
 

@@ -23,6 +23,7 @@ NB_SPEC = VariantSpec(
     summary="NB, no behaviour: each robot goes to its closest task and reports it once "
     "(plain publish); it ignores link quality",
     topics=("pose", "task_status"),
+    uses_threshold=False,
 )
 LF_SPEC = VariantSpec(
     kind="behaviour",

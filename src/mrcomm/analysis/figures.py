@@ -87,11 +87,15 @@ def panel_grid(
     return fig, axes
 
 
-def render(fig: Figure, fmt: str = "png", dpi: int = 110) -> bytes:
-    """The figure encoded as PNG or SVG bytes."""
+#: Resolution of PNG figures: print quality.
+PNG_DPI = 300
+
+
+def render(fig: Figure, fmt: str = "png", dpi: int = PNG_DPI) -> bytes:
+    """The figure encoded as PNG, SVG or PDF bytes."""
     buf = io.BytesIO()
-    # SVG: text stays text (smaller, searchable); metadata date omitted for reproducibility.
-    meta = {"Date": None} if fmt == "svg" else {}
+    # SVG/PDF: text stays text (smaller, searchable); no date, for reproducible files.
+    meta = {"Date": None} if fmt == "svg" else {"CreationDate": None} if fmt == "pdf" else {}
     fig.savefig(buf, format=fmt, dpi=dpi, metadata=meta)
     return buf.getvalue()
 
@@ -144,31 +148,96 @@ def _per_panel(
 
 
 def metric_bars(runs: pd.DataFrame, metric: str) -> Figure:
-    """Mean ± standard deviation (ddof=1) of ``metric`` per configuration."""
+    """``metric`` per configuration: mean ± standard deviation (ddof=1) bars, as the
+    original study drew them, above box plots (median, quartiles, 1.5 IQR whiskers),
+    which show what the rank tests compare. Behaviours without the metric (NB for
+    Leader–Follower metrics) are left out, not drawn as zero."""
     info = METRICS[metric]
+    runs = usable_runs(runs)
+    runs = runs[pd.to_numeric(runs[metric], errors="coerce").notna()]
+    keys = panel_keys(runs)
+    multi = len({k[0] for k in keys}) > 1
+    levels = spl_levels(runs)
+    behs = behaviours(runs)
+    fig, axes = panel_grid(len(keys), rows=2, height=3.0)
+    cols = axes.shape[1]
+    for k, key in enumerate(keys):
+        frame = runs[
+            (runs["scenario"] == key[0])
+            & (runs["network"] == key[1])
+            & (runs["threshold"] == key[2])
+        ]
+        top, bottom = axes[2 * (k // cols), k % cols], axes[2 * (k // cols) + 1, k % cols]
+        _mean_sd_bars(top, frame, metric, levels, behs)
+        box_plots(bottom, frame, metric, levels, behs)
+        for ax, kind in ((top, "mean ± SD"), (bottom, "box plot")):
+            ax.set_title(f"{panel_title(key, multi)} · {kind}", fontsize=10)
+            _spl_axis(ax, levels)
+            ax.set_ylabel(f"{info.label} ({info.unit})")
+    for k in range(len(keys), (axes.shape[0] // 2) * cols):
+        axes[2 * (k // cols), k % cols].set_visible(False)
+        axes[2 * (k // cols) + 1, k % cols].set_visible(False)
+    handles = [Patch(color=behaviour_colour(b), label=b.upper()) for b in behs]
+    fig.legend(handles=handles, loc="outside lower center", ncols=max(len(handles), 1))
+    fig.suptitle(info.label)
+    return fig
 
-    def draw(ax: Axes, frame: pd.DataFrame, levels: list[float], behs: list[str]) -> None:
-        offsets, width = _bar_offsets(len(behs))
-        for off, beh in zip(offsets, behs, strict=True):
-            means, sds = [], []
-            for spl in levels:
-                vals = pd.to_numeric(
-                    frame.loc[(frame["behaviour"] == beh) & (frame["spl"] == spl), metric],
-                    errors="coerce",
-                ).dropna()
-                means.append(vals.mean() if len(vals) else np.nan)
-                sds.append(vals.std(ddof=1) if len(vals) > 1 else np.nan)
+
+def _mean_sd_bars(
+    ax: Axes, frame: pd.DataFrame, column: str, levels: list[float], behs: list[str]
+) -> None:
+    offsets, width = _bar_offsets(len(behs))
+    for off, beh in zip(offsets, behs, strict=True):
+        for i, spl in enumerate(levels):
+            vals = pd.to_numeric(
+                frame.loc[(frame["behaviour"] == beh) & (frame["spl"] == spl), column],
+                errors="coerce",
+            ).dropna()
+            if not len(vals):
+                continue  # no runs here: nothing drawn (not a zero bar)
+            sd = float(vals.std(ddof=1)) if len(vals) > 1 else 0.0
             ax.bar(
-                np.arange(len(levels)) + off,
-                np.nan_to_num(means),
+                i + off,
+                float(vals.mean()),
                 width * 0.95,
-                yerr=np.nan_to_num(sds),
+                yerr=sd,
                 capsize=3,
                 color=behaviour_colour(beh),
                 error_kw={"elinewidth": 1},
             )
 
-    return _per_panel(runs, draw, f"{info.label} (mean ± SD)", f"{info.label} ({info.unit})")
+
+def box_plots(
+    ax: Axes, frame: pd.DataFrame, column: str, levels: list[float], behs: list[str]
+) -> bool:
+    """Box plots of ``column`` per behaviour and SPL level; False when there is no data."""
+    offsets, width = _bar_offsets(len(behs))
+    drawn = False
+    for off, beh in zip(offsets, behs, strict=True):
+        samples, positions = [], []
+        for i, spl in enumerate(levels):
+            values = pd.to_numeric(
+                frame.loc[(frame["behaviour"] == beh) & (frame["spl"] == spl), column],
+                errors="coerce",
+            ).dropna()
+            if len(values):
+                samples.append(values.to_numpy())
+                positions.append(i + off)
+        if samples:
+            drawn = True
+            parts = ax.boxplot(
+                samples,
+                positions=positions,
+                widths=width * 0.8,
+                patch_artist=True,
+                manage_ticks=False,
+                medianprops={"color": "black"},
+                flierprops={"markersize": 3},
+            )
+            for patch in parts["boxes"]:
+                patch.set_facecolor(behaviour_colour(beh))
+                patch.set_alpha(0.75)
+    return drawn
 
 
 def success_figure(runs: pd.DataFrame) -> Figure:
@@ -229,12 +298,19 @@ def separation_figure(runs: pd.DataFrame) -> Figure:
             ax.axhline(AH_LIMIT_M, **_AH_LINE)
         ax.set_ylim(bottom=0)
 
-    refs = [
-        Line2D([], [], label="4 m SLT warning", **_SLT_LINE),
-        Line2D([], [], label="8 m AH limit", **_AH_LINE),
-    ]
+    # Only the reference lines some panel draws appear in the legend.
+    ok = usable_runs(runs)
+    refs = []
+    if (ok["threshold"] == "slt").any():
+        refs.append(Line2D([], [], label="4 m SLT warning", **_SLT_LINE))
+    if (ok["network"] == "ah").any():
+        refs.append(Line2D([], [], label="8 m AH limit", **_AH_LINE))
     return _per_panel(
-        runs, draw, "Minimum ▼ and maximum ▲ separation (mean ± SD)", "m", extra_handles=refs
+        runs,
+        draw,
+        "Minimum ▼ and maximum ▲ separation (mean ± SD)",
+        "separation from the closest ▼ / furthest ▲ team mate (m)",
+        extra_handles=refs,
     )
 
 

@@ -54,11 +54,16 @@ def qq_figure(runs: pd.DataFrame, metric: str) -> Figure:
         ax = axes.flat[used]
         used += 1
         for i, spl in enumerate(levels):
-            theo, z = qq_points(values[frame["spl"] == spl].to_numpy(dtype=float))
+            sample = values[frame["spl"] == spl].dropna().to_numpy(dtype=float)
+            theo, z = qq_points(sample)
             if len(theo):
                 colour = _SPL_COLOURS(i / max(len(levels) - 1, 1) * 0.9)
                 marker = _MARKERS[i % len(_MARKERS)]  # overlapping levels stay distinguishable
                 ax.plot(theo, z, marker, ms=3.5, color=colour, alpha=0.8, label=f"SPL{spl:g}")
+            elif len(sample):
+                # Nothing to standardise (all equal, or too few): say so in the legend.
+                why = "all equal" if len(sample) > 1 and np.ptp(sample) == 0 else "too few"
+                ax.plot([], [], " ", label=f"SPL{spl:g}: {why}, not drawn")
         ax.axline((0, 0), slope=1, color="grey", lw=0.8, ls="--")
         ax.set_title(f"{panel_title(key, multi)} · {beh.upper()}", fontsize=9)
         ax.set_xlabel("normal quantile", fontsize=8)

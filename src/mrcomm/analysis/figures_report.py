@@ -4,6 +4,7 @@ every figure of the report drawn and encoded (PNG, optionally SVG), by section."
 from __future__ import annotations
 
 import base64
+import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -12,7 +13,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from mrcomm.analysis import figures as fig_mod
-from mrcomm.analysis import figures_qq, figures_time
+from mrcomm.analysis import figures_comm, figures_qq, figures_time
 from mrcomm.analysis import stats as st
 from mrcomm.errors import InputError, did_you_mean
 
@@ -28,6 +29,7 @@ class ReportFigure:
     png: bytes
     svg: bytes | None
     metric: str = ""  # the metric a per-metric figure shows
+    pdf: bytes | None = None
 
     @property
     def data_uri(self) -> str:
@@ -47,6 +49,18 @@ def metrics_with_data(runs: pd.DataFrame, names: Sequence[str] | None = None) ->
         for m in st.resolve_metrics(names)
         if m.name in runs.columns and pd.to_numeric(runs[m.name], errors="coerce").notna().any()
     ]
+
+
+def constant_metrics(runs: pd.DataFrame, names: Sequence[str]) -> dict[str, float]:
+    """The metrics of ``names`` with one and the same value in every usable run (a
+    figure of them shows nothing): name -> that value."""
+    runs = st.usable_runs(runs)
+    out = {}
+    for name in names:
+        values = pd.to_numeric(runs[name], errors="coerce").dropna().unique()
+        if len(values) == 1:
+            out[name] = float(values[0])
+    return out
 
 
 def pick_timeline_runs(runs: pd.DataFrame, wanted: Sequence[str] | None) -> list[str]:
@@ -94,10 +108,11 @@ def _figure(
     fid: str, title: str, caption: str, fig: Figure, svg: bool, metric: str = ""
 ) -> ReportFigure:
     png = fig_mod.render(fig, "png")
-    # The layout is settled by the first render; freezing it makes the SVG render cheaper.
+    # The layout is settled by the first render; freezing it makes the vector renders cheaper.
     fig.set_layout_engine("none")
     svg_bytes = fig_mod.render(fig, "svg") if svg else None
-    return ReportFigure(fid, title, caption, png, svg_bytes, metric)
+    pdf_bytes = fig_mod.render(fig, "pdf") if svg else None
+    return ReportFigure(fid, title, caption, png, svg_bytes, metric, pdf_bytes)
 
 
 def build_figures(
@@ -112,6 +127,9 @@ def build_figures(
         "qq": [],
         "timelines": [],
         "rssi": [],
+        "comm": [],
+        "links": [],
+        "trajectories": [],
     }
     out["success"].append(
         _figure(
@@ -122,18 +140,24 @@ def build_figures(
             svg,
         )
     )
+    constant = constant_metrics(runs, metrics)
     for name in metrics:
+        if name in constant:
+            continue  # the same value in every run: the report says so instead
         info = st.METRICS[name]
         out["metrics"].append(
             _figure(
                 f"metric_{name}",
                 info.label,
-                f"{info.label} ({info.unit}): mean ± SD per configuration.",
+                f"{info.label} ({info.unit}) per configuration: mean ± SD (top, as the "
+                "original study) and box plots (bottom: median, quartiles, whiskers to "
+                "1.5 IQR), which show what the rank tests compare.",
                 fig_mod.metric_bars(runs, name),
                 svg,
                 name,
             )
         )
+    _communication_figures(data, runs, timelines, svg, out)
     out["time"].append(
         _figure(
             "time_breakdown",
@@ -168,7 +192,7 @@ def build_figures(
                 svg,
             )
         )
-    for name in [m for m in st.CORE_METRICS if m in metrics]:
+    for name in [m for m in st.CORE_METRICS if m in metrics and m not in constant]:
         out["qq"].append(
             _figure(
                 f"qq_{name}",
@@ -207,4 +231,103 @@ def build_figures(
                 svg,
             )
         )
+    return out
+
+
+def _communication_figures(
+    data: Any,
+    runs: pd.DataFrame,
+    timelines: Sequence[str],
+    svg: bool,
+    out: dict[str, list[ReportFigure]],
+) -> None:
+    """Messages lost per topic and cause, AON, and for each timeline run its link
+    states and trajectories (only the figures that have data)."""
+    messages = frame_of(data, "messages")
+    if not messages.empty:
+        out["comm"].append(
+            _figure(
+                "messages_lost",
+                "Messages lost by topic and cause",
+                "Share of deliveries (one per receiver) that did not arrive, mean per run, "
+                "per topic (bar label) and cause: lost to SPL or out of range.",
+                figures_comm.message_loss_figure(runs, messages),
+                svg,
+            )
+        )
+    aon = figures_comm.aon_figure(runs)
+    if aon is not None:
+        out["comm"].append(
+            _figure(
+                "aon",
+                "All-Or-Nothing messaging",
+                "AON publications per run (top) and the time the slowest status took "
+                "from its first publication until every member had it (bottom).",
+                aon,
+                svg,
+            )
+        )
+    link_states, trajectories = frame_of(data, "link_states"), frame_of(data, "trajectories")
+    info = runs.set_index("run_id")
+    scenarios = _scenarios(frame_of(data, "configs"))
+    for run_id in timelines:
+        if run_id not in info.index:
+            continue
+        row = info.loc[run_id]
+        title = f"{row['label']} ({run_id})"
+        robots = (
+            sorted(set(trajectories.loc[trajectories["run_id"] == run_id, "robot"].astype(str)))
+            if not trajectories.empty
+            else []
+        )
+        if len(robots) >= 2 and not link_states.empty:
+            out["links"].append(
+                _figure(
+                    f"links_{run_id}",
+                    f"Link states of {run_id}",
+                    "Each robot pair's link over the run: connected, in warning (the "
+                    "threshold's), out of range (the worse of the two directions).",
+                    figures_comm.link_state_figure(
+                        link_states, run_id, float(row["sim_time_s"]), robots, title
+                    ),
+                    svg,
+                )
+            )
+        scenario = scenarios.get(str(row["config_id"]))
+        if robots and scenario is not None:
+            grid = scenario.grid
+            tasks = [(t.task_id, t.x, t.y) for t in scenario.tasks]
+            out["trajectories"].append(
+                _figure(
+                    f"trajectory_{run_id}",
+                    f"Trajectories of {run_id}",
+                    "Every robot's path (sampled each second): start ○, end ■, tasks ★.",
+                    figures_comm.trajectory_figure(
+                        trajectories, run_id, grid.occupied, grid.extent, tasks, title
+                    ),
+                    svg,
+                )
+            )
+
+
+def _scenarios(configs: pd.DataFrame) -> dict[str, Any]:
+    """config_id -> its scenario, loaded from the stored path (missing files skipped:
+    the report then has no trajectory figure for it)."""
+    from mrcomm.errors import InputError
+    from mrcomm.world.scenario import load_scenario
+
+    loaded: dict[str, Any] = {}
+    out: dict[str, Any] = {}
+    for record in configs.to_dict("records"):
+        try:
+            path = str(json.loads(str(record.get("options") or "{}")).get("scenario", ""))
+        except ValueError:
+            continue
+        if path and path not in loaded:
+            try:
+                loaded[path] = load_scenario(path)
+            except (InputError, OSError):
+                loaded[path] = None
+        if loaded.get(path) is not None:
+            out[str(record["config_id"])] = loaded[path]
     return out

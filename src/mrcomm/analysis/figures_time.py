@@ -69,9 +69,10 @@ _FALLBACK = matplotlib.colormaps["tab20"]
 EVENT_MARKERS: dict[str, tuple[str, str]] = {
     L.NEAR_COLLISION: ("x", "red"),
     L.TASK_COMPLETED: ("*", "black"),
-    L.DISCONNECT_DETECTED: ("|", "firebrick"),
+    # A triangle with a white edge: readable on every interval colour (a thin tick was not).
+    L.DISCONNECT_DETECTED: ("v", "black"),
 }
-#: Warning thresholds drawn on the RSSI figure (SPEC §3).
+#: Warning thresholds drawn on the RSSI figure (the SSD and ESD defaults).
 RSSI_WARNING = {"ssd": -42.0, "esd": -41.0}
 
 
@@ -185,7 +186,9 @@ def timeline_figure(
                     sub["robot"].map(row_of),
                     marker,
                     color=colour,
-                    ms=7,
+                    mec="white" if marker == "v" else colour,
+                    mew=0.8 if marker == "v" else 1.5,
+                    ms=8,
                     ls="none",
                     label=label.replace("_", " "),
                 )

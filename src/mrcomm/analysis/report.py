@@ -25,8 +25,10 @@ import pandas as pd
 
 import mrcomm
 from mrcomm.analysis import stats as st
+from mrcomm.analysis.figures_comm import message_table
 from mrcomm.analysis.figures_report import (
     build_figures,
+    constant_metrics,
     frame_of,
     metrics_with_data,
     pick_timeline_runs,
@@ -352,6 +354,32 @@ def provenance_rows(runs: pd.DataFrame) -> list[list[str]]:
     return rows
 
 
+MESSAGE_COLUMNS = (
+    "configuration", "SPL", "topic", "runs", "sent", "received", "lost (SPL)",
+    "out of range", "not received %",
+)  # fmt: skip
+
+
+def _message_rows(runs: pd.DataFrame, messages: pd.DataFrame) -> list[list[str]]:
+    """Mean messages per run, by configuration, SPL level and topic (the table next to
+    the figure of messages lost)."""
+    table = message_table(runs, messages)
+    if table.empty:
+        return []
+    multi = table["scenario"].nunique() > 1
+    return [
+        [
+            _config(row, multi),
+            f"{float(row['spl']):g}",
+            str(row["topic"]),
+            str(int(row["runs"])),
+            *(fmt_num(row[k], 1) for k in ("sent", "received", "dropped_loss", "dropped_range")),
+            fmt_num(row["lost_percent"], 1),
+        ]
+        for _, row in table.iterrows()
+    ]
+
+
 def _failed_runs(runs: pd.DataFrame) -> list[list[str]]:
     bad = runs[runs["status"] != "ok"] if "status" in runs else runs.iloc[0:0]
     return bad.reindex(columns=["run_id", "status", "error"]).fillna("").astype(str).values.tolist()
@@ -426,6 +454,9 @@ def build_report(
         "tables": {name: _html_table(name, tables.get(name)) for name in st.TABLE_NAMES},
         "table_titles": TABLE_TITLES,
         "figures": figures,
+        "constant": constant_metrics(runs, chosen),
+        "messages": _message_rows(runs, frame_of(data, "messages")),
+        "message_columns": MESSAGE_COLUMNS,
     }
     html = _environment().get_template("report.html.j2").render(**context)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -437,14 +468,15 @@ def build_report(
         for f in section:
             _write(out_dir / "figures" / f"{f.id}.png", f.png)
             written.add(f"{f.id}.png")
-            if f.svg is not None:
-                _write(out_dir / "figures" / f"{f.id}.svg", f.svg)
-                written.add(f"{f.id}.svg")
+            for suffix, payload in (("svg", f.svg), ("pdf", f.pdf)):
+                if payload is not None:
+                    _write(out_dir / "figures" / f"{f.id}.{suffix}", payload)
+                    written.add(f"{f.id}.{suffix}")
             report.figures.append(f.id)
     # Written over an older report: its figures that this one does not have would be
     # taken for part of it. figures/ holds only what reports write.
     for old in (out_dir / "figures").glob("*"):
-        if old.suffix in (".png", ".svg") and old.name not in written:
+        if old.suffix in (".png", ".svg", ".pdf") and old.name not in written:
             old.unlink()
     for name in st.TABLE_NAMES:
         _write(out_dir / "tables" / f"{name}.csv", tables.get(name).to_csv(index=False).encode())

@@ -22,7 +22,7 @@ per group: 252); otherwise the normal approximation with tie and continuity corr
 
 Z (for the effect sizes) is ``(U − mn/2) / σ_U`` without continuity correction, with the
 tie-corrected σ_U = √(mn/12 · ((N+1) − Σ(t³−t)/(N(N−1)))), N = m+n, t the size of each
-group of tied values; without ties this is the SPEC's √(mn(m+n+1)/12).
+group of tied values; without ties this is the textbook √(mn(m+n+1)/12).
 
 Bootstrap intervals are percentile intervals of ``BOOTSTRAP_RESAMPLES`` resamples drawn
 with a fixed seed (``BOOTSTRAP_SEED``), so the same data always give the same interval.
@@ -100,7 +100,7 @@ METRICS: dict[str, Metric] = {
         _M("aon_resends", "AON re-sends", "count", lf_only=True),
     )
 }
-#: The SPEC §8 core metrics: the default selection of figures and Q–Q plots.
+#: The core metrics of the original study: the default Q–Q plots.
 CORE_METRICS = (
     "execution_phase_time",
     "total_movement_time",

@@ -168,7 +168,7 @@ def run_config(
     shortcuts = {"rssi_trace": rssi_trace, "signal_model": signal_model}
     given = {k: v for k, v in shortcuts.items() if v is not None}
     try:
-        return make_config(
+        config = make_config(
             None,
             scenario=scenario,
             network=network,
@@ -183,6 +183,9 @@ def run_config(
         )
     except InputError as err:
         raise InputError(err.message, field=_option_name(err.field)) from None
+    for warning in config.ignored_settings():
+        typer.echo(f"mrcomm: warning: {warning}", err=True)
+    return config
 
 
 def _option_name(field: str | None) -> str | None:

@@ -31,6 +31,7 @@ from mrcomm.output_paths import DATABASE_SUFFIXES, check_output_dir, check_outpu
 
 if TYPE_CHECKING:
     from mrcomm.experiment.runner import SweepPlan, SweepReport
+    from mrcomm.experiment.schema import Experiment
     from mrcomm.experiment.worker import RunOutcome
 
 #: Exit status when the sweep ended but some runs failed (bad input is 2).
@@ -78,6 +79,7 @@ def sweep(
     from mrcomm.experiment.schema import load_experiment
 
     experiment = load_experiment(schema, parse_assignments(sets))
+    _warn_ignored(experiment)
     if jobs is not None and jobs < 1:
         raise InputError(f"must be at least 1, got {jobs}", field="--jobs")
     if jobs is not None and scheduler is not None:
@@ -152,6 +154,23 @@ def export(
     check_output_dir(out, "--out")
     written = export_tables(db, fmt, out)
     typer.echo(f"wrote {len(written)} tables to {out}: {', '.join(p.name for p in written)}")
+
+
+def _warn_ignored(experiment: Experiment) -> None:
+    """One line per kind of setting that changes nothing, with how many configurations
+    have it (e.g. NB runs under several thresholds: identical runs)."""
+    counts: dict[str, list[str]] = {}
+    for configuration in experiment.configurations:
+        for warning in configuration.config.ignored_settings():
+            counts.setdefault(warning.split(" (")[0], []).append(configuration.label)
+    for what, labels in counts.items():
+        typer.echo(
+            f"mrcomm: warning: {what} in {len(labels)} configuration(s) "
+            f"({', '.join(labels[:4])}{', ...' if len(labels) > 4 else ''}): their runs "
+            "differ from those without a threshold only in link statistics; drop them "
+            "with an 'exclude' entry if they are not wanted",
+            err=True,
+        )
 
 
 def _check_record_dir(record: Path) -> None:

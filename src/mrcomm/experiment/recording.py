@@ -279,7 +279,7 @@ class MissionRecorder:
             if robots and all((task.task_id, r) in received for r in robots):
                 state = "communicated"
             elif final:
-                state = "failed"  # the assigner never learnt it (SPEC §8)
+                state = "failed"  # the assigner never learnt it (a failed task)
             elif any(task.task_id in m.executors[r].completed for r in robots):
                 state = "completed"
             elif task.task_id in goals:

@@ -46,7 +46,7 @@ LINK_COLORS: dict[str, Color] = {
 }
 #: pending: not started; active: some robot's current goal; completed: done by the robot
 #: but its status has not reached the assigner (yet); communicated: the assigner has it;
-#: failed: the mission ended without the assigner knowing (SPEC §8 failed task).
+#: failed: the mission ended without the assigner knowing (a failed task).
 TASK_COLORS: dict[str, Color] = {
     "pending": (0.60, 0.60, 0.60, 0.8),
     "active": (0.20, 0.50, 1.00, 0.9),

@@ -1,4 +1,4 @@
-"""Experiment schema files (SPEC §7): validated YAML that expands into configurations.
+"""Experiment schema files: validated YAML that expands into configurations.
 
 An experiment is a scenario (or several), a full factorial over run options and a
 number of repetitions::

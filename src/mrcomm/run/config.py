@@ -101,6 +101,18 @@ class RunConfig(BaseModel):
         bumped = {k: v for k, v in self.variants().items() if not v.endswith("-v1")}
         return {"variants": json.dumps(bumped, sort_keys=True)} if bumped else {}
 
+    def ignored_settings(self) -> list[str]:
+        """Settings accepted that change nothing the team does, one line each (the
+        commands warn about them)."""
+        behaviour = self.spec("behaviour")
+        if self.threshold != "none" and not behaviour.uses_threshold:
+            return [
+                f"{behaviour.name.upper()} ignores the threshold ({self.threshold}): its runs "
+                "are those of --threshold none; the threshold is recorded for link "
+                "statistics only"
+            ]
+        return []
+
     def label(self) -> str:
         """Short configuration label, e.g. ``AH_NB_SPL25_SSD``."""
         spl = f"{self.spl:g}"
