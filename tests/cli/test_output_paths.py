@@ -186,3 +186,18 @@ def test_unwritable_directory_as_a_normal_user(
     (line,) = proc.stderr.strip().splitlines()
     assert option in line and "permission denied" in line, line
     assert list(read_only_dir.iterdir()) == []
+
+
+def test_a_setting_that_changes_nothing_is_warned_about_once(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    nb = in_process(capsys, monkeypatch, *RUN, "--network", "ah", "--threshold", "slt")
+    assert nb.returncode == 0
+    assert nb.stderr == (
+        "mrcomm: warning: NB ignores the threshold (slt): its runs are those of --threshold "
+        "none; the threshold is recorded for link statistics only\n"
+    )
+    lf = in_process(
+        capsys, monkeypatch, *RUN, "--network", "ah", "--threshold", "slt", "--behaviour", "lf"
+    )
+    assert lf.returncode == 0 and lf.stderr == ""

@@ -74,3 +74,26 @@ def test_mission_metrics_sum_robots_and_take_extremes() -> None:
     assert m["min_separation"] == 0.7 and m["max_separation"] == 12.0
     assert m["failed_tasks"] == ["2", "10"]
     assert m["successful"] is False
+
+
+def test_a_task_done_twice_counts_once() -> None:
+    """A robot restarted in a live run may complete a task again: 7 tasks never
+    become 8 completed."""
+    from mrcomm.metrics.compute import completed_tasks
+
+    timeline = Timeline("r1")
+    for t, task in ((10.0, "1"), (20.0, "2"), (30.0, "2")):
+        timeline.event(L.TASK_COMPLETED, t, task_id=task)
+    assert completed_tasks(timeline) == {"1", "2"}
+    other = Timeline("r2")
+    other.event(L.TASK_COMPLETED, 5.0, task_id="3")
+    robots = {"r1": {"tasks_completed": 2}, "r2": {"tasks_completed": 1}}
+    robots = {rid: {**_zero_metrics(), **m} for rid, m in robots.items()}
+    mission = mission_metrics(robots, {"r1": timeline, "r2": other}, tasks_total=3, failed_tasks=[])
+    assert mission["tasks_completed"] == 3
+
+
+def _zero_metrics() -> dict[str, float | None]:
+    keys = ("movement_time", "distance", "near_collisions", "near_collisions_filtered")
+    keys += ("delay_time", "idle_time", "task_execution_time")
+    return {**dict.fromkeys(keys, 0.0), "min_separation": None, "max_separation": None}

@@ -23,7 +23,7 @@ import typer
 from mrcomm.cli.db_option import DbOpt, ExperimentOpt, KeepDuplicateOpt, check_db, store_run
 from mrcomm.cli.live_display import LiveDisplay
 from mrcomm.cli.run_cmd import show_result
-from mrcomm.cli.run_options import with_run_options
+from mrcomm.cli.run_options import warn_ignored_settings, with_run_options
 from mrcomm.errors import InputError, Interrupted
 from mrcomm.net.zenoh_config import ZenohOptions, make_options
 
@@ -240,6 +240,7 @@ def live(
     from mrcomm.world.scenario import load_scenario
 
     scenario = load_scenario(run.scenario)
+    warn_ignored_settings(run)
     display = LiveDisplay(directory, run.max_time, len(scenario.tasks), len(scenario.robots))
     try:
         with display:

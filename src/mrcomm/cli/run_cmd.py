@@ -19,8 +19,9 @@ from mrcomm.cli.db_option import (
     stored_json,
 )
 from mrcomm.cli.display import fmt
-from mrcomm.cli.run_options import with_run_options
+from mrcomm.cli.run_options import warn_ignored_settings, with_run_options
 from mrcomm.fileio import atomic_write
+from mrcomm.metrics.units import unit_of
 from mrcomm.output_paths import FIGURE_SUFFIXES, RECORDING_SUFFIXES, check_output_file
 from mrcomm.run.result import MissionResult
 from mrcomm.sim.mission import run_mission
@@ -53,6 +54,7 @@ def run(
     if record is not None:
         check_output_file(record, "--record", RECORDING_SUFFIXES)
     check_db(db, experiment)
+    warn_ignored_settings(config)
     if record is not None:
         from mrcomm.experiment.recording import run_and_record
 
@@ -95,8 +97,79 @@ def show_result(
         console.print(footer)
 
 
+#: Robots beyond which the per-robot table is left to --json (it would not fit).
+MAX_ROBOT_COLUMNS = 8
+#: Robot pairs beyond which the link table shows a summary only.
+MAX_LINK_ROWS = 15
+
+_MISSION_KEYS = (
+    "tasks_completed",
+    "failed_tasks",
+    "execution_phase_time",
+    "total_movement_time",
+    "total_distance",
+    "near_collisions",
+    "near_collisions_filtered",
+    "delay_time",
+    "idle_time",
+    "task_execution_time",
+    "min_separation",
+    "max_separation",
+    "timed_out",
+)
+_ROBOT_KEYS = (
+    "tasks_assigned",
+    "tasks_completed",
+    "tasks_failed",
+    "failed_tasks",
+    "initialisation_time",
+    "movement_time",
+    "task_execution_time",
+    "distance",
+    "near_collisions",
+    "delay_time",
+    "idle_time",
+    "min_separation",
+    "max_separation",
+)
+_LF_KEYS = (
+    "na_movement_time",
+    "leader_movement_time",
+    "follower_movement_time",
+    "leader_disconnect_time",
+    "follower_waiting_time",
+    "role_assignment_time",
+    "switching_time",
+)
+_AON_KEYS = (
+    "statuses_sent",
+    "publications",
+    "resend_publications",
+    "replies",
+    "restarts",
+    "pending",
+    "left_out_reports",
+    "max_finish_time",
+)
+
+
+def _named(key: str) -> str:
+    """``key (unit)`` for a table's first column."""
+    unit = unit_of(key)
+    return f"{key} ({unit})" if unit and unit != "yes/no" else key
+
+
+def _table(title: str, *columns: str) -> Table:
+    table = Table(title=title, title_justify="left")
+    for i, column in enumerate(columns):
+        first = i == 0
+        table.add_column(column, justify="left" if first else "right", no_wrap=first)
+    return table
+
+
 def print_result(result: MissionResult, console: Console) -> None:
-    """Human output: mission, per-robot and message tables."""
+    """Human output, every metric group with its unit: mission, robots, Leader–Follower,
+    AON, links, messages (see docs/GLOSSARY.md for definitions)."""
     m = result.mission
     verdict = "[green]successful[/]" if m["successful"] else "[red]failed[/]"
     console.print(
@@ -105,51 +178,80 @@ def print_result(result: MissionResult, console: Console) -> None:
         f"{result.sim_time_s:.1f} s simulated in {result.wall_time_s:.2f} s "
         f"({result.sim_time_s / max(result.wall_time_s, 1e-9):.0f}x real time)"
     )
-    mission = Table(title="Mission", show_header=True)
-    mission.add_column("metric")
-    mission.add_column("value", justify="right")
-    for key in (
-        "tasks_completed",
-        "failed_tasks",
-        "execution_phase_time",
-        "total_movement_time",
-        "total_distance",
-        "near_collisions",
-        "delay_time",
-        "idle_time",
-        "min_separation",
-        "max_separation",
-        "timed_out",
-    ):
-        mission.add_row(key, fmt(m.get(key)))
+    mission = _table("Mission", "metric", "value")
+    for key in _MISSION_KEYS:
+        value = m.get(key)
+        shown = (
+            f"{fmt(value)} of {m.get('tasks_total')}" if key == "tasks_completed" else fmt(value)
+        )
+        mission.add_row(_named(key), shown)
     console.print(mission)
 
-    robots = Table(title="Robots")
-    robots.add_column("metric")
-    for rid in result.robots:
-        robots.add_column(rid, justify="right")
-    for key in (
-        "tasks_assigned",
-        "tasks_completed",
-        "tasks_failed",
-        "failed_tasks",
-        "initialisation_time",
-        "movement_time",
-        "task_execution_time",
-        "distance",
-        "near_collisions",
-        "delay_time",
-        "idle_time",
-        "min_separation",
-        "max_separation",
-    ):
-        robots.add_row(key, *(fmt(row.get(key)) for row in result.robots.values()))
-    console.print(robots)
+    robots = list(result.robots)
+    if len(robots) <= MAX_ROBOT_COLUMNS:
+        table = _table("Robots", "metric", *robots)
+        for key in _ROBOT_KEYS:
+            table.add_row(_named(key), *(fmt(result.robots[r].get(key)) for r in robots))
+        console.print(table)
+    else:
+        console.print(f"Robots: {len(robots)} (per-robot metrics: --json)")
 
-    messages = Table(title="Messages")
-    messages.add_column("topic")
-    for c in ("sent", "received", "dropped_loss", "dropped_range"):
-        messages.add_column(c.replace("_", " "), justify="right")
+    if any(m.get(key) is not None for key in _LF_KEYS):
+        lf = _table("Leader–Follower (team totals)", "metric", "value")
+        for key in _LF_KEYS:
+            lf.add_row(_named(key), fmt(m.get(key)))
+        console.print(lf)
+
+    total = result.aon.get("total") or {}
+    if total:
+        aon = _table("AON (All-Or-Nothing messaging)", "metric", "value")
+        for key in _AON_KEYS:
+            aon.add_row(_named(key), fmt(total.get(key)))
+        console.print(aon)
+
+    _print_links(result, console)
+
+    messages = _table(
+        "Messages", "topic", "sent", "received", "lost (SPL)", "out of range", "not received %"
+    )
     for topic, counts in result.messages.items():
-        messages.add_row(topic, *(str(counts[c]) for c in counts))
+        attempts = counts["received"] + counts["dropped_loss"] + counts["dropped_range"]
+        lost = counts["dropped_loss"] + counts["dropped_range"]
+        share = f"{100.0 * lost / attempts:.1f}" if attempts else "-"
+        messages.add_row(
+            topic,
+            *(str(counts[c]) for c in ("sent", "received", "dropped_loss", "dropped_range")),
+            share,
+        )
     console.print(messages)
+
+
+def _print_links(result: MissionResult, console: Console) -> None:
+    """Robot pairs (one direction each): distances, warnings, time out of range."""
+    robots = set(result.robots)
+    pairs = []
+    for name, row in result.links.items():
+        a, _, b = name.partition("->")
+        if a in robots and b in robots and a < b:
+            pairs.append((f"{a}–{b}", row))
+    if not pairs:
+        return
+    columns = {
+        "min_distance": "closest (m)",
+        "max_distance": "furthest (m)",
+        "min_rssi": "min RSSI (dBm)",
+        "time_in_warning": "in warning (s)",
+        "warnings": "warnings",
+        "time_disconnected": "out of range (s)",
+    }
+    if len(pairs) > MAX_LINK_ROWS:
+        out = [row["time_disconnected"] for _, row in pairs]
+        console.print(
+            f"Links: {len(pairs)} robot pairs; out of range {sum(o > 0 for o in out)} of them, "
+            f"longest {max(out):.1f} s (per pair: --json)"
+        )
+        return
+    table = _table("Links (robot pairs)", "pair", *columns.values())
+    for name, row in pairs:
+        table.add_row(name, *(fmt(row.get(k)) for k in columns))
+    console.print(table)

@@ -183,9 +183,14 @@ def run_config(
         )
     except InputError as err:
         raise InputError(err.message, field=_option_name(err.field)) from None
+    return config
+
+
+def warn_ignored_settings(config: Any) -> None:
+    """Say in one line per setting that it changes nothing (called once every check
+    has passed, just before the work: bad input still gets a single line)."""
     for warning in config.ignored_settings():
         typer.echo(f"mrcomm: warning: {warning}", err=True)
-    return config
 
 
 def _option_name(field: str | None) -> str | None:

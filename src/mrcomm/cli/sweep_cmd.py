@@ -79,7 +79,6 @@ def sweep(
     from mrcomm.experiment.schema import load_experiment
 
     experiment = load_experiment(schema, parse_assignments(sets))
-    _warn_ignored(experiment)
     if jobs is not None and jobs < 1:
         raise InputError(f"must be at least 1, got {jobs}", field="--jobs")
     if jobs is not None and scheduler is not None:
@@ -108,6 +107,7 @@ def sweep(
             pools.append(process_pool(workers))
             return pools[-1]
 
+    _warn_ignored(experiment)  # every check passed: the work begins
     if record is not None:
         record.mkdir(parents=True, exist_ok=True)
     interrupted = False

@@ -37,7 +37,8 @@ def robot_metrics(timeline: Timeline, facts: RobotFacts) -> dict[str, Any]:
     last_completion = timeline.last(L.TASK_COMPLETED)
     return {
         "tasks_assigned": facts.tasks_assigned,
-        "tasks_completed": timeline.count(L.TASK_COMPLETED),
+        # Distinct tasks: a restarted robot (a new live incarnation) may do one again.
+        "tasks_completed": len(completed_tasks(timeline)),
         "tasks_failed": facts.tasks_failed,
         "initialisation_time": init_time,
         "movement_time": timeline.total(L.MOVING),
@@ -117,6 +118,11 @@ LF_TOTALS = (
 )
 
 
+def completed_tasks(timeline: Timeline) -> set[str]:
+    """Ids of the tasks a robot completed (each once, however often it did it)."""
+    return {str(e.data.get("task_id")) for e in timeline.events if e.label == L.TASK_COMPLETED}
+
+
 def execution_phase(timelines: Mapping[str, Timeline]) -> tuple[float | None, float | None]:
     """(start, end) of the execution phase: every robot has its assignment -> the last
     task completed. ``None`` where it never began or no task was completed."""
@@ -148,7 +154,7 @@ def mission_metrics(
         "successful": not failed_tasks and start is not None,
         "failed_tasks": sorted(failed_tasks, key=_task_sort_key),
         "tasks_total": tasks_total,
-        "tasks_completed": int(total("tasks_completed")),
+        "tasks_completed": len(set().union(*(completed_tasks(tl) for tl in timelines.values()))),
         "execution_phase_time": (end - start) if (start is not None and end is not None) else None,
         "total_movement_time": total("movement_time"),
         "total_distance": total("distance"),
