@@ -1,4 +1,4 @@
-"""Task assigner agent (SPEC §1).
+"""Task assigner agent.
 
 Loads the mission, identifies the team, assigns tasks round-robin at mission start
 (the assignment topic is not perturbed), then records, without interfering, every

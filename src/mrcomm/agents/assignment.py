@@ -1,4 +1,4 @@
-"""Static round-robin task assignment (SPEC §1).
+"""Static round-robin task assignment.
 
 Tasks in file order, robots in a fixed order; each task goes to the next robot in a
 cycle (a task needing k robots goes to the next k robots). With 3 robots and 7 tasks:

@@ -1,4 +1,4 @@
-"""Near-collision detection and right of way (SPEC §4), as pure functions.
+"""Near-collision detection and right of way, as pure functions.
 
 * Danger zone: a semicircle of radius ``danger_radius`` ahead of the robot. A team mate
   (from its last received pose) inside it that is heading towards the robot or across

@@ -1,4 +1,4 @@
-"""Task executor agent with the NB behaviour (SPEC §1, §4).
+"""Task executor agent with the NB behaviour.
 
 One per robot. Receives its agenda, repeatedly drives to the closest available task,
 executes it, publishes its status once (plain publish-subscribe: no acknowledgement, no

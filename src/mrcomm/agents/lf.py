@@ -1,4 +1,4 @@
-"""LF — the communication-aware Leader-Follower behaviour (SPEC §4), enclosing NB.
+"""LF — the communication-aware Leader-Follower behaviour, enclosing NB.
 
 A hierarchical state machine: ``na`` is NB plus a network trigger; ``leader`` and
 ``follower`` are sub-machines; ``assigning`` collects utilities and roles;
@@ -448,7 +448,7 @@ class LeaderFollowerExecutor(TaskExecutor):
         """Navigate to the leader's last known position, unless the follower is in the
         connection area and the planned route would take it out (some point of the
         route in warning from the leader): then drive straight at the leader instead,
-        one short hop at a time, where the straight line is open (SPEC §4: the planner
+        one short hop at a time, where the straight line is open (the planner
         must not route a follower out of range). Where it is not, the planned route is
         the only way and is kept."""
         pose = self.base.pose

@@ -1,4 +1,4 @@
-"""Utility functions of LF role assignment, registered by name (SPEC §4, §9).
+"""Utility functions of LF role assignment, registered by name.
 
 The robot with the highest utility leads. The original's utility is
 ``u = d_score × n_incomplete × rec_complete`` with ``d_score = 1 / distance to the

@@ -1,4 +1,4 @@
-"""AON — all-or-nothing acknowledged messaging over the Bus port (SPEC §5, §9).
+"""AON — all-or-nothing acknowledged messaging over the Bus port.
 
 One :class:`AonEndpoint` per agent. It carries task-status payloads to every member of
 a fixed team over plain best-effort publish/subscribe (topic ``TOPIC_AON``), with the

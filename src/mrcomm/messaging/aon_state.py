@@ -118,7 +118,7 @@ class FinishReport:
 
 @dataclass
 class AonStats:
-    """Counters of one AON endpoint (SPEC §8: AON re-sends and completion times)."""
+    """Counters of one AON endpoint (AON re-sends and completion times)."""
 
     #: AON publications made by this member.
     publications: int = 0

@@ -1,4 +1,4 @@
-"""Typed messages shared by the agents (SPEC §2) and their wire encoding.
+"""Typed messages shared by the agents and their wire encoding.
 
 Every message carries the sender id, the sender's incarnation (new each time an agent
 starts), a per-sender sequence number and the send time. Structs are msgspec-tagged so

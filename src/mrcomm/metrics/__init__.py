@@ -1,2 +1,2 @@
-"""Metrics layer: per-robot timelines of labelled intervals and events, and the SPEC §8
+"""Metrics layer: per-robot timelines of labelled intervals and events, and the
 metrics computed from them."""

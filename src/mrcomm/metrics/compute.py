@@ -1,4 +1,4 @@
-"""SPEC §8 metrics computed from per-robot timelines.
+"""The metrics of a run, computed from per-robot timelines.
 
 Team totals are sums of what each robot recorded about itself (distributed data
 recording), so a near collision between two robots counts once for each of them, as in
@@ -87,7 +87,7 @@ def switching_time(timeline: Timeline) -> float:
 
 
 def lf_metrics(timeline: Timeline) -> dict[str, Any]:
-    """Leader-Follower metrics (SPEC §8) of one robot."""
+    """Leader-Follower metrics of one robot."""
     return {
         "na_movement_time": overlap(timeline, L.MOVING, L.ROLE_NA),
         "leader_movement_time": overlap(timeline, L.MOVING, L.ROLE_LEADER),

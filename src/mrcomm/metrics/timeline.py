@@ -1,6 +1,6 @@
 """Per-robot timeline: labelled intervals on named tracks, plus point events.
 
-Every time-based metric is computed from these records (SPEC §8), and the same records
+Every time-based metric is computed from these records, and the same records
 draw the timeline chart. A *track* holds mutually exclusive states (e.g. the
 ``activity`` track: init / moving / delay / task / waiting / idle); different tracks may
 overlap in time (e.g. the LF ``role`` track). Each robot records its own timeline

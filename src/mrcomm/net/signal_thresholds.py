@@ -1,4 +1,4 @@
-"""Signal-strength thresholds (SPEC §3): SSD and ESD, registered with the threshold
+"""Signal-strength thresholds: SSD and ESD, registered with the threshold
 registry of :mod:`mrcomm.net.thresholds`.
 
 * SSD — simulated signal degradation: RSSI predicted from each pair's distance by the

@@ -1,4 +1,4 @@
-"""Signal thresholds — the second perturbation of SPEC §3 — as a registry.
+"""Signal thresholds — the second perturbation, after packet loss — as a registry.
 
 A threshold turns the geometry of every link (distance, line of sight) into an RSSI
 estimate (where it has one) and a *warning* flag: the link is about to break. Each

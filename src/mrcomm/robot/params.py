@@ -2,7 +2,7 @@
 and the tuning of its planner, path follower, re-planning and stuck recovery.
 
 One frozen :class:`RobotParams` is shared by every robot of a run. Every field has a
-default (SPEC §6); :meth:`RobotParams.from_mapping` builds one from a configuration
+default; :meth:`RobotParams.from_mapping` builds one from a configuration
 mapping and rejects unknown keys and bad values with a one-line
 :class:`~mrcomm.errors.InputError`.
 """

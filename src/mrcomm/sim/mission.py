@@ -1,4 +1,4 @@
-"""One mission in simulation: the lock-step loop (SPEC §7 run; DESIGN ``sim`` mode).
+"""One mission in simulation: the lock-step loop (the ``sim`` mode).
 
 Each step of ``dt`` simulated seconds:
 

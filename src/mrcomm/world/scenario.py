@@ -11,7 +11,7 @@ team (robot ids and start poses, in file order) and where the task assigner runs
     assigner: {host: robot_1}          # or {kind: base_station, position: {x: .., y: ..}}
                                        # or {kind: virtual}
 
-A task file is a list of tasks in the SPEC §1 format. :func:`load_scenario` checks the
+A task file is a list of tasks in MRComm's task format (docs/ARCHITECTURE.md). :func:`load_scenario` checks the
 mission is feasible on its map (poses clear of walls, every task reachable from every
 start for a robot of the given radius) so a bad file fails at load time with a
 one-line :class:`~mrcomm.errors.InputError`, not minutes into a sweep.
@@ -40,7 +40,7 @@ from mrcomm.world.occupancy import OccupancyGrid
 from mrcomm.world.tasks import TaskSpec
 from mrcomm.world.yamlfile import read_yaml, validation_error
 
-#: Turtlebot 2 footprint radius (SPEC §6): the default clearance a pose needs.
+#: Turtlebot 2 footprint radius: the default clearance a pose needs.
 ROBOT_RADIUS = 0.18
 #: Robot ids become part of live-mode key expressions, so keep them plain.
 ID_PATTERN = r"^[A-Za-z0-9_\-]+$"
@@ -185,7 +185,7 @@ class Scenario:
 
 
 def load_tasks(path: str | Path) -> tuple[TaskSpec, ...]:
-    """Load and check a task file (SPEC §1 format): ids unique, dependencies known and
+    """Load and check a task file (MRComm's task format): ids unique, dependencies known and
     acyclic. Map and team checks happen in :func:`load_scenario`."""
     file = Path(path)
     raw = read_yaml(file)

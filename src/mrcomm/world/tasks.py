@@ -1,4 +1,4 @@
-"""The task type of a mission (SPEC §1 task file): world data that the task file holds
+"""The task type of a mission (the task file): world data that the task file holds
 and that the assigner sends to the robots (so it is also a wire struct)."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import msgspec
 
 
 class TaskSpec(msgspec.Struct, frozen=True):
-    """One task of the mission (SPEC §1 task file)."""
+    """One task of the mission (the task file)."""
 
     task_id: str
     type: str

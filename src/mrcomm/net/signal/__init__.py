@@ -1,4 +1,4 @@
-"""Signal-strength models (SPEC §3 SSD/ESD): path-loss theory, calibration CSVs, SVR
+"""Signal-strength models (SSD/ESD): path-loss theory, calibration CSVs, SVR
 models and their JSON form, the fast RSSI lookup table, ``iw`` parsing and RSSI traces.
 
 Import the submodules directly (``mrcomm.net.signal.table`` ...): this package imports

@@ -1,4 +1,4 @@
-"""Radio propagation theory the signal models are judged against (SPEC §3).
+"""Radio propagation theory the signal models are judged against.
 
 * Free-space path loss (Friis): ``FSPL = 20 log10(4 π d f / c)`` dB, d in metres, f in Hz.
 * Log-distance model: ``RSSI(d) = −(10 n log10 d + A)`` dBm, where ``A`` is the

@@ -1,4 +1,4 @@
-"""SSD signal models: two Support Vector Regressions of RSSI on distance (SPEC §3).
+"""SSD signal models: two Support Vector Regressions of RSSI on distance.
 
 One RBF-kernel SVR (gamma 0.1 m⁻², C 100, epsilon 0.1 dB — scikit-learn's default
 epsilon) is fitted to the line-of-sight readings and one to the obstructed readings of a
