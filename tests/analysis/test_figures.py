@@ -63,7 +63,12 @@ def test_metric_bars_are_means_with_sd_error_bars() -> None:
     runs = synthetic_runs()
     fig = F.metric_bars(runs, "execution_phase_time")
     axes = [ax for ax in fig.axes if ax.get_visible()]
-    assert [ax.get_title() for ax in axes] == ["WLAN + SLT", "AH + SSD"]  # original's order
+    assert [ax.get_title() for ax in axes] == [  # the original's order; bars above boxes
+        "WLAN + SLT · mean ± SD",
+        "AH + SSD · mean ± SD",
+        "WLAN + SLT · box plot",
+        "AH + SSD · box plot",
+    ]
     heights = sorted(b.get_height() for b in bars(axes[0]))
     sub = runs[runs["network"] == "wlan"]
     expected = sub.groupby(["behaviour", "spl"])["execution_phase_time"].mean()
@@ -76,6 +81,22 @@ def test_metric_bars_are_means_with_sd_error_bars() -> None:
     ]
     lengths = {round(abs(s[1][1] - s[0][1]), 6) for s in segments}
     assert lengths == {20.0}
+    # The box plots' medians are the samples' medians.
+    medians = sorted(
+        float(line.get_ydata()[0])  # type: ignore[index]
+        for line in axes[2].lines
+        if line.get_gid() == "median"
+    )
+    expected_medians = sub.groupby(["behaviour", "spl"])["execution_phase_time"].median()
+    assert medians == pytest.approx(sorted(expected_medians))
+
+
+def test_a_metric_a_behaviour_lacks_is_not_drawn_as_zero() -> None:
+    fig = F.metric_bars(synthetic_runs(), "leader_movement_time")  # LF only
+    top = fig.axes[0]
+    # Only LF's bars (2 SPL levels), none of height 0 for NB.
+    assert sorted(b.get_height() for b in bars(top)) == [80.0, 80.0]
+    assert [t.get_text() for t in fig.legends[0].get_texts()] == ["LF"]
 
 
 def test_success_bars_are_percentages() -> None:

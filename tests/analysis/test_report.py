@@ -162,3 +162,16 @@ def test_provenance_of_every_run_is_loaded_and_reported(built: rp.Report, study:
     html = built.html.read_text()
     assert "Provenance" in html and hashes["map_image"] in html
     assert f'<td class="text">{mrcomm.__version__}</td>' in html
+
+
+def test_the_report_defines_its_terms(built: rp.Report) -> None:
+    html = built.html.read_text()
+    assert 'id="glossary"' in html
+    for term in ("SPL", "SLT", "SSD", "ESD", "AON", "execution_phase_time", "Holm"):
+        assert term in html.split('id="glossary"', 1)[1], term
+    # Every metric the report can show has a unit in the glossary.
+    from mrcomm.analysis.glossary import glossary_sections
+
+    named = {str(row[0]) for s in glossary_sections() for row in s.rows if len(row) == 3}
+    for metric in st.METRICS:
+        assert any(metric in cell for cell in named), metric

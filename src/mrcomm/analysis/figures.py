@@ -231,7 +231,7 @@ def box_plots(
                 widths=width * 0.8,
                 patch_artist=True,
                 manage_ticks=False,
-                medianprops={"color": "black"},
+                medianprops={"color": "black", "gid": "median"},
                 flierprops={"markersize": 3},
             )
             for patch in parts["boxes"]:

@@ -33,6 +33,7 @@ from mrcomm.analysis.figures_report import (
     metrics_with_data,
     pick_timeline_runs,
 )
+from mrcomm.analysis.glossary import glossary_sections
 from mrcomm.errors import InputError
 from mrcomm.experiment.tables import RUN_MODES
 from mrcomm.fileio import atomic_write_bytes
@@ -457,6 +458,7 @@ def build_report(
         "constant": constant_metrics(runs, chosen),
         "messages": _message_rows(runs, frame_of(data, "messages")),
         "message_columns": MESSAGE_COLUMNS,
+        "glossary": glossary_sections(),
     }
     html = _environment().get_template("report.html.j2").render(**context)
     out_dir.mkdir(parents=True, exist_ok=True)

@@ -11,10 +11,10 @@ team (robot ids and start poses, in file order) and where the task assigner runs
     assigner: {host: robot_1}          # or {kind: base_station, position: {x: .., y: ..}}
                                        # or {kind: virtual}
 
-A task file is a list of tasks in MRComm's task format (docs/ARCHITECTURE.md). :func:`load_scenario` checks the
-mission is feasible on its map (poses clear of walls, every task reachable from every
-start for a robot of the given radius) so a bad file fails at load time with a
-one-line :class:`~mrcomm.errors.InputError`, not minutes into a sweep.
+A task file is a list of tasks in MRComm's task format (docs/ARCHITECTURE.md).
+:func:`load_scenario` checks the mission is feasible on its map (poses clear of walls,
+every task reachable from every start for a robot of the given radius) so a bad file
+fails at load time with a one-line :class:`~mrcomm.errors.InputError`, not minutes into a sweep.
 """
 
 from __future__ import annotations
