@@ -107,7 +107,8 @@ def message_loss_figure(runs: pd.DataFrame, messages: pd.DataFrame) -> Figure:
                 )
                 bottom += share
             for i, total in enumerate(bottom):
-                if np.isfinite(attempts[i]) and attempts[i] > 0:
+                # Zero-height bars stay unlabelled: the caption says what no bar means.
+                if np.isfinite(attempts[i]) and attempts[i] > 0 and total > 0.5:
                     ax.annotate(
                         f"{spl:g}",
                         (i + off, total),

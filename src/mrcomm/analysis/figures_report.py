@@ -250,7 +250,8 @@ def _communication_figures(
                 "messages_lost",
                 "Messages lost by topic and cause",
                 "Share of deliveries (one per receiver) that did not arrive, mean per run, "
-                "per topic (bar label) and cause: lost to SPL or out of range.",
+                "per topic and cause (lost to SPL, out of range); bar label: the SPL level. "
+                "A topic without bars lost nothing (e.g. topics exempt from SPL).",
                 figures_comm.message_loss_figure(runs, messages),
                 svg,
             )

@@ -33,10 +33,11 @@ def glossary_path() -> Path | None:
 
 
 def _inline(text: str) -> Markup:
-    """Markdown's inline code and bold as HTML, everything else escaped."""
+    """Markdown's inline code, bold and italics as HTML, everything else escaped."""
     html = str(escape(text.replace("\\|", "|")))
     html = re.sub(r"`([^`]+)`", r"<code>\1</code>", html)
     html = re.sub(r"\*\*([^*]+)\*\*", r"<strong>\1</strong>", html)
+    html = re.sub(r"\*([^*\s][^*]*)\*", r"<em>\1</em>", html)
     return Markup(html)
 
 
