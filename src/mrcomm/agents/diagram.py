@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import re
 import shutil
 from typing import Any, Literal
 
@@ -15,6 +16,19 @@ class _Model:
     """A bare model: the diagram needs the machine's structure, not an agent."""
 
 
+class _DiagramMachine(HierarchicalGraphMachine):
+    """The graph machine laid out top to bottom with room between nodes and ranks."""
+
+    machine_attributes = {
+        **HierarchicalGraphMachine.machine_attributes,
+        "rankdir": "TB",
+        "nodesep": "0.5",
+        "ranksep": "0.7",
+        "fontsize": "12",
+        "forcelabels": "true",
+    }
+
+
 def graphviz_available() -> bool:
     """Whether SVG/PNG rendering is possible (the ``dot`` program is installed)."""
     return shutil.which("dot") is not None
@@ -24,7 +38,7 @@ def behaviour_graph(behaviour: str, engine: Literal["graphviz", "mermaid"]) -> A
     """The transitions graph of a behaviour's machine (``engine``: graphviz|mermaid)."""
     cls = behaviour_class(behaviour)
     model = _Model()
-    HierarchicalGraphMachine(
+    _DiagramMachine(
         model=model,
         states=cls.states,
         transitions=cls.transitions,
@@ -44,6 +58,13 @@ def mermaid(behaviour: str) -> str:
 
 def render(behaviour: str, fmt: str) -> bytes:
     """SVG or PNG bytes of a behaviour's diagram through graphviz."""
-    graph = behaviour_graph(behaviour, "graphviz")
-    data = graph.draw(None, format=fmt, prog="dot")
-    return data if isinstance(data, bytes) else str(data).encode()
+    import graphviz
+
+    source = behaviour_graph(behaviour, "graphviz").source
+    # Edges into and out of a nested machine carry their name as a head/tail label,
+    # which graphviz piles up where those edges meet: as a plain label it is placed
+    # along the edge; a rank between the two ends gives opposite edges room to keep
+    # their labels apart.
+    source = re.sub(r"\b(head|tail)label=", "minlen=2 label=", source)
+    data: bytes = graphviz.Source(source).pipe(format=fmt, engine="dot")
+    return data
