@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import re
 import shutil
-from typing import Any, ClassVar, Literal
+from typing import Any, Literal
 
 from transitions.extensions.diagrams import HierarchicalGraphMachine
 
@@ -19,7 +19,7 @@ class _Model:
 class _DiagramMachine(HierarchicalGraphMachine):
     """The graph machine laid out top to bottom with room between nodes and ranks."""
 
-    machine_attributes: ClassVar[dict[str, str]] = {
+    machine_attributes = {  # noqa: RUF012 (transitions reads it from the class)
         **HierarchicalGraphMachine.machine_attributes,
         "rankdir": "TB",
         "nodesep": "0.5",
