@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from mrcomm.analysis import inference
 from mrcomm.analysis import stats as st
 from mrcomm.errors import InputError
 
@@ -278,7 +279,7 @@ def test_direction_is_explicit_even_against_the_hypothesis() -> None:
 
 @pytest.mark.parametrize(("m", "n", "expected"), [(3, 3, 1 / 20), (5, 5, 1 / 252), (2, 4, 1 / 15)])
 def test_minimum_attainable_p(m: int, n: int, expected: float) -> None:
-    assert st.min_attainable_p(m, n) == pytest.approx(expected)
+    assert inference.min_attainable_p(m, n) == pytest.approx(expected)
     # The most extreme data reach it exactly.
     res = st.mann_whitney(list(range(m)), list(range(100, 100 + n)), "less")
     assert res.p == pytest.approx(expected) and res.min_p == pytest.approx(expected)
@@ -320,14 +321,14 @@ def test_holm_and_bh_against_a_hand_computation() -> None:
     p = [0.01, 0.04, 0.03, 0.005, math.nan]
     # Holm: sorted 0.005, 0.01, 0.03, 0.04 times 4, 3, 2, 1 = 0.02, 0.03, 0.06, 0.04,
     # made non-decreasing: 0.02, 0.03, 0.06, 0.06.
-    holm = st.adjust_p(p, "holm")
+    holm = inference.adjust_p(p, "holm")
     assert holm[:4] == pytest.approx([0.03, 0.06, 0.06, 0.02]) and math.isnan(holm[4])
     # BH: times 4/1, 4/2, 4/3, 4/4 = 0.02, 0.02, 0.04, 0.04 (already monotone).
-    assert st.adjust_p(p, "bh")[:4] == pytest.approx([0.02, 0.04, 0.04, 0.02])
-    assert st.adjust_p([0.6, 0.9], "holm") == pytest.approx([1.0, 1.0])  # capped at 1
-    assert st.adjust_p(p, "none")[:4] == pytest.approx(p[:4])
+    assert inference.adjust_p(p, "bh")[:4] == pytest.approx([0.02, 0.04, 0.04, 0.02])
+    assert inference.adjust_p([0.6, 0.9], "holm") == pytest.approx([1.0, 1.0])  # capped at 1
+    assert inference.adjust_p(p, "none")[:4] == pytest.approx(p[:4])
     with pytest.raises(InputError, match="unknown correction"):
-        st.check_correction("bonferoni")
+        inference.check_correction("bonferoni")
 
 
 def test_the_table_decides_on_the_corrected_p_with_not_rejected_wording() -> None:
@@ -335,7 +336,7 @@ def test_the_table_decides_on_the_corrected_p_with_not_rejected_wording() -> Non
     runs["total_distance"] = [1.0, 2.0, 3.0, 4.0, 5.0, 3.5, 4.5, 5.5, 6.5, 7.5]
     table = st.comparison_table(runs, ["execution_phase_time", "total_distance"])
     assert list(table["metric"]) == ["execution_phase_time", "total_distance"]
-    assert table["p_adj"].tolist() == pytest.approx(list(st.adjust_p(table["p"].tolist())))
+    assert table["p_adj"].tolist() == pytest.approx(list(inference.adjust_p(table["p"].tolist())))
     assert set(table["decision"]) <= {st.SUPPORTED, st.NOT_REJECTED}
     assert table["decision"].tolist() == [
         st.SUPPORTED if p < st.ALPHA else st.NOT_REJECTED for p in table["p_adj"]
@@ -346,9 +347,9 @@ def test_the_table_decides_on_the_corrected_p_with_not_rejected_wording() -> Non
 def test_bootstrap_intervals_are_seeded_and_cover_the_estimate() -> None:
     rng = np.random.default_rng(3)
     x = rng.normal(10.0, 2.0, 20)
-    low, high = st.bootstrap_ci((x,), np.mean)
+    low, high = inference.bootstrap_ci((x,), np.mean)
     assert low < float(np.mean(x)) < high
-    assert (low, high) == st.bootstrap_ci((x,), np.mean)  # same data, same interval
-    assert math.isnan(st.bootstrap_ci((x[:1],), np.mean)[0])
+    assert (low, high) == inference.bootstrap_ci((x,), np.mean)  # same data, same interval
+    assert math.isnan(inference.bootstrap_ci((x[:1],), np.mean)[0])
     desc = st.describe_table(_two_levels(5), ["execution_phase_time"])
     assert (desc["mean_low"] <= desc["mean"]).all() and (desc["mean"] <= desc["mean_high"]).all()

@@ -34,6 +34,7 @@ from mrcomm.analysis.figures_report import (
     pick_timeline_runs,
 )
 from mrcomm.analysis.glossary import glossary_sections
+from mrcomm.analysis.inference import Correction
 from mrcomm.errors import InputError
 from mrcomm.experiment.tables import RUN_MODES
 from mrcomm.fileio import atomic_write_bytes
@@ -414,7 +415,7 @@ def build_report(
     timeline_runs: Sequence[str] | None = None,
     svg: bool = True,
     alpha: float = st.ALPHA,
-    correction: st.Correction = "holm",
+    correction: Correction = "holm",
 ) -> Report:
     """Compute tables and figures of ``data`` (a ``load_results`` Results) and write the
     report into ``out_dir`` (created if missing): report.html, figures/, tables/."""

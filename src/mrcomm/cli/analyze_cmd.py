@@ -50,6 +50,7 @@ def analyze(
     from mrcomm.analysis import report as rp
     from mrcomm.analysis import stats as st
     from mrcomm.analysis.figures_report import metrics_with_data
+    from mrcomm.analysis.inference import check_correction
 
     if fmt not in FORMATS:
         raise InputError(
@@ -58,7 +59,7 @@ def analyze(
         )
     if not 0 < alpha < 1:
         raise InputError(f"must be between 0 and 1, got {alpha:g}", field="--alpha")
-    method = st.check_correction(correction)
+    method = check_correction(correction)
     names = _tables(table)
     st.resolve_metrics(metric)  # unknown metric: fail before loading anything
     data = rp.load_study(db, experiment, mode)  # checks --mode before loading

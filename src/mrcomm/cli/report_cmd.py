@@ -46,11 +46,12 @@ def report(
     # Imported here: matplotlib, scipy and DuckDB are not needed by the other commands.
     from mrcomm.analysis import report as rp
     from mrcomm.analysis import stats as st
+    from mrcomm.analysis.inference import check_correction
 
     if not 0 < alpha < 1:
         raise InputError(f"must be between 0 and 1, got {alpha:g}", field="--alpha")
     check_output_dir(out, "--out")
-    method = st.check_correction(correction)
+    method = check_correction(correction)
     st.resolve_metrics(metric)  # unknown metric: fail before loading anything
     data = rp.load_study(db, experiment, mode)  # checks --mode before loading
     result = rp.build_report(
