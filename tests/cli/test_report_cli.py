@@ -144,3 +144,20 @@ def test_bad_input_is_one_line_exit_2(
     assert message in proc.stderr
     assert "Traceback" not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "r").exists()
+
+
+def test_analyze_fits_a_100_column_terminal(study_db: Path) -> None:  # noqa: F811
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "COLUMNS": "100"}
+    proc = subprocess.run(
+        [sys.executable, "-c", "from mrcomm.cli.main import app; app()", "analyze", "--db",
+         str(study_db)],
+        capture_output=True, text=True, env=env, timeout=300,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    widest = max(len(line) for line in proc.stdout.splitlines())
+    assert widest <= 100, widest
+    assert "H0 not rejected" in proc.stdout and "accepted" not in proc.stdout

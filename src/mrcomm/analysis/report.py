@@ -180,21 +180,31 @@ def _with_ci(r: pd.Series, key: str) -> str:
     return text
 
 
-#: The columns a terminal shows (the rest are in CSV, LaTeX and the HTML report).
-COMPACT = {
-    "comparisons": (
-        *("metric", "configuration", "H_A", "m", "n", "SPL0 median [IQR]"),
-        *("SPLX median [IQR]", "p", "p corr.", "r=Z/√(m+n) [95% CI]", "effect", "decision"),
-    ),
+def _medians(r: pd.Series) -> str:
+    a, b = float(r["median0"]), float(r["median_x"])
+    return "–" if not (math.isfinite(a) and math.isfinite(b)) else f"{a:.4g} → {b:.4g}"
+
+
+#: What a terminal shows of a table (one table per metric, so no metric column); the
+#: rest is in CSV, LaTeX and the HTML report.
+COMPACT: dict[str, list[Column]] = {
+    "comparisons": [
+        ("config", _config),
+        ("H_A", lambda r, _: str(r["hypothesis"])),
+        ("m/n", lambda r, _: f"{r['m']}/{r['n']}"),
+        ("median SPL0 → SPLX", lambda r, _: _medians(r)),
+        ("p corr.", lambda r, _: _p_adj(r)),
+        ("r [95% CI]", lambda r, _: _r_ci(r)),
+        ("effect", lambda r, _: str(r["effect"])),
+        ("decision", lambda r, _: str(r["decision"])),
+    ],
 }
 
 
 def display_frame(name: str, frame: pd.DataFrame, compact: bool = False) -> pd.DataFrame:
-    """Table ``name`` as rounded strings under readable headers (``compact``: only the
+    """Table ``name`` as rounded strings under readable headers (``compact``: the
     columns a terminal has room for)."""
-    columns = _COLUMNS[name]
-    if compact and name in COMPACT:
-        columns = [c for c in columns if c[0] in COMPACT[name]]
+    columns = COMPACT[name] if compact and name in COMPACT else _COLUMNS[name]
     multi = "scenario" in frame.columns and frame["scenario"].nunique() > 1
     rows = [[fn(row, multi) for _, fn in columns] for _, row in frame.iterrows()]
     return pd.DataFrame(rows, columns=[h for h, _ in columns])

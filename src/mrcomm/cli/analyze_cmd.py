@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.console import Console
@@ -79,16 +79,11 @@ def analyze(
             typer.echo(rp.to_latex(name, frame), nl=False)
         else:
             assert console is not None
-            shown = rp.display_frame(name, frame, compact=True)
-            console.print(_rich_table(rp.TABLE_TITLES[name], shown))
             if name == "comparisons":
-                console.print(
-                    f"p corrected: {rp.CORRECTION_NAMES[method]}; more columns "
-                    "(means, Z, direction, the original r = Z/√n): --format csv or latex",
-                    style="dim",
-                )
-                for warning in st.unreachable(frame, alpha):
-                    console.print(f"warning: {warning}", style="yellow", markup=False)
+                _print_comparisons(console, frame, rp, st, method, alpha)
+            else:
+                shown = rp.display_frame(name, frame)
+                console.print(_rich_table(rp.TABLE_TITLES[name], shown))
         if i < len(names) - 1 and fmt != "table":
             typer.echo("")
 
@@ -107,6 +102,27 @@ def _tables(names: list[str] | None) -> list[str]:
     return names
 
 
+def _print_comparisons(
+    console: Console, frame: Any, rp: Any, st: Any, method: str, alpha: float
+) -> None:
+    """The comparisons, one table per metric (the terminal's width is the limit)."""
+    console.print(f"[bold]{rp.TABLE_TITLES['comparisons']}[/]")
+    for metric, rows in frame.groupby("metric", sort=False):
+        info = st.METRICS[str(metric)]
+        title = f"{info.label} ({info.unit})"
+        console.print(_rich_table(title, rp.display_frame("comparisons", rows, compact=True)))
+    if frame.empty:
+        console.print("no comparisons")
+    console.print(
+        f"p corr.: p corrected across all {len(frame)} comparisons "
+        f"({rp.CORRECTION_NAMES[method]}); † the design cannot reach α = {alpha:g}. "
+        "All columns (U, Z, raw p, means, the original r = Z/√n): --format csv or latex.",
+        style="dim",
+    )
+    for warning in st.unreachable(frame, alpha):
+        console.print(f"warning: {warning}", style="yellow", markup=False)
+
+
 def _rich_table(title: str, frame: object) -> Table:
     import pandas as pd
 
@@ -115,7 +131,14 @@ def _rich_table(title: str, frame: object) -> Table:
 
     out = Table(title=title, title_justify="left")
     for column in frame.columns:
-        out.add_column(str(column), justify="left" if column in _TEXT else "right")
+        # Cells wrap rather than lose characters to an ellipsis.
+        text = column in _TEXT
+        out.add_column(
+            str(column),
+            justify="left" if text else "right",
+            overflow="fold",
+            no_wrap=column == "decision",  # the verdict is read whole
+        )
     decisions = frame["decision"] if "decision" in frame.columns else [None] * len(frame)
     for row, decision in zip(frame.itertuples(index=False), decisions, strict=True):
         out.add_row(*(str(c) for c in row), style="green" if decision == SUPPORTED else None)
@@ -125,6 +148,7 @@ def _rich_table(title: str, frame: object) -> Table:
 
 
 _TEXT = {
-    *("metric", "configuration", "H_A", "effect", "decision", "direction"),
+    *("metric", "configuration", "config", "H_A", "effect", "decision", "direction"),
+    "median SPL0 → SPLX",
     *("method", "comparison", "note"),
 }
