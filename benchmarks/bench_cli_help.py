@@ -36,7 +36,7 @@ def main() -> None:
     repeats = parser.parse_args().repeats
     print(f"load before: {os.getloadavg()[0]:.2f}")
     times: dict[str, list[tuple[float, float]]] = {name: [] for name in CASES}
-    for name, args in CASES.items():
+    for args in CASES.values():
         once(args)  # warm the file cache
     for _ in range(repeats):
         for name, args in CASES.items():

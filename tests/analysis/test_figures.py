@@ -14,6 +14,7 @@ from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
+from mrcomm.analysis import encoding as E
 from mrcomm.analysis import figures as F
 from mrcomm.analysis import figures_qq as FQ
 from mrcomm.analysis import figures_time as FT
@@ -232,10 +233,10 @@ def test_figures_of_a_real_study_render(study: Any, tmp_path: Any) -> None:
     assert not iv.empty
     figures["timeline"] = FT.timeline_figure(iv, study.events[study.events["run_id"] == run_id])
     for name, fig in figures.items():
-        png = F.render(fig, "png")
+        png = E.render(fig, "png")
         assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 5_000, name
         (tmp_path / f"{name}.png").write_bytes(png)
-    svg = F.render(figures["bars"], "svg")
+    svg = E.render(figures["bars"], "svg")
     assert b"<svg" in svg[:400]
     # The bars of the real study are its per-configuration means.
     heights = sorted(b.get_height() for b in bars(figures["bars"].axes[0]))
@@ -258,4 +259,4 @@ def test_rssi_of_a_real_ssd_mission(s1_resources: Any) -> None:
     assert len(curves) == 3  # robot pairs of a team of three, one curve each
     assert all(max(c.get_xdata()) <= 120.0 + 1e-9 for c in curves)
     assert [line.get_ydata()[0] for line in ax.lines if len(line.get_xdata()) == 2] == [-42.0]
-    assert F.render(fig)[:4] == b"\x89PNG"
+    assert E.render(fig)[:4] == b"\x89PNG"

@@ -6,12 +6,11 @@ breakdowns, timelines and RSSI are in :mod:`figures_time`, Q–Q plots in
 :mod:`figures_qq`.
 
 Every function takes the DataFrames of the results database contract and returns a
-matplotlib Figure (backend Agg); :func:`render` turns one into PNG/SVG bytes.
+matplotlib Figure (backend Agg); :mod:`encoding` turns one into PNG/SVG/PDF bytes.
 """
 
 from __future__ import annotations
 
-import io
 import math
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -85,19 +84,6 @@ def panel_grid(
     fig = Figure(figsize=(max(7.0, width * cols), height * rows_total), layout="constrained")
     axes = fig.subplots(rows_total, cols, squeeze=False)
     return fig, axes
-
-
-#: Resolution of PNG figures: print quality.
-PNG_DPI = 300
-
-
-def render(fig: Figure, fmt: str = "png", dpi: int = PNG_DPI) -> bytes:
-    """The figure encoded as PNG, SVG or PDF bytes."""
-    buf = io.BytesIO()
-    # SVG/PDF: text stays text (smaller, searchable); no date, for reproducible files.
-    meta = {"Date": None} if fmt == "svg" else {"CreationDate": None} if fmt == "pdf" else {}
-    fig.savefig(buf, format=fmt, dpi=dpi, metadata=meta)
-    return buf.getvalue()
 
 
 def _hide_unused(axes: np.ndarray, used: int) -> None:

@@ -1,11 +1,12 @@
 """The figure set of a study report: which runs get a timeline and an RSSI figure, and
-every figure of the report drawn and encoded (PNG, optionally SVG), by section."""
+every figure of the report drawn and encoded (PNG, optionally SVG and PDF), by section."""
 
 from __future__ import annotations
 
 import base64
 import json
 from collections.abc import Sequence
+from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Any
 
@@ -15,6 +16,7 @@ from matplotlib.figure import Figure
 from mrcomm.analysis import figures as fig_mod
 from mrcomm.analysis import figures_comm, figures_qq, figures_time
 from mrcomm.analysis import stats as st
+from mrcomm.analysis.encoding import Encoded, Encoder
 from mrcomm.errors import InputError, did_you_mean
 
 #: Timelines drawn when the caller names none: one per behaviour.
@@ -104,23 +106,48 @@ def pick_rssi_runs(runs: pd.DataFrame, rssi: pd.DataFrame) -> list[str]:
     return [str(have["run_id"].iloc[0])] if not have.empty else []
 
 
+@dataclass
+class _Pending:
+    """A figure handed to the encoder, with what the report says about it."""
+
+    id: str
+    title: str
+    caption: str
+    encoded: Future[Encoded]
+    metric: str = ""
+
+    def result(self) -> ReportFigure:
+        files = self.encoded.result()
+        return ReportFigure(
+            self.id, self.title, self.caption, files.png, files.svg, self.metric, files.pdf
+        )
+
+
 def _figure(
-    fid: str, title: str, caption: str, fig: Figure, svg: bool, metric: str = ""
-) -> ReportFigure:
-    png = fig_mod.render(fig, "png")
-    # The layout is settled by the first render; freezing it makes the vector renders cheaper.
-    fig.set_layout_engine("none")
-    svg_bytes = fig_mod.render(fig, "svg") if svg else None
-    pdf_bytes = fig_mod.render(fig, "pdf") if svg else None
-    return ReportFigure(fid, title, caption, png, svg_bytes, metric, pdf_bytes)
+    fid: str, title: str, caption: str, fig: Figure, encoder: Encoder, metric: str = ""
+) -> _Pending:
+    return _Pending(fid, title, caption, encoder.submit(fig), metric)
 
 
 def build_figures(
-    data: Any, metrics: Sequence[str], timelines: Sequence[str], svg: bool = True
+    data: Any,
+    metrics: Sequence[str],
+    timelines: Sequence[str],
+    svg: bool = True,
+    jobs: int = 1,
 ) -> dict[str, list[ReportFigure]]:
-    """Every figure of the report, by section."""
+    """Every figure of the report, by section: PNG, and SVG and PDF when ``svg``, encoded
+    in ``jobs`` processes while the next figures are drawn."""
+    with Encoder(svg, jobs) as encoder:
+        pending = _draw_figures(data, metrics, timelines, encoder)
+        return {section: [p.result() for p in items] for section, items in pending.items()}
+
+
+def _draw_figures(
+    data: Any, metrics: Sequence[str], timelines: Sequence[str], encoder: Encoder
+) -> dict[str, list[_Pending]]:
     runs = frame_of(data, "runs")
-    out: dict[str, list[ReportFigure]] = {
+    out: dict[str, list[_Pending]] = {
         "success": [],
         "metrics": [],
         "time": [],
@@ -137,7 +164,7 @@ def build_figures(
             "Successful missions",
             "Percentage of successful missions (label: successful/runs).",
             fig_mod.success_figure(runs),
-            svg,
+            encoder,
         )
     )
     constant = constant_metrics(runs, metrics)
@@ -153,18 +180,18 @@ def build_figures(
                 "original study) and box plots (bottom: median, quartiles, whiskers to "
                 "1.5 IQR), which show what the rank tests compare.",
                 fig_mod.metric_bars(runs, name),
-                svg,
+                encoder,
                 name,
             )
         )
-    _communication_figures(data, runs, timelines, svg, out)
+    _communication_figures(data, runs, timelines, encoder, out)
     out["time"].append(
         _figure(
             "time_breakdown",
             "Where the time went",
             "Team time per component, mean per run, stacked.",
             figures_time.stacked_time_figure(runs),
-            svg,
+            encoder,
         )
     )
     out["time"].append(
@@ -173,7 +200,7 @@ def build_figures(
             "Minimum and maximum separation",
             "Closest and furthest team mate over the run, mean ± SD.",
             fig_mod.separation_figure(runs),
-            svg,
+            encoder,
         )
     )
     failed = frame_of(data, "failed_tasks")
@@ -189,7 +216,7 @@ def build_figures(
                 "Failed tasks per robot",
                 "Tasks whose status never reached the assigner, mean per run.",
                 fig_mod.failed_tasks_figure(runs, failed, robots),
-                svg,
+                encoder,
             )
         )
     for name in [m for m in st.CORE_METRICS if m in metrics and m not in constant]:
@@ -199,7 +226,7 @@ def build_figures(
                 f"Q–Q: {st.METRICS[name].label}",
                 "Standardised samples against normal quantiles.",
                 figures_qq.qq_figure(runs, name),
-                svg,
+                encoder,
             )
         )
     intervals, events = frame_of(data, "intervals"), frame_of(data, "events")
@@ -216,7 +243,7 @@ def build_figures(
                 f"Timeline of {run_id}",
                 "Every robot's labelled intervals and events.",
                 figures_time.timeline_figure(iv, ev, title),
-                svg,
+                encoder,
             )
         )
     rssi = frame_of(data, "rssi")
@@ -228,7 +255,7 @@ def build_figures(
                 "Signal strength over time",
                 "RSSI of every robot pair" + (" (SSD vs ESD)." if len(rssi_runs) > 1 else "."),
                 figures_time.rssi_figure(rssi, runs, rssi_runs),
-                svg,
+                encoder,
             )
         )
     return out
@@ -238,8 +265,8 @@ def _communication_figures(
     data: Any,
     runs: pd.DataFrame,
     timelines: Sequence[str],
-    svg: bool,
-    out: dict[str, list[ReportFigure]],
+    encoder: Encoder,
+    out: dict[str, list[_Pending]],
 ) -> None:
     """Messages lost per topic and cause, AON, and for each timeline run its link
     states and trajectories (only the figures that have data)."""
@@ -253,7 +280,7 @@ def _communication_figures(
                 "per topic and cause (lost to SPL, out of range); bar label: the SPL level. "
                 "A topic without bars lost nothing (e.g. topics exempt from SPL).",
                 figures_comm.message_loss_figure(runs, messages),
-                svg,
+                encoder,
             )
         )
     aon = figures_comm.aon_figure(runs)
@@ -265,7 +292,7 @@ def _communication_figures(
                 "AON publications per run (top) and the time the slowest status took "
                 "from its first publication until every member had it (bottom).",
                 aon,
-                svg,
+                encoder,
             )
         )
     link_states, trajectories = frame_of(data, "link_states"), frame_of(data, "trajectories")
@@ -291,7 +318,7 @@ def _communication_figures(
                     figures_comm.link_state_figure(
                         link_states, run_id, float(row["sim_time_s"]), robots, title
                     ),
-                    svg,
+                    encoder,
                 )
             )
         scenario = scenarios.get(str(row["config_id"]))
@@ -306,7 +333,7 @@ def _communication_figures(
                     figures_comm.trajectory_figure(
                         trajectories, run_id, grid.occupied, grid.extent, tasks, title
                     ),
-                    svg,
+                    encoder,
                 )
             )
 

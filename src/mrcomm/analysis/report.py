@@ -426,15 +426,17 @@ def build_report(
     svg: bool = True,
     alpha: float = st.ALPHA,
     correction: Correction = "holm",
+    jobs: int = 1,
 ) -> Report:
     """Compute tables and figures of ``data`` (a ``load_results`` Results) and write the
-    report into ``out_dir`` (created if missing): report.html, figures/, tables/."""
+    report into ``out_dir`` (created if missing): report.html, figures/, tables/.
+    ``jobs`` processes encode the figures."""
     started = time.perf_counter()
     runs = frame_of(data, "runs")
     check_runs(runs, db_path)
     chosen = metrics_with_data(runs, metrics)
     tables = st.study_tables(runs, chosen, alpha, correction)
-    figures = build_figures(data, chosen, pick_timeline_runs(runs, timeline_runs), svg)
+    figures = build_figures(data, chosen, pick_timeline_runs(runs, timeline_runs), svg, jobs)
     status = runs["status"].value_counts().to_dict() if "status" in runs else {}
     meta = _meta(data)
     # The runs' own experiment when they have one (meta names only the latest sweep).

@@ -35,19 +35,28 @@ def report(
         str | None,
         typer.Option(help="Only the runs of this mode: sim | live (needed when both are stored)."),
     ] = None,
-    svg: Annotated[bool, typer.Option(help="Also write every figure as SVG.")] = True,
+    svg: Annotated[
+        bool, typer.Option(help="Also write every figure as SVG and PDF (vector).")
+    ] = True,
     alpha: Annotated[float, typer.Option(help="Significance level.")] = 0.05,
     correction: Annotated[
         str,
         typer.Option(help="Correction of p across the comparisons of the table: holm | bh | none."),
     ] = "holm",
+    jobs: Annotated[
+        int | None,
+        typer.Option(help="Processes that encode the figures (default: one per CPU)."),
+    ] = None,
 ) -> None:
-    """Write report.html, figures/*.png|svg and tables/*.csv into OUT."""
+    """Write report.html, figures/*.png|svg|pdf and tables/*.csv into OUT."""
     # Imported here: matplotlib, scipy and DuckDB are not needed by the other commands.
     from mrcomm.analysis import report as rp
     from mrcomm.analysis import stats as st
+    from mrcomm.analysis.encoding import available_cpus
     from mrcomm.analysis.inference import check_correction
 
+    if jobs is not None and jobs < 1:
+        raise InputError(f"must be at least 1, got {jobs}", field="--jobs")
     if not 0 < alpha < 1:
         raise InputError(f"must be between 0 and 1, got {alpha:g}", field="--alpha")
     check_output_dir(out, "--out")
@@ -63,6 +72,7 @@ def report(
         svg=svg,
         alpha=alpha,
         correction=method,
+        jobs=jobs or available_cpus(),
     )
     typer.echo(
         f"report: {result.html} ({len(result.figures)} figures, {len(result.tables)} tables, "
