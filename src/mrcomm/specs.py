@@ -74,6 +74,8 @@ class VariantSpec:
     #: Behaviours: whether it acts on the threshold's warnings (False: the threshold
     #: only shapes the recorded link statistics; runs with other thresholds are alike).
     uses_threshold: bool = True
+    #: Run modes it supports ("sim": simulation; "live": separate processes over Zenoh).
+    modes: frozenset[str] = frozenset({"sim", "live"})
     #: Where the variant came from: the distribution that registered it.
     origin: str = "mrcomm"
 

@@ -25,10 +25,19 @@ from mrcomm.analysis.figures import (
     spl_levels,
 )
 from mrcomm.analysis.stats import GROUP, usable_runs
+from mrcomm.net.delivery import COUNT_KEYS, DROP_CAUSES, RADIO_COUNT_KEYS
 
 #: Why a message was not received, in the order the bars stack.
-CAUSES = {"dropped_loss": "lost (SPL)", "dropped_range": "out of range"}
-CAUSE_COLOURS = {"dropped_loss": "#E1812C", "dropped_range": "#C03D3E"}
+CAUSES = DROP_CAUSES
+CAUSE_COLOURS = {
+    "dropped_loss": "#E1812C",
+    "dropped_range": "#C03D3E",
+    "dropped_radio": "#8172B3",
+    "dropped_queue": "#937860",
+}
+#: The count columns of the messages table (the radio's are NULL without a radio).
+COUNTS = list(COUNT_KEYS)
+DROPS = list(DROP_CAUSES)
 LINK_COLOURS = {"warning": "#F2C14E", "out of range": "#C03D3E"}
 CONNECTED_COLOUR = "#DCEFD8"
 TOPIC_ORDER = ("pose", "task_status", "aon", "utility", "role", "clock")
@@ -49,12 +58,14 @@ def _topics(messages: pd.DataFrame) -> list[str]:
 
 def per_run_messages(runs: pd.DataFrame, messages: pd.DataFrame) -> pd.DataFrame:
     """Messages per run and topic (summed over agents), joined to the runs'
-    configuration: sent, received, dropped by loss, dropped by range."""
+    configuration: sent, received, dropped by each cause."""
     ok = usable_runs(runs)
-    counts = ["sent", "received", "dropped_loss", "dropped_range"]
     if messages.empty or ok.empty:
-        return pd.DataFrame(columns=["run_id", "topic", *counts, *GROUP, "spl"])
-    per_run = messages.groupby(["run_id", "topic"], as_index=False)[counts].sum()
+        return pd.DataFrame(columns=["run_id", "topic", *COUNTS, *GROUP, "spl"])
+    messages = messages.reindex(columns=["run_id", "topic", *COUNTS]).fillna(
+        dict.fromkeys(COUNTS, 0)
+    )
+    per_run = messages.groupby(["run_id", "topic"], as_index=False)[COUNTS].sum()
     return per_run.merge(ok[["run_id", *GROUP, "spl"]], on="run_id")
 
 
@@ -65,13 +76,10 @@ def message_table(runs: pd.DataFrame, messages: pd.DataFrame) -> pd.DataFrame:
     if data.empty:
         return pd.DataFrame()
     keys = [*GROUP, "spl", "topic"]
-    mean = data.groupby(keys, as_index=False)[
-        ["sent", "received", "dropped_loss", "dropped_range"]
-    ].mean()
-    attempts = mean["received"] + mean["dropped_loss"] + mean["dropped_range"]
-    mean["lost_percent"] = np.where(
-        attempts > 0, 100.0 * (mean["dropped_loss"] + mean["dropped_range"]) / attempts, np.nan
-    )
+    mean = data.groupby(keys, as_index=False)[COUNTS].mean()
+    lost = mean[DROPS].sum(axis=1)
+    attempts = mean["received"] + lost
+    mean["lost_percent"] = np.where(attempts > 0, 100.0 * lost / attempts, np.nan)
     mean["runs"] = data.groupby(keys)["run_id"].nunique().to_numpy()
     return mean
 
@@ -85,14 +93,20 @@ def message_loss_figure(runs: pd.DataFrame, messages: pd.DataFrame) -> Figure:
     levels = spl_levels(table)
     fig, axes = panel_grid(len(configs), width=4.8, height=3.6)
     offsets, width = _bar_offsets(len(levels))
+    # Loss and range always; the radio's causes where a run had them.
+    colours = {
+        cause: colour
+        for cause, colour in CAUSE_COLOURS.items()
+        if cause not in RADIO_COUNT_KEYS or table[cause].sum() > 0
+    }
     for ax, key in zip(axes.flat, configs, strict=False):
         frame = table[(table[list(GROUP)] == pd.Series(key, index=list(GROUP))).all(axis=1)]
         topics = _topics(frame)
         for off, spl in zip(offsets, levels, strict=True):
             rows = frame[frame["spl"] == spl].set_index("topic").reindex(topics)
-            attempts = (rows["received"] + rows["dropped_loss"] + rows["dropped_range"]).to_numpy()
+            attempts = (rows["received"] + rows[DROPS].sum(axis=1)).to_numpy()
             bottom = np.zeros(len(topics))
-            for cause, colour in CAUSE_COLOURS.items():
+            for cause, colour in colours.items():
                 with np.errstate(divide="ignore", invalid="ignore"):
                     share = np.where(attempts > 0, 100.0 * rows[cause].to_numpy() / attempts, 0.0)
                 share = np.nan_to_num(share)
@@ -123,7 +137,7 @@ def message_loss_figure(runs: pd.DataFrame, messages: pd.DataFrame) -> Figure:
         ax.set_ylim(0, 105)
         ax.grid(axis="y", alpha=0.3)
     _hide_unused(axes, len(configs))
-    handles = [Patch(color=c, label=CAUSES[k]) for k, c in CAUSE_COLOURS.items()]
+    handles = [Patch(color=c, label=CAUSES[k]) for k, c in colours.items()]
     fig.legend(handles=handles, loc="outside lower center", ncols=len(handles))
     fig.suptitle("Messages not received, by topic and cause (mean share per run; bar label: SPL %)")
     return fig

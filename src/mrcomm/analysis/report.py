@@ -38,6 +38,7 @@ from mrcomm.analysis.inference import Correction
 from mrcomm.errors import InputError
 from mrcomm.experiment.tables import RUN_MODES
 from mrcomm.fileio import atomic_write_bytes
+from mrcomm.net.delivery import COUNT_KEYS, DROP_CAUSES, RADIO_COUNT_KEYS
 
 TABLE_TITLES = {
     "comparisons": "Mann-Whitney U, SPL0 vs SPLX (one-sided; p corrected across the table)",
@@ -366,10 +367,16 @@ def provenance_rows(runs: pd.DataFrame) -> list[list[str]]:
     return rows
 
 
-MESSAGE_COLUMNS = (
-    "configuration", "SPL", "topic", "runs", "sent", "received", "lost (SPL)",
-    "out of range", "not received %",
-)  # fmt: skip
+def _count_keys(table: pd.DataFrame) -> list[str]:
+    """The count columns to show: the radio's only when some run had a radio."""
+    radio = not table.empty and bool(table[list(RADIO_COUNT_KEYS)].to_numpy().sum() > 0)
+    return [k for k in COUNT_KEYS if radio or k not in RADIO_COUNT_KEYS]
+
+
+def _message_columns(runs: pd.DataFrame, messages: pd.DataFrame) -> list[str]:
+    table = message_table(runs, messages)
+    causes = [DROP_CAUSES[k] for k in _count_keys(table) if k in DROP_CAUSES]
+    return ["configuration", "SPL", "topic", "runs", "sent", "received", *causes, "not received %"]
 
 
 def _message_rows(runs: pd.DataFrame, messages: pd.DataFrame) -> list[list[str]]:
@@ -385,7 +392,7 @@ def _message_rows(runs: pd.DataFrame, messages: pd.DataFrame) -> list[list[str]]
             f"{float(row['spl']):g}",
             str(row["topic"]),
             str(int(row["runs"])),
-            *(fmt_num(row[k], 1) for k in ("sent", "received", "dropped_loss", "dropped_range")),
+            *(fmt_num(row[k], 1) for k in _count_keys(table)),
             fmt_num(row["lost_percent"], 1),
         ]
         for _, row in table.iterrows()
@@ -470,7 +477,7 @@ def build_report(
         "figures": figures,
         "constant": constant_metrics(runs, chosen),
         "messages": _message_rows(runs, frame_of(data, "messages")),
-        "message_columns": MESSAGE_COLUMNS,
+        "message_columns": _message_columns(runs, frame_of(data, "messages")),
         "glossary": glossary_sections(),
     }
     html = _environment().get_template("report.html.j2").render(**context)

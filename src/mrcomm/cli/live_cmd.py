@@ -108,6 +108,7 @@ def world(
     ] = 60.0,
 ) -> None:
     """Simulate every robot's base and publish the shared clock (live mode)."""
+    run.check_mode("live")
     from mrcomm.live.settings import LiveSettings, check_record_dir
     from mrcomm.live.world import run_world
 
@@ -158,6 +159,7 @@ def agent(
     ] = "shared",
 ) -> None:
     """Run one robot's agent (task executor, and the assigner it hosts) over Zenoh."""
+    run.check_mode("live")
     from mrcomm.live.agent import check_agent_id, run_agent
     from mrcomm.live.settings import LiveSettings, check_agent_clock, check_record_dir
     from mrcomm.world.scenario import load_scenario
@@ -215,6 +217,7 @@ def live(
 ) -> None:
     """Run one mission live: world and every agent as separate processes over Zenoh;
     with --db, store it in a results database (mode live)."""
+    run.check_mode("live")
     from mrcomm.live.collect import live_summary
     from mrcomm.live.launcher import TlsLayout, run_live
     from mrcomm.live.settings import LiveSettings, check_agent_clock, check_record_dir

@@ -22,6 +22,7 @@ from mrcomm.cli.display import fmt
 from mrcomm.cli.run_options import warn_ignored_settings, with_run_options
 from mrcomm.fileio import atomic_write
 from mrcomm.metrics.units import unit_of
+from mrcomm.net.delivery import COUNT_KEYS, DELAY_KEYS, DROP_CAUSES, RADIO_COUNT_KEYS
 from mrcomm.output_paths import FIGURE_SUFFIXES, RECORDING_SUFFIXES, check_output_file
 from mrcomm.run.result import MissionResult
 from mrcomm.sim.mission import run_mission
@@ -211,18 +212,19 @@ def print_result(result: MissionResult, console: Console) -> None:
 
     _print_links(result, console)
 
-    messages = _table(
-        "Messages", "topic", "sent", "received", "lost (SPL)", "out of range", "not received %"
-    )
+    radio = any(RADIO_COUNT_KEYS[0] in c for c in result.messages.values())
+    keys = [k for k in COUNT_KEYS if radio or k not in RADIO_COUNT_KEYS]
+    drops = [k for k in keys if k in DROP_CAUSES]
+    headers = ["topic", "sent", "received", *(DROP_CAUSES[k] for k in drops), "not received %"]
+    if radio:
+        headers += ["mean delay s", "max delay s"]
+    messages = _table("Messages", *headers)
     for topic, counts in result.messages.items():
-        attempts = counts["received"] + counts["dropped_loss"] + counts["dropped_range"]
-        lost = counts["dropped_loss"] + counts["dropped_range"]
+        lost = sum(counts[k] for k in drops)
+        attempts = counts["received"] + lost
         share = f"{100.0 * lost / attempts:.1f}" if attempts else "-"
-        messages.add_row(
-            topic,
-            *(str(counts[c]) for c in ("sent", "received", "dropped_loss", "dropped_range")),
-            share,
-        )
+        delays = [f"{counts.get(k, 0.0):.4f}" for k in DELAY_KEYS] if radio else []
+        messages.add_row(topic, *(str(counts[k]) for k in keys), share, *delays)
     console.print(messages)
 
 

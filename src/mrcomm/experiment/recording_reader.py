@@ -19,8 +19,8 @@ from zstandard import ZstdError
 
 from mrcomm.errors import InputError
 from mrcomm.experiment.recording import METADATA_NAME, TOPIC_MESSAGES, TOPIC_RESULT
+from mrcomm.net.delivery import OUTCOMES, RADIO_COUNT_KEYS
 
-OUTCOMES = ("received", "dropped_loss", "dropped_range")
 _MAGIC = b"\x89MCAP"
 # What a damaged file raises while being read: bad records, failed decompression (zstd;
 # lz4 raises RuntimeError), bad JSON, seeks before the start of a truncated file.
@@ -143,7 +143,9 @@ def _summarise(path: Path, stream: Any) -> RecordingSummary:
         metadata=metadata,
         result=result,
         outcomes={
-            topic: {o: counts.get(o, 0) for o in OUTCOMES}
+            topic: {
+                o: counts.get(o, 0) for o in OUTCOMES if o in counts or o not in RADIO_COUNT_KEYS
+            }
             for topic, counts in sorted(outcomes.items())
         },
     )

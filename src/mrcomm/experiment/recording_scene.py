@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from mrcomm.experiment.recording_schemas import Schema
+from mrcomm.net.delivery import OUTCOMES
 from mrcomm.net.links import LinkState
 from mrcomm.world.geometry import Pose
 from mrcomm.world.occupancy import OccupancyGrid
@@ -339,7 +340,7 @@ def message_event_schema() -> Schema:
             "topic": {"type": "string"},
             "sender": {"type": "string"},
             "receiver": {"type": "string"},
-            "outcome": {"type": "string", "enum": ["received", "dropped_loss", "dropped_range"]},
+            "outcome": {"type": "string", "enum": list(OUTCOMES)},
             "seq": {"type": "integer", "description": "The sender's sequence number"},
             "stamp": {"type": "number", "description": "Send time, s"},
         },

@@ -20,6 +20,7 @@ from mrcomm.experiment.tables import (
     RUN_TABLES,
     TRAJECTORY_STORE_PERIOD,
 )
+from mrcomm.net.delivery import COUNT_KEYS, DELAY_KEYS
 from mrcomm.run.provenance import fingerprint, provenance
 from mrcomm.run.result import MissionResult
 
@@ -116,15 +117,14 @@ def result_rows(
         for robot, values in result.robots.items()
         for task in values.get("failed_tasks") or []
     ]
+    # The radio's causes and delays are NULL for runs of network models without a radio.
     rows["messages"] = [
         (
             rid,
             agent,
             topic,
-            c["sent"],
-            c["received"],
-            c["dropped_loss"],
-            c["dropped_range"],
+            *(c.get(key) for key in COUNT_KEYS),
+            *(c.get(key) for key in DELAY_KEYS),
         )
         for agent, topics in result.messages_by_agent.items()
         for topic, c in topics.items()

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 #: Bumped whenever a table or column changes meaning; a database written with another
 #: version is refused before it is touched.
-SCHEMA_VERSION = "2"
+SCHEMA_VERSION = "3"
 
 Columns = tuple[tuple[str, str], ...]
 
@@ -126,6 +126,10 @@ MESSAGES: Columns = (
     ("received", "INTEGER"),
     ("dropped_loss", "INTEGER"),
     ("dropped_range", "INTEGER"),
+    ("dropped_radio", "INTEGER"),
+    ("dropped_queue", "INTEGER"),
+    ("delay_mean_s", "DOUBLE"),
+    ("delay_max_s", "DOUBLE"),
 )
 LINKS: Columns = (
     ("run_id", "TEXT"),

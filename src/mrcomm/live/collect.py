@@ -31,6 +31,7 @@ from mrcomm.errors import InputError
 from mrcomm.live.protocol import WORLD_ID
 from mrcomm.messaging.aon_state import AON_COUNTERS
 from mrcomm.metrics.timeline import Event, Interval, Timeline
+from mrcomm.net.delivery import COUNT_KEYS, RADIO_COUNT_KEYS
 from mrcomm.run.assemble import AonAgentFacts, RobotTruth, RunFacts, assemble
 from mrcomm.run.config import make_config
 from mrcomm.run.result import MissionResult
@@ -211,9 +212,9 @@ def _assigner_receipts(journals: list[JournalData]) -> set[tuple[str, str]]:
     return received
 
 
-def _counts_by_agent(journals: list[JournalData]) -> dict[str, dict[str, dict[str, int]]]:
+def _counts_by_agent(journals: list[JournalData]) -> dict[str, dict[str, dict[str, float]]]:
     """Per agent and topic, summed over incarnations (each journal's last snapshot)."""
-    out: dict[str, dict[str, dict[str, int]]] = {}
+    out: dict[str, dict[str, dict[str, float]]] = {}
     for j in journals:
         snapshot = j.last("counts")
         if snapshot is None:
@@ -221,9 +222,8 @@ def _counts_by_agent(journals: list[JournalData]) -> dict[str, dict[str, dict[st
         for agent, topics in snapshot["agents"].items():
             mine = out.setdefault(agent, {})
             for topic, counts in topics.items():
-                t = mine.setdefault(
-                    topic, {"sent": 0, "received": 0, "dropped_loss": 0, "dropped_range": 0}
-                )
+                # Live mode has no radio: its causes are never counted.
+                t = mine.setdefault(topic, {k: 0 for k in COUNT_KEYS if k not in RADIO_COUNT_KEYS})
                 for key in t:
                     t[key] += int(counts.get(key, 0))
     return {a: dict(sorted(t.items())) for a, t in sorted(out.items())}

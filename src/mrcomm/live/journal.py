@@ -26,7 +26,13 @@ from mrcomm.metrics.timeline import ACTIVITY, ROLE, Timeline
 from mrcomm.net.zenoh_bus import Presence
 
 #: Outcome codes of the message log (short: the log has a line per delivery).
-OUTCOME_CODE = {"received": "r", "dropped_loss": "l", "dropped_range": "x"}
+OUTCOME_CODE = {
+    "received": "r",
+    "dropped_loss": "l",
+    "dropped_range": "x",
+    "dropped_radio": "p",
+    "dropped_queue": "q",
+}
 
 
 def journal_path(record_dir: Path, process: str, incarnation: int) -> Path:

@@ -5,8 +5,12 @@ behave the same in every mode and every dropped message is counted where it was 
 For one message reaching one receiver:
 
 1. topics exempt from perturbation (the task assignment) are always received;
-2. range: the link from the sender must be connected (the network model's decision);
-3. simulated packet loss (SPL X %): on lossy topics the receiver drops X % of the
+2. queue: a message the sender's radio queue could not take is lost (``radio`` only);
+3. range: the link from the sender must be connected (the network model's decision);
+4. radio packet error: lost with the link's packet error rate for the message's size,
+   one uniform draw from the receiver's stream (``radio`` only; every topic that is not
+   exempt, since the radio does not know topics);
+5. simulated packet loss (SPL X %): on lossy topics the receiver drops X % of the
    messages, one uniform draw per message from its own seeded stream.
 
 The in-process bus (simulation) and the Zenoh bus (live mode) both call
@@ -26,6 +30,24 @@ from mrcomm.messaging.topics import EXEMPT_TOPICS, LOSSY_TOPICS
 RECEIVED = "received"
 DROPPED_LOSS = "dropped_loss"
 DROPPED_RANGE = "dropped_range"
+DROPPED_RADIO = "dropped_radio"
+DROPPED_QUEUE = "dropped_queue"
+
+#: What can become of one message at one receiver.
+OUTCOMES = (RECEIVED, DROPPED_LOSS, DROPPED_RANGE, DROPPED_RADIO, DROPPED_QUEUE)
+#: The causes of a lost message, as reports name them.
+DROP_CAUSES = {
+    DROPPED_LOSS: "lost (SPL)",
+    DROPPED_RANGE: "out of range",
+    DROPPED_RADIO: "packet error (radio)",
+    DROPPED_QUEUE: "queue overflow (radio)",
+}
+#: The message counts of one agent on one topic.
+COUNT_KEYS = ("sent", *OUTCOMES)
+#: The counts only a radio produces (results of other network models leave them out).
+RADIO_COUNT_KEYS = (DROPPED_RADIO, DROPPED_QUEUE)
+#: The radio's delay statistics of the received messages.
+DELAY_KEYS = ("delay_mean_s", "delay_max_s")
 
 _UNIFORM_BATCH = 1024
 
@@ -50,32 +72,48 @@ class LossStream:
 
 @dataclass
 class TopicCounts:
-    """Message counts of one agent on one topic."""
+    """Message counts of one agent on one topic, and the radio delay (queue wait plus
+    airtime) of the messages it received."""
 
     sent: int = 0
     received: int = 0
     dropped_loss: int = 0
     dropped_range: int = 0
+    dropped_radio: int = 0
+    dropped_queue: int = 0
+    delay_total: float = 0.0
+    delay_max: float = 0.0
 
-    def count(self, outcome: str) -> None:
+    def count(self, outcome: str, delay: float = 0.0) -> None:
         if outcome == RECEIVED:
             self.received += 1
+            if delay > 0.0:
+                self.delay_total += delay
+                self.delay_max = max(self.delay_max, delay)
         elif outcome == DROPPED_LOSS:
             self.dropped_loss += 1
-        else:
+        elif outcome == DROPPED_RANGE:
             self.dropped_range += 1
+        elif outcome == DROPPED_RADIO:
+            self.dropped_radio += 1
+        else:
+            self.dropped_queue += 1
 
-    def as_dict(self) -> dict[str, int]:
+    def as_dict(self, radio: bool = False) -> dict[str, int]:
+        """The counts (:data:`COUNT_KEYS`; without a ``radio``, none of
+        :data:`RADIO_COUNT_KEYS`, which are then always 0)."""
         return {
-            "sent": self.sent,
-            "received": self.received,
-            "dropped_loss": self.dropped_loss,
-            "dropped_range": self.dropped_range,
+            key: getattr(self, key) for key in COUNT_KEYS if radio or key not in RADIO_COUNT_KEYS
         }
+
+    def delays(self) -> dict[str, float]:
+        """Mean and largest radio delay of the received messages, s."""
+        mean = self.delay_total / self.received if self.received else 0.0
+        return {"delay_mean_s": round(mean, 6), "delay_max_s": round(self.delay_max, 6)}
 
 
 class DeliveryPolicy:
-    """Range cut, then SPL loss (see the module docstring)."""
+    """Range cut, radio packet error, then SPL loss (see the module docstring)."""
 
     def __init__(
         self,
@@ -94,13 +132,18 @@ class DeliveryPolicy:
     def exempt(self, topic: str) -> bool:
         return topic in self.exempt_topics
 
-    def decide(self, topic: str, connected: bool, stream: LossStream) -> str:
+    def decide(
+        self, topic: str, connected: bool, stream: LossStream, packet_error: float = 0.0
+    ) -> str:
         """The outcome of one message on ``topic`` reaching one receiver, whose link from
-        the sender is ``connected``; draws from ``stream`` only when loss applies."""
+        the sender is ``connected`` and loses this message with probability
+        ``packet_error`` (the radio's); draws from ``stream`` only when a loss applies."""
         if topic in self.exempt_topics:
             return RECEIVED
         if not connected:
             return DROPPED_RANGE
+        if packet_error > 0.0 and stream.draw() < packet_error:
+            return DROPPED_RADIO
         if self._loss > 0.0 and topic in self.lossy_topics and stream.draw() < self._loss:
             return DROPPED_LOSS
         return RECEIVED

@@ -6,6 +6,11 @@ order. Whether each reaches each receiver is decided on the receiving side by th
 :class:`~mrcomm.net.delivery.DeliveryPolicy` (range cut from the step's link matrix,
 then simulated packet loss from the receiver's own seeded stream), the same policy the
 Zenoh bus applies in live mode.
+
+With a radio (:class:`~mrcomm.net.radio.channel.RadioChannel`) a message also queues at
+its sender and is delivered at the first step at or after its publication plus its
+delay (wait + airtime; within one step for light traffic), or is lost to the queue, and
+each receiver may lose it to packet error.
 """
 
 from __future__ import annotations
@@ -15,11 +20,22 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 
 from mrcomm.messaging.messages import Message
-from mrcomm.net.delivery import RECEIVED, DeliveryPolicy, LossStream, TopicCounts
+from mrcomm.net.delivery import (
+    DROPPED_QUEUE,
+    RECEIVED,
+    DeliveryPolicy,
+    LossStream,
+    TopicCounts,
+)
+from mrcomm.net.radio.channel import RadioChannel
 from mrcomm.ports import Handler
 
+#: A message on its way: sender index, topic, message, due time, radio delay (None:
+#: lost to the sender's queue), bits on the air.
+_Queued = tuple[int, str, Message, float, float | None, int]
+
 #: Observer of every delivery decision: (now, topic, sender, receiver, message, outcome)
-#: with outcome "received" | "dropped_loss" | "dropped_range". Used by recordings.
+#: with outcome one of :data:`~mrcomm.net.delivery.OUTCOMES`. Used by recordings.
 DeliveryObserver = Callable[[float, str, str, str, Message, str], None]
 
 #: Observer of every publication: (stamp, topic, sender, message).
@@ -54,13 +70,15 @@ class InProcessNetwork:
         *,
         policy: DeliveryPolicy,
         loss_rngs: Mapping[str, np.random.Generator],
+        channel: RadioChannel | None = None,
     ) -> None:
         self.ids: tuple[str, ...] = tuple(agent_ids)
         self.policy = policy
+        self.channel = channel
         self._streams = [LossStream(loss_rngs[a]) for a in self.ids]
         # topic -> receiver index -> handlers
         self._subs: dict[str, dict[int, list[Handler]]] = {}
-        self._outbox: list[tuple[int, str, Message]] = []
+        self._outbox: list[_Queued] = []
         n = len(self.ids)
         self._connected: list[list[bool]] = [[True] * n for _ in range(n)]
         self.counts: dict[tuple[str, str], TopicCounts] = {}
@@ -84,13 +102,20 @@ class InProcessNetwork:
         return len(self._outbox)
 
     def deliver(self, now: float) -> None:
-        """Deliver everything published since the last call. Messages published by
-        handlers during delivery wait for the next call."""
+        """Deliver everything published since the last call (with a radio: everything
+        due by ``now``). Messages published by handlers during delivery wait for the
+        next call."""
         self._now = now
         outbox, self._outbox = self._outbox, []
+        if self.channel is not None:
+            due = [m for m in outbox if m[3] <= now + 1e-9]
+            self._outbox = [m for m in outbox if m[3] > now + 1e-9]
+            outbox = due
         decide = self.policy.decide
         streams = self._streams
-        for sender, topic, message in outbox:
+        channel = self.channel
+        exempt = self.policy.exempt
+        for sender, topic, message, _, delay, bits in outbox:
             receivers = self._subs.get(topic)
             if not receivers:
                 continue
@@ -98,8 +123,16 @@ class InProcessNetwork:
             for receiver, handlers in receivers.items():
                 if receiver == sender:
                     continue
-                outcome = decide(topic, links[receiver], streams[receiver])
-                self._count(receiver, topic).count(outcome)
+                if delay is None and not exempt(topic):
+                    outcome = DROPPED_QUEUE
+                else:
+                    per = (
+                        channel.packet_error(sender, receiver, bits)
+                        if channel is not None and links[receiver]
+                        else 0.0
+                    )
+                    outcome = decide(topic, links[receiver], streams[receiver], per)
+                self._count(receiver, topic).count(outcome, delay or 0.0)
                 if self.observer is not None:
                     self.observer(
                         now, topic, self.ids[sender], self.ids[receiver], message, outcome
@@ -111,7 +144,13 @@ class InProcessNetwork:
     # -- endpoint plumbing ---------------------------------------------------------
     def _publish(self, sender: int, topic: str, message: Message) -> None:
         self._count(sender, topic).sent += 1
-        self._outbox.append((sender, topic, message))
+        if self.channel is None:
+            self._outbox.append((sender, topic, message, 0.0, 0.0, 0))
+        else:
+            bits = self.channel.bits(message)
+            delay = self.channel.transmit(sender, self._now, bits)
+            due = self._now + (delay or 0.0)
+            self._outbox.append((sender, topic, message, due, delay, bits))
         if self.publish_observer is not None:
             self.publish_observer(message.stamp, topic, self.ids[sender], message)
 
@@ -125,9 +164,13 @@ class InProcessNetwork:
             counts = self.counts[key] = TopicCounts()
         return counts
 
-    def counts_by_agent(self) -> dict[str, dict[str, dict[str, int]]]:
-        """agent -> topic -> counts."""
-        out: dict[str, dict[str, dict[str, int]]] = {}
+    def counts_by_agent(self) -> dict[str, dict[str, dict[str, float]]]:
+        """agent -> topic -> counts (and, with a radio, the delays of what it received)."""
+        out: dict[str, dict[str, dict[str, float]]] = {}
         for (agent, topic), c in sorted(self.counts.items()):
-            out.setdefault(agent, {})[topic] = c.as_dict()
+            radio = self.channel is not None
+            entry: dict[str, float] = dict(c.as_dict(radio))
+            if radio:
+                entry.update(c.delays())
+            out.setdefault(agent, {})[topic] = entry
         return out

@@ -3,6 +3,9 @@
 For each pair: distance, line of sight (ray cast on the map, only when the threshold
 needs it), RSSI (from the active threshold's signal model, where it has one),
 ``warning`` (threshold crossed) and ``connected`` (within the network type's limit).
+With a network model that decides range from received power (``radio``) also the walls
+crossed and the received power of every link (``power``), from which it decides
+``connected``.
 A node without a position (a virtual assigner) is always connected and never warns.
 
 Distance, RSSI, warning and connection are evaluated for every pair at every step.
@@ -11,7 +14,9 @@ passes the edge of a wall, so a pair's ray is cast again only when it may have c
 an unobstructed ray whose clearance to the nearest wall is c stays unobstructed while
 each end moves less than c (exact); an obstructed ray is cast again once an end has
 moved ``los_refresh`` (0.25 m), so a pair coming into sight through a door switches
-model within that distance. Nothing is cast while both ends stand still.
+model within that distance. Nothing is cast while both ends stand still. Walls are
+counted (a full traversal) only when a cast finds the ray obstructed and the network
+model needs the count.
 """
 
 from __future__ import annotations
@@ -39,6 +44,9 @@ class LinkState:
     rssi: FloatArray | None
     warning: BoolArray
     connected: BoolArray
+    #: Received power of each link, dBm (network models with a radio; NaN for a node
+    #: without a position), else None.
+    power: FloatArray | None = None
 
     def index(self, agent_id: str) -> int:
         return self.ids.index(agent_id)
@@ -82,11 +90,13 @@ class LinkModel:
         # end may move before the answer may change.
         pairs = self.layout.pairs
         self._cast_from: list[tuple[float, float, float, float] | None] = [None] * len(pairs)
-        self._cast_value = [True] * len(pairs)
+        self._cast_walls = [0] * len(pairs)
         self._cast_slack = [0.0] * len(pairs)
         self._sight: tuple[tuple[bool, ...], BoolArray] | None = None
         self.casts = 0
-        if threshold.needs_line_of_sight:
+        self._count_walls = network.needs_walls
+        self._casts_rays = threshold.needs_line_of_sight or network.needs_walls
+        if self._casts_rays:
             grid.prepare_ray_casts()
 
     def update(
@@ -103,9 +113,13 @@ class LinkModel:
         distance = self.layout.matrix(pair_distance, 0.0)
         line_of_sight: BoolArray | None = None
         sight: list[bool] | None = None
-        if self.threshold.needs_line_of_sight:
-            sight = self._line_of_sight(xy, pair_distance)
+        power: FloatArray | None = None
+        if self._casts_rays:
+            walls = self._walls(xy, pair_distance)
+            sight = [w == 0 for w in walls]
             line_of_sight = self._sight_matrix(sight)
+            if self._count_walls:
+                power = self._power(xy, pair_distance, walls)
         pairs = PairGeometry(distance, self.layout, pair_distance, sight)
         rssi, warning = self.threshold.evaluate(pairs, now)
         warning = warning & self._off_diagonal
@@ -114,8 +128,22 @@ class LinkModel:
             distance, warning = distance.take(e), warning.take(e)
             line_of_sight = None if line_of_sight is None else line_of_sight.take(e)
             rssi = None if rssi is None else rssi.take(e)
-        connected = self.network.connected(distance)
-        return LinkState(self.ids, distance, line_of_sight, rssi, warning, connected)
+            power = None if power is None else power.take(e)
+        if power is None:
+            connected = self.network.connected(distance)
+        else:
+            connected = self.network.in_range_power(power)
+        return LinkState(self.ids, distance, line_of_sight, rssi, warning, connected, power)
+
+    def _power(
+        self, xy: Sequence[Sequence[float]], distance: list[float], walls: list[int]
+    ) -> FloatArray:
+        """(n, n) received power of the evaluated nodes: the network model's reciprocal
+        power per pair plus its per-direction offsets; NaN on the diagonal."""
+        network: Any = self.network
+        per_pair = network.pair_power(xy, self.layout.pairs, distance, walls)
+        matrix = self.layout.matrix(per_pair, math.nan)
+        return np.asarray(matrix + network.offsets(len(self.evaluated_ids)))
 
     def _sight_matrix(self, sight: list[bool]) -> BoolArray:
         # Line of sight changes rarely: rebuild the matrix only when a pair changed.
@@ -125,17 +153,21 @@ class LinkModel:
             self._sight = (key, matrix)
         return self._sight[1]
 
-    def _line_of_sight(self, xy: Sequence[Sequence[float]], distance: list[float]) -> list[bool]:
-        # Only pairs within the network's reach matter for signal (beyond the AH limit
-        # nothing is delivered anyway): farther pairs count as obstructed, unrayed.
+    def _walls(self, xy: Sequence[Sequence[float]], distance: list[float]) -> list[int]:
+        """Walls crossed by each pair's ray (0: line of sight). Without a wall-counting
+        network model an obstructed ray counts as 1 (its exact count is not needed).
+        Only pairs within the network's reach are cast: farther pairs count as
+        obstructed (beyond the reach nothing is delivered anyway)."""
         reach = self.network.reach_m
+        count = self._count_walls
         hypot = math.hypot
-        cast_from, cast_value, cast_slack = self._cast_from, self._cast_value, self._cast_slack
-        sight: list[bool] = []
+        cast_from, cast_walls, cast_slack = self._cast_from, self._cast_walls, self._cast_slack
+        grid = self.grid
+        walls: list[int] = []
         for k, (a, b) in enumerate(self.layout.pairs):
             dist = distance[k]
             if not (0.0 < dist <= reach):  # also False for NaN (virtual node)
-                sight.append(not dist > reach)
+                walls.append(1 if dist > reach else 0)
                 continue
             (ax, ay), (bx, by) = xy[a], xy[b]
             last = cast_from[k]
@@ -144,13 +176,16 @@ class LinkModel:
                 or hypot(ax - last[0], ay - last[1]) >= cast_slack[k]
                 or hypot(bx - last[2], by - last[3]) >= cast_slack[k]
             ):
-                clearance = self.grid.ray_clearance(ax, ay, bx, by)
+                clearance = grid.ray_clearance(ax, ay, bx, by)
                 self.casts += 1
-                cast_value[k] = clearance >= 0.0
-                cast_slack[k] = clearance if clearance >= 0.0 else self.los_refresh
+                if clearance >= 0.0:
+                    cast_walls[k], cast_slack[k] = 0, clearance
+                else:
+                    cast_walls[k] = grid.walls_between(ax, ay, bx, by) if count else 1
+                    cast_slack[k] = self.los_refresh
                 cast_from[k] = (ax, ay, bx, by)
-            sight.append(cast_value[k])
-        return sight
+            walls.append(cast_walls[k])
+        return walls
 
 
 #: Link states of a robot pair by code (0, connected, is not recorded as an interval).

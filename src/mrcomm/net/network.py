@@ -5,6 +5,8 @@
 * ``ah`` — ad-hoc, peer to peer: a hard communication limit (8.0 m by default) between
   two nodes; beyond it nothing is delivered, and a node that comes back into range
   rejoins by itself.
+* ``radio`` (:mod:`mrcomm.net.radio.model`) — received power from distance, walls and
+  shadowing decides range, packet error and the senders' queues.
 
 Each is a registered variant (:data:`WLAN_SPEC`, :data:`AH_SPEC`); a new model is a
 :class:`NetworkModel` subclass with its parameter model and spec, in one module.
@@ -13,8 +15,9 @@ Each is a registered variant (:data:`WLAN_SPEC`, :data:`AH_SPEC`); a new model i
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from enum import StrEnum
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,9 +42,25 @@ class NetworkModel:
     name: ClassVar[str] = ""
     #: Beyond this distance nothing is delivered (inf: no distance limit).
     reach_m: float = math.inf
+    #: Whether range is decided from received power, which needs the walls between
+    #: nodes (:class:`~mrcomm.net.radio.model.RadioNetwork`); otherwise from distance.
+    needs_walls: ClassVar[bool] = False
 
     def __init__(self, params: BaseModel | None = None) -> None:
         """``params``: the model's validated parameters (its spec's parameter model)."""
+
+    @classmethod
+    def build(cls, params: BaseModel, resources: Any, seed: int) -> NetworkModel:
+        """The model of one run: ``resources`` are the run's per-scenario resources
+        (the map), ``seed`` the run's seed. Models that need neither take only their
+        parameters."""
+        return cls(params)
+
+    def channel(self, ids: Sequence[str]) -> Any:
+        """The per-message part of the model for the nodes ``ids`` (a
+        :class:`~mrcomm.net.radio.channel.RadioChannel`), or None when messages are
+        decided by range and loss alone."""
+        return None
 
     def connected(self, distance: NDArray[np.float64]) -> NDArray[np.bool_]:
         """(n, n) connectivity from the (n, n) distances (NaN: a node without a
@@ -51,6 +70,26 @@ class NetworkModel:
     def in_range(self, distance: float) -> bool:
         """Whether one link of this length can carry a message."""
         return True
+
+    # -- models that decide range from received power (needs_walls) ----------------
+    def pair_power(
+        self,
+        xy: Sequence[Sequence[float]],
+        pairs: Sequence[tuple[int, int]],
+        distance: Sequence[float],
+        walls: Sequence[int],
+    ) -> list[float]:
+        """Received power of each unordered pair of nodes, dBm, the same both ways (NaN
+        for a pair with a node without a position)."""
+        raise NotImplementedError(f"network model {self.name!r} does not model power")
+
+    def offsets(self, n: int) -> NDArray[np.float64]:
+        """(n, n) fixed per-direction offsets added to the pairs' power, dB."""
+        return np.zeros((n, n))
+
+    def in_range_power(self, power: NDArray[np.float64]) -> NDArray[np.bool_]:
+        """(n, n) range from the (n, n) received power (NaN: always in range)."""
+        raise NotImplementedError(f"network model {self.name!r} does not model power")
 
     def describe(self) -> dict[str, float | str]:
         return {"network": self.name}

@@ -145,7 +145,7 @@ SSD_SPEC = VariantSpec(
     entry=ModelThreshold,
     params=SsdParams,
     summary="SSD, simulated signal degradation: RSSI predicted by the SVR signal model",
-    network_types=frozenset({"ah"}),
+    network_types=frozenset({"ah", "radio"}),
 )
 ESD_SPEC = VariantSpec(
     kind="threshold",

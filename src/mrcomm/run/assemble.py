@@ -17,12 +17,11 @@ from typing import Any
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robot_metrics
 from mrcomm.metrics.timeline import Timeline
+from mrcomm.net.delivery import COUNT_KEYS, RADIO_COUNT_KEYS
 from mrcomm.run.config import RunConfig
 from mrcomm.run.result import MissionResult
 from mrcomm.world.scenario import Scenario
 
-#: The per-topic message counts, in the order results show them.
-COUNT_KEYS = ("sent", "received", "dropped_loss", "dropped_range")
 #: AON counters summed over agents into the run's total.
 AON_TOTAL_KEYS = (
     "publications",
@@ -70,7 +69,7 @@ class RunFacts:
     #: (task_id, robot) pairs whose completion reached the task assigner.
     received: set[tuple[str, str]]
     robots: dict[str, RobotTruth]
-    counts_by_agent: dict[str, dict[str, dict[str, int]]]
+    counts_by_agent: dict[str, dict[str, dict[str, float]]]
     aon: dict[str, AonAgentFacts]
     links: dict[str, dict[str, Any]]
     trajectories: dict[str, list[tuple[float, float, float]]]
@@ -144,14 +143,31 @@ def assemble(facts: RunFacts) -> MissionResult:
     )
 
 
-def sum_counts(per_agent: Iterable[Mapping[str, Mapping[str, int]]]) -> dict[str, dict[str, int]]:
-    """Totals per topic over several agents' counts."""
-    totals: dict[str, dict[str, int]] = {}
+def sum_counts(
+    per_agent: Iterable[Mapping[str, Mapping[str, float]]],
+) -> dict[str, dict[str, Any]]:
+    """Totals per topic over several agents' counts (with a radio, also the mean and
+    largest delay of the messages received)."""
+    per_agent = list(per_agent)
+    # The radio's causes appear only in runs with a radio (present in the agents' counts).
+    radio = any(RADIO_COUNT_KEYS[0] in c for counts in per_agent for c in counts.values())
+    keys = [k for k in COUNT_KEYS if radio or k not in RADIO_COUNT_KEYS]
+    totals: dict[str, dict[str, Any]] = {}
     for counts in per_agent:
         for topic, c in counts.items():
-            t = totals.setdefault(topic, dict.fromkeys(COUNT_KEYS, 0))
-            for k in COUNT_KEYS:
+            t = totals.setdefault(topic, dict.fromkeys(keys, 0))
+            for k in keys:
                 t[k] += int(c.get(k, 0))
+            if radio:  # received-weighted mean and maximum of the radio delay
+                t["delay_total"] = t.get("delay_total", 0.0) + c.get("delay_mean_s", 0.0) * int(
+                    c.get("received", 0)
+                )
+                t["delay_max_s"] = max(t.get("delay_max_s", 0.0), c.get("delay_max_s", 0.0))
+    for t in totals.values():
+        if "delay_total" in t:
+            total = t.pop("delay_total")
+            t["delay_mean_s"] = round(total / t["received"], 6) if t["received"] else 0.0
+            t["delay_max_s"] = round(t["delay_max_s"], 6)
     return dict(sorted(totals.items()))
 
 

@@ -101,6 +101,17 @@ class RunConfig(BaseModel):
         bumped = {k: v for k, v in self.variants().items() if not v.endswith("-v1")}
         return {"variants": json.dumps(bumped, sort_keys=True)} if bumped else {}
 
+    def check_mode(self, mode: str) -> None:
+        """Refuse (one line) a variant that cannot run in ``mode`` ("sim" | "live")."""
+        for kind in ("network", "threshold", "behaviour"):
+            spec = self.spec(kind)
+            if mode not in spec.modes:
+                where = " and ".join(sorted(spec.modes))
+                raise InputError(
+                    f"{kind} '{spec.name}' runs in {where} mode only, not in {mode} mode",
+                    field=f"--{kind}",
+                )
+
     def ignored_settings(self) -> list[str]:
         """Settings accepted that change nothing the team does, one line each (the
         commands warn about them)."""

@@ -63,6 +63,10 @@ def input_files(config: RunConfig) -> dict[str, Path]:
         for key, value in params.model_dump().items():
             if isinstance(value, Path):
                 files[f"{kind}.{key}"] = value
+        # Files a parameter names indirectly (a radio profile given by name).
+        named = getattr(params, "input_files", None)
+        if callable(named):
+            files.update({f"{kind}.{key}": path for key, path in named().items()})
     return files
 
 

@@ -17,8 +17,8 @@ class MissionResult:
     config: dict[str, Any]
     mission: dict[str, Any]
     robots: dict[str, dict[str, Any]]
-    messages: dict[str, dict[str, int]]
-    messages_by_agent: dict[str, dict[str, dict[str, int]]]
+    messages: dict[str, dict[str, Any]]
+    messages_by_agent: dict[str, dict[str, dict[str, float]]]
     aon: dict[str, Any]
     links: dict[str, dict[str, Any]]
     sim_time_s: float

@@ -27,10 +27,11 @@ if TYPE_CHECKING:
     from mrcomm.metrics.timeline import Timeline
 
 
-def build_network(config: RunConfig) -> NetworkModel:
-    """The run's network model, from its spec and parameters."""
-    model: NetworkModel = config.spec("network").load()(config.variant_params("network"))
-    return model
+def build_network(config: RunConfig, resources: ScenarioResources | None = None) -> NetworkModel:
+    """The run's network model, from its spec and parameters (``resources``: the
+    scenario's, for models that need the map)."""
+    cls: type[NetworkModel] = config.spec("network").load()
+    return cls.build(config.variant_params("network"), resources, config.seed)
 
 
 def build_threshold(
@@ -151,7 +152,7 @@ def make_links(resources: ScenarioResources, config: RunConfig) -> tuple[LinkMod
     links = LinkModel(
         node_ids,
         scenario.grid,
-        build_network(config),
+        build_network(config, resources),
         build_threshold(config, resources, evaluated),
         aliases=aliases,
     )

@@ -48,12 +48,13 @@ class Mission:
         self.robot_ids = tuple(r.id for r in scenario.robots)
         self.node_ids = (*self.robot_ids, ASSIGNER_ID)
         seed = config.seed
+        self.links, self.link_recorder = make_links(self.resources, config)
         self.network = InProcessNetwork(
             self.node_ids,
             policy=DeliveryPolicy(config.spl),
             loss_rngs={a: stream(seed, "loss", a) for a in self.node_ids},
+            channel=self.links.network.channel(self.node_ids),
         )
-        self.links, self.link_recorder = make_links(self.resources, config)
         self.bodies = RobotBodies(make_bases(self.resources, seed), scenario.assigner)
         self.bases = self.bodies.bases
         self.timelines = {rid: Timeline(rid) for rid in self.robot_ids}
@@ -107,6 +108,8 @@ class Mission:
         links = self.links.update(positions, now)
         self.last_links = links
         self.network.set_connected(links.connected.tolist())
+        if self.network.channel is not None and links.power is not None:
+            self.network.channel.set_links(links.power, links.line_of_sight)
         self.assigner.set_time(now)
         for executor in self.executors.values():
             executor.set_time(now)

@@ -104,6 +104,8 @@ def check_api(spec: VariantSpec) -> str:
         from mrcomm.net.network import NetworkModel
 
         assert isinstance(entry, type) and issubclass(entry, NetworkModel)
+        if entry.needs_walls:
+            return _check_power_model(entry, params)
         network = entry(params)
         rng = np.random.default_rng(0)
         distance = rng.uniform(0.0, 3.0 * min(network.reach_m, 30.0), (6, 6))
@@ -127,6 +129,32 @@ def check_api(spec: VariantSpec) -> str:
                     if n == 0:
                         assert u == 0.0, f"an idle robot must have utility 0, got {u}"
     return f"{spec.kind} {entry.__name__ if hasattr(entry, '__name__') else entry}"
+
+
+def _check_power_model(entry: Any, params: Any) -> str:
+    """A network model that decides range from received power: on S1's map, for random
+    free positions, the link model gets a finite power for every link, the same in
+    both directions up to the model's fixed offsets, and a boolean range matrix."""
+    from mrcomm.net.links import LinkModel
+    from mrcomm.net.thresholds import NoThreshold
+    from mrcomm.run.resources import ScenarioResources
+
+    resources = ScenarioResources.load(S1)
+    network = entry.build(params, resources, 1)
+    grid = resources.scenario.grid
+    rng = np.random.default_rng(0)
+    free = np.argwhere(~grid.inflated(0.3).occupied)
+    cells = free[rng.choice(len(free), 5, replace=False)]
+    xy = [grid.cell_to_world(int(iy), int(ix)) for iy, ix in cells]
+    ids = tuple(f"n{i}" for i in range(5))
+    state = LinkModel(ids, grid, network, NoThreshold()).update(xy, 0.0)
+    assert state.power is not None, "the link model got no received power"
+    assert state.connected.shape == (5, 5) and state.connected.dtype == np.bool_
+    off = ~np.eye(5, dtype=np.bool_)
+    assert np.isfinite(state.power[off]).all(), "a link without a finite power"
+    reciprocal = state.power - network.offsets(5)
+    assert np.allclose(reciprocal[off], reciprocal.T[off]), "mean power is not reciprocal"
+    return f"network {entry.__name__}: power and range of 5 nodes on S1"
 
 
 # -- determinism and deadlock ----------------------------------------------------------
@@ -178,6 +206,8 @@ def check_no_deadlock(spec: VariantSpec) -> str:
 def check_same_decisions(spec: VariantSpec, steps: int = 600) -> str:
     from mrcomm.testing.buses import compare_buses
 
+    if "live" not in spec.modes:
+        return "simulation only (no live mode): nothing to compare"
     compared = compare_buses(mission_config(spec, spl=50, seed=5), steps)
     return f"{compared} delivery decisions identical on both buses"
 

@@ -109,7 +109,13 @@ class OccupancyGrid:
         moved segment is within that displacement of the old one)."""
         return self._traverse(x0, y0, x1, y1, True)
 
-    def _traverse(self, x0: float, y0: float, x1: float, y1: float, clearances: bool) -> float:
+    def _ray(
+        self, x0: float, y0: float, x1: float, y1: float
+    ) -> tuple[int, int, int, float, float, int, float, float] | None:
+        """Set-up of an exact grid traversal (Amanatides & Woo) of the segment: first
+        flat cell index, number of cells, x step, next x crossing, x crossing interval,
+        y step (± width), next y crossing, y crossing interval. None when an end is off
+        the map or on its outermost cells."""
         res = self.resolution
         ox, oy = self.origin
         fx0, fy0 = (x0 - ox) / res, (y0 - oy) / res
@@ -118,15 +124,14 @@ class OccupancyGrid:
         end_x, end_y = math.floor(fx1), math.floor(fy1)
         height, width = self.occupied.shape
         # Every visited cell lies in the box spanned by the two end cells (give or take
-        # one cell of rounding at a tie), so bounds are checked once, here, not per cell:
-        # ends on the map's outermost cells or beyond count as obstructed.
+        # one cell of rounding at a tie), so bounds are checked once, here, not per cell.
         if not (
             0 < ix < width - 1
             and 0 < end_x < width - 1
             and 0 < iy < height - 1
             and 0 < end_y < height - 1
         ):
-            return -1.0
+            return None
         dx, dy = fx1 - fx0, fy1 - fy0
         if dx > 0:
             step_x, t_max_x, t_dx = 1, (ix + 1 - fx0) / dx, 1.0 / dx
@@ -140,12 +145,45 @@ class OccupancyGrid:
             step_y, t_max_y, t_dy = -width, (fy0 - iy) / -dy, -1.0 / dy
         else:
             step_y, t_max_y, t_dy = 0, math.inf, math.inf
+        cells = abs(end_x - ix) + abs(end_y - iy) + 1
+        return iy * width + ix, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy
+
+    def walls_between(self, x0: float, y0: float, x1: float, y1: float) -> int:
+        """How many walls the straight segment crosses: the runs of occupied cells it
+        passes through (a wall several cells thick is one wall), by the same exact
+        traversal as :meth:`line_of_sight`. Ends off the map or on its outermost cells
+        count as one wall (the map says nothing about what lies there)."""
+        ray = self._ray(x0, y0, x1, y1)
+        if ray is None:
+            return 1
+        k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy = ray
+        clear = self._clearances()
+        walls = 0
+        inside = False
+        for _ in range(cells):
+            occupied = clear[k] == 0.0
+            if occupied and not inside:
+                walls += 1
+            inside = occupied
+            if t_max_x < t_max_y:
+                k += step_x
+                t_max_x += t_dx
+            else:
+                k += step_y
+                t_max_y += t_dy
+        return walls
+
+    def _traverse(self, x0: float, y0: float, x1: float, y1: float, clearances: bool) -> float:
+        ray = self._ray(x0, y0, x1, y1)
+        if ray is None:
+            return -1.0  # ends on the map's outermost cells or beyond: obstructed
+        k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy = ray
+        res = self.resolution
         # One list holds both answers: an occupied cell is at distance 0 from the nearest
         # occupied cell, a free one at least a cell's width away.
         clear = self._clearances()
-        k = iy * width + ix
         nearest = math.inf
-        for _ in range(abs(end_x - ix) + abs(end_y - iy) + 1):
+        for _ in range(cells):
             c = clear[k]
             if c < nearest:
                 if c == 0.0:

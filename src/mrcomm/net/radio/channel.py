@@ -1,0 +1,119 @@
+"""The per-message part of the radio: each sender's transmit queue, and whether one
+message reaches one receiver given the link's received power, the message's size and
+(optionally) fast fading.
+
+* **Queue.** A sender transmits its messages one after another at the profile's
+  ``rate_bps``; a message takes ``(bytes + header_bytes) · 8 / rate_bps`` seconds of
+  airtime and waits for the messages before it. Its delay is the wait plus its airtime;
+  a message that would wait longer than ``max_queue_s`` is dropped (queue overflow).
+  One transmission serves every receiver (broadcast, as publish/subscribe over the
+  radio). Contention between senders is not modelled: each has the channel to itself.
+* **Packet error.** PER = 1 − (1 − BER)^bits at the link's power this step, drawn from
+  the receiver's own loss stream (so the radio's draws, like SPL's, are the
+  receiver's).
+* **Fading** (profile ``fading: rician``): the power of each packet is the link's power
+  plus a fast-fading gain, Rician with the profile's K factor in line of sight and
+  Rayleigh when obstructed, drawn from the receiver's fading stream.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mrcomm.messaging.messages import Message, encode
+from mrcomm.net.radio.profile import RadioProfile
+
+FloatArray = NDArray[np.float64]
+
+
+def fading_gain_db(rng: np.random.Generator, k_db: float | None) -> float:
+    """One fast-fading power gain, dB, with unit mean power: Rician with K factor
+    ``k_db`` (dB), Rayleigh when ``k_db`` is None."""
+    k = 0.0 if k_db is None else 10.0 ** (k_db / 10.0)
+    # Complex gain: a fixed line-of-sight part of power K/(K+1) plus a scattered part.
+    los = math.sqrt(k / (k + 1.0))
+    scatter = math.sqrt(1.0 / (2.0 * (k + 1.0)))
+    re, im = rng.standard_normal(2).tolist()
+    power = (los + scatter * re) ** 2 + (scatter * im) ** 2
+    return 10.0 * math.log10(max(power, 1e-12))
+
+
+def _ber(power_dbm: float, noise_floor_dbm: float) -> float:
+    """BER = erfc(√SNR) of one link (0 for NaN: a node without a position has no
+    radio); the scalar form of :func:`~mrcomm.net.radio.model.bit_error_rate`."""
+    if power_dbm != power_dbm:
+        return 0.0
+    snr = 10.0 ** ((power_dbm - noise_floor_dbm) / 10.0)
+    return min(math.erfc(math.sqrt(snr)), 0.5)
+
+
+class RadioChannel:
+    """Queue and packet error of one run's radio (see the module docstring)."""
+
+    def __init__(
+        self,
+        profile: RadioProfile,
+        ids: Sequence[str],
+        fading_rngs: Mapping[str, np.random.Generator] | None = None,
+    ) -> None:
+        self.profile = profile
+        self.ids = tuple(ids)
+        self._free_at = [0.0] * len(self.ids)
+        self._seconds_per_bit = 1.0 / profile.rate_bps
+        self._power: list[list[float]] | None = None
+        self._ber: list[list[float]] = []
+        self._noise = profile.noise_floor_dbm
+        self._sight: list[list[bool]] | None = None
+        self._fading = (
+            [fading_rngs[a] for a in self.ids]
+            if fading_rngs is not None and profile.fading != "none"
+            else None
+        )
+
+    def bits(self, message: Message) -> int:
+        """Bits on the air for one message: its wire form plus the header."""
+        return (len(encode(message)) + self.profile.header_bytes) * 8
+
+    def transmit(self, sender: int, stamp: float, bits: int) -> float | None:
+        """Queue one message of the sender at ``stamp``: its delay (wait + airtime), or
+        None when the queue is too long and the message is dropped."""
+        start = max(stamp, self._free_at[sender])
+        if start - stamp > self.profile.max_queue_s:
+            return None
+        airtime = bits * self._seconds_per_bit
+        self._free_at[sender] = start + airtime
+        return start + airtime - stamp
+
+    def backlog(self, sender: int, now: float) -> float:
+        """Seconds of traffic still waiting in the sender's queue at ``now``."""
+        return max(0.0, self._free_at[sender] - now)
+
+    def set_links(self, power: FloatArray, sight: NDArray[np.bool_] | None) -> None:
+        """The step's received power ``power[s, r]`` (dBm) and line of sight."""
+        self._power = power.tolist()
+        self._sight = sight.tolist() if sight is not None else None
+        # A team has a handful of links: plain Python beats numpy's per-call overhead.
+        self._ber = [[_ber(p, self._noise) for p in row] for row in self._power]
+
+    def packet_error(self, sender: int, receiver: int, bits: int) -> float:
+        """Probability that one message of ``bits`` from ``sender`` is lost at
+        ``receiver`` this step (0 for a node without a position)."""
+        if self._power is None:
+            return 0.0
+        if self._fading is None:
+            ber = self._ber[sender][receiver]
+        else:
+            power = self._power[sender][receiver]
+            if power != power:  # NaN: virtual node, no radio
+                return 0.0
+            in_sight = self._sight is None or self._sight[sender][receiver]
+            k_db = self.profile.rician_k_db if in_sight else None
+            power += fading_gain_db(self._fading[receiver], k_db)
+            ber = _ber(power, self._noise)
+        if ber <= 0.0:
+            return 0.0
+        return -math.expm1(bits * math.log1p(-ber))

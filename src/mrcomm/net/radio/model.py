@@ -1,0 +1,228 @@
+"""The ``radio`` network model: received power of every link from distance, walls and
+shadowing; which links are in range; the bit error rate of each (see
+:mod:`mrcomm.net.radio.profile` for the formulas and their parameters).
+
+Per step the link model hands it the geometry of every unordered pair (distance, walls
+crossed) and the positions; it returns the (n, n) received power (reciprocal mean plus
+a fixed per-direction offset), whether each link is in range and the bit error rate.
+The per-message part — the sender's queue, packet error from the message's size, fast
+fading — is :class:`mrcomm.net.radio.channel.RadioChannel`, which the bus consults.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from pydantic import BaseModel, ConfigDict, Field
+from scipy.special import erfc
+
+from mrcomm.net.network import NetworkModel
+from mrcomm.net.radio.profile import DEFAULT_PROFILE, RadioProfile, load_profile, profile_path
+from mrcomm.net.radio.shadowing import ShadowingField
+from mrcomm.seeding import stream
+from mrcomm.specs import VariantSpec
+
+FloatArray = NDArray[np.float64]
+
+#: Distances below the 1 m reference distance count as 1 m (near field).
+REFERENCE_DISTANCE_M = 1.0
+#: The link model casts rays (walls, line of sight) only within the distance at which
+#: the mean power in line of sight is this far above the sensitivity (beyond it the link
+#: is out of range even with a strong shadowing draw and no wall).
+REACH_MARGIN_SIGMAS = 4.0
+
+
+class RadioParams(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    profile: str = Field(
+        DEFAULT_PROFILE,
+        min_length=1,
+        description="radio profile: a bundled name (mrcomm radio show) or a YAML file",
+    )
+
+    def input_files(self) -> dict[str, Path]:
+        """The profile's file, for the run's provenance."""
+        return {"profile": profile_path(self.profile)}
+
+
+def mean_power_dbm(profile: RadioProfile, distance: ArrayLike, walls: ArrayLike) -> FloatArray:
+    """Mean received power without shadowing, dBm."""
+    d = np.maximum(np.asarray(distance, dtype=np.float64), REFERENCE_DISTANCE_M)
+    return np.asarray(
+        profile.tx_power_dbm
+        - profile.reference_loss_db
+        - 10.0 * profile.exponent * np.log10(d / REFERENCE_DISTANCE_M)
+        - profile.wall_loss_db * np.asarray(walls, dtype=np.float64)
+    )
+
+
+def bit_error_rate(profile: RadioProfile, power_dbm: FloatArray | float) -> FloatArray:
+    """BER = erfc(√SNR) (QPSK), SNR = power − noise floor (linear)."""
+    snr = 10.0 ** ((np.asarray(power_dbm, dtype=np.float64) - profile.noise_floor_dbm) / 10.0)
+    return np.asarray(np.minimum(erfc(np.sqrt(snr)), 0.5))
+
+
+def packet_error_rate(ber: FloatArray | float, bits: FloatArray | float) -> FloatArray:
+    """PER = 1 − (1 − BER)^bits."""
+    b = np.asarray(ber, dtype=np.float64)
+    return np.asarray(-np.expm1(np.asarray(bits, dtype=np.float64) * np.log1p(-b)))
+
+
+def reach_m(profile: RadioProfile) -> float:
+    """Distance beyond which even a line-of-sight link with a 4σ shadowing gain is
+    below the sensitivity."""
+    budget = (
+        profile.tx_power_dbm
+        - profile.reference_loss_db
+        + REACH_MARGIN_SIGMAS * (profile.shadowing_sigma_db + profile.asymmetry_db)
+        - profile.sensitivity_dbm
+    )
+    return REFERENCE_DISTANCE_M * 10.0 ** (max(budget, 0.0) / (10.0 * profile.exponent))
+
+
+class RadioNetwork(NetworkModel):
+    """A radio that follows the building (see the module docstring)."""
+
+    name = "radio"
+    needs_walls: ClassVar[bool] = True
+
+    def __init__(
+        self,
+        params: BaseModel | None = None,
+        *,
+        profile: RadioProfile | None = None,
+        extent: tuple[float, float, float, float] = (0.0, 1.0, 0.0, 1.0),
+        seed: int = 0,
+    ) -> None:
+        if not isinstance(params, RadioParams):
+            params = RadioParams.model_validate({})
+        self.params = params
+        self.profile = profile if profile is not None else load_profile(params.profile)
+        self.reach_m = reach_m(self.profile)
+        self.seed = seed
+        self.field = ShadowingField(
+            self.profile.shadowing_sigma_db,
+            self.profile.decorrelation_m,
+            extent,
+            stream(seed, "radio", "shadowing"),
+        )
+        self._offsets: dict[int, FloatArray] = {}
+
+    @classmethod
+    def build(cls, params: BaseModel, resources: Any, seed: int) -> RadioNetwork:
+        """The run's radio: its profile, and a shadowing field over the scenario's map
+        drawn from the run's seed."""
+        if not isinstance(params, RadioParams):
+            params = RadioParams.model_validate({})
+        return cls(params, extent=resources.scenario.grid.extent, seed=seed)
+
+    def offsets(self, n: int) -> FloatArray:
+        """The fixed per-direction offsets of n nodes, dB ((n, n), antisymmetric so the
+        two directions of a link differ by twice the offset; zeros without asymmetry)."""
+        cached = self._offsets.get(n)
+        if cached is None:
+            sigma = self.profile.asymmetry_db
+            draw = stream(self.seed, "radio", "asymmetry").normal(0.0, sigma, (n, n))
+            cached = np.triu(draw, 1) - np.triu(draw, 1).T if sigma > 0 else np.zeros((n, n))
+            self._offsets[n] = cached
+        return cached
+
+    def pair_power(
+        self,
+        xy: Sequence[Sequence[float]],
+        pairs: Sequence[tuple[int, int]],
+        distance: Sequence[float],
+        walls: Sequence[int],
+    ) -> list[float]:
+        """Mean received power of each unordered pair with its shadowing, dBm (NaN for
+        a pair with a node without a position)."""
+        p = self.profile
+        base = p.tx_power_dbm - p.reference_loss_db
+        slope = 10.0 * p.exponent
+        wall_loss = p.wall_loss_db
+        # The field once per node (a pair's shadowing is the scaled sum of its ends').
+        at = self.field.at
+        field = [at(x, y) if x == x else math.nan for x, y in xy]
+        scale = 1.0 / math.sqrt(2.0)
+        out: list[float] = []
+        for k, (a, b) in enumerate(pairs):
+            d = distance[k]
+            if d != d:  # NaN: a virtual node
+                out.append(math.nan)
+                continue
+            loss = slope * math.log10(max(d, REFERENCE_DISTANCE_M) / REFERENCE_DISTANCE_M)
+            out.append(base - loss - wall_loss * walls[k] + (field[a] + field[b]) * scale)
+        return out
+
+    def channel(self, ids: Sequence[str]) -> Any:
+        from mrcomm.net.radio.channel import RadioChannel
+
+        rngs = {a: stream(self.seed, "radio", "fading", a) for a in ids}
+        return RadioChannel(self.profile, ids, rngs)
+
+    def in_range_power(self, power: FloatArray) -> NDArray[np.bool_]:
+        """Which links are in range (power at or above the sensitivity; NaN — a node
+        without a position — is always in range)."""
+        return np.asarray(~(power < self.profile.sensitivity_dbm))
+
+    def describe(self) -> dict[str, float | str]:
+        return {"network": self.name, "profile": self.profile.name}
+
+
+RADIO_SPEC = VariantSpec(
+    kind="network",
+    name="radio",
+    entry=RadioNetwork,
+    params=RadioParams,
+    summary=(
+        "radio that follows the building: log-distance path loss, walls, correlated "
+        "shadowing, packet error from SNR and size, a sender queue (simulation only)"
+    ),
+    modes=frozenset({"sim"}),
+)
+
+
+#: Wire size of a typical pose message (bytes, before the header): what
+#: :func:`delivery_ratio` assumes unless told otherwise.
+POSE_BYTES = 150
+#: Gauss–Hermite nodes for averaging over the shadowing distribution.
+_QUADRATURE = np.polynomial.hermite_e.hermegauss(48)
+#: Fast-fading draws averaged per point (fixed seed: the curve is the same every time).
+_FADING_DRAWS = 400
+
+
+def delivery_ratio(
+    profile: RadioProfile,
+    distance: FloatArray | Sequence[float],
+    walls: int,
+    message_bytes: int = POSE_BYTES,
+) -> FloatArray:
+    """Expected share of messages of ``message_bytes`` delivered over a link of each
+    ``distance`` through ``walls`` walls: in range and free of packet error, averaged
+    over the shadowing (and the per-direction offset and fast fading, where the profile
+    has them)."""
+    from mrcomm.net.radio.channel import fading_gain_db
+
+    d = np.asarray(distance, dtype=np.float64)
+    nodes, weights = _QUADRATURE
+    weights = weights / weights.sum()
+    sigma = math.hypot(profile.shadowing_sigma_db, profile.asymmetry_db)
+    power = mean_power_dbm(profile, d, walls)[..., None] + sigma * nodes  # (..., nodes)
+    if profile.fading == "none":
+        gains = np.zeros(1)
+    else:
+        rng = np.random.default_rng(0)
+        k_db = profile.rician_k_db if walls == 0 else None
+        gains = np.array([fading_gain_db(rng, k_db) for _ in range(_FADING_DRAWS)])
+    bits = (message_bytes + profile.header_bytes) * 8
+    received = power[..., None] + gains  # (..., nodes, draws)
+    ok = (received >= profile.sensitivity_dbm) * (
+        1.0 - packet_error_rate(bit_error_rate(profile, received), bits)
+    )
+    return np.asarray((ok.mean(axis=-1) * weights).sum(axis=-1))

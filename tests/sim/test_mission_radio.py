@@ -1,0 +1,88 @@
+"""Whole S1 missions under the radio model: reproducible, the drops the model
+predicts, delays in the message statistics, and the behaviours still succeed."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from mrcomm.messaging.messages import Message
+from mrcomm.net.delivery import DROPPED_RADIO, RECEIVED
+from mrcomm.net.radio.profile import profile_path
+from mrcomm.run.config import make_config
+from mrcomm.run.resources import ScenarioResources
+from mrcomm.sim.mission import Mission, run_mission
+from tests.golden.golden import SCENARIO, comparable
+
+pytestmark = pytest.mark.slow
+
+
+def _config(**options: Any) -> Any:
+    values = {"network": "radio", "threshold": "slt", "behaviour": "nb", "spl": 0, "seed": 1}
+    return make_config(None, scenario=SCENARIO, **{**values, **options})
+
+
+def test_same_seed_same_result_other_seed_other(s1_resources: ScenarioResources) -> None:
+    first = comparable(run_mission(_config(seed=4), s1_resources))
+    again = comparable(run_mission(_config(seed=4), s1_resources))
+    other = comparable(run_mission(_config(seed=5), s1_resources))
+    assert first == again
+    assert first != other
+
+
+def test_radio_drops_match_the_packet_error_the_model_gives(
+    s1_resources: ScenarioResources, tmp_path: Path
+) -> None:
+    """Every pose decision on a link in range: the model's PER for that message (from
+    the channel at that moment) against what happened. The number of radio drops must
+    be the sum of the PERs within four binomial standard deviations."""
+    # A weaker radio than the office's, so that S1's links lose a measurable share.
+    text = profile_path("office-2.4ghz").read_text()
+    weak = tmp_path / "weak.yaml"
+    weak.write_text(text.replace("tx_power_dbm: 10.0", "tx_power_dbm: -12.0"))
+    mission = Mission(_config(params={"network": {"profile": str(weak)}}, seed=2), s1_resources)
+    channel = mission.network.channel
+    assert channel is not None and channel.profile.tx_power_dbm == -12.0
+    per_sum, per_var, drops, decisions = 0.0, 0.0, 0, 0
+    index = {a: i for i, a in enumerate(mission.node_ids)}
+
+    def observe(now: float, topic: str, s: str, r: str, message: Message, outcome: str) -> None:
+        nonlocal per_sum, per_var, drops, decisions
+        if outcome not in (RECEIVED, DROPPED_RADIO) or topic != "pose":
+            return
+        p = channel.packet_error(index[s], index[r], channel.bits(message))
+        per_sum, per_var = per_sum + p, per_var + p * (1 - p)
+        drops += outcome == DROPPED_RADIO
+        decisions += 1
+
+    mission.network.observer = observe
+    mission.run()
+    assert decisions > 1000
+    assert per_sum > 50, "the test needs links that lose packets"
+    assert abs(drops - per_sum) < 4 * np.sqrt(per_var) + 1
+
+
+def test_message_statistics_show_radio_causes_and_delays(
+    s1_resources: ScenarioResources,
+) -> None:
+    result = run_mission(_config(behaviour="lf", seed=1), s1_resources)
+    pose = result.messages["pose"]
+    assert {"dropped_radio", "dropped_queue", "delay_mean_s", "delay_max_s"} <= set(pose)
+    # A pose (~150 bytes + header) takes ~1.7 ms of airtime at 1 Mbit/s.
+    assert 1e-3 < pose["delay_mean_s"] < 5e-3
+    assert result.messages["aon"]["delay_mean_s"] > 0
+    # Models without a radio keep their results as they were: no radio keys.
+    plain = run_mission(_config(network="ah", seed=1), s1_resources)
+    assert "dropped_radio" not in plain.messages["pose"]
+
+
+@pytest.mark.parametrize("threshold", ["slt", "ssd"])
+def test_lf_succeeds_on_s1_under_the_radio(s1_resources: ScenarioResources, threshold: str) -> None:
+    for seed in (1, 2):
+        result = run_mission(
+            _config(behaviour="lf", threshold=threshold, spl=25, seed=seed), s1_resources
+        )
+        assert result.mission["successful"], (threshold, seed, result.mission["failed_tasks"])
