@@ -3,6 +3,7 @@ curves, packet error and the sender's queue."""
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -54,7 +55,7 @@ def test_delivery_falls_smoothly_with_distance_and_walls() -> None:
         assert np.all(np.diff(curve) <= 1e-12), "delivery must not rise with distance"
         # Smooth: no step larger than 5 points between samples half a metre apart.
         assert np.max(np.abs(np.diff(curve))) < 0.05
-    for near, far in zip(curves, curves[1:], strict=False):
+    for near, far in itertools.pairwise(curves):
         assert np.all(far <= near + 1e-12), "a wall more must not help"
     los = dict(zip(distances.tolist(), curves[0].tolist(), strict=True))
     two_walls = dict(zip(distances.tolist(), curves[2].tolist(), strict=True))
@@ -123,7 +124,7 @@ def test_a_sender_above_capacity_sees_delays_grow_then_drops() -> None:
     sent = [d for d in delays if d is not None]
     assert sent[:5] == pytest.approx([0.1, 0.15, 0.2, 0.25, 0.3])
     first_drop = delays.index(None)
-    assert all(b > a for a, b in zip(sent[:first_drop], sent[1:first_drop], strict=False))
+    assert all(b > a for a, b in itertools.pairwise(sent[:first_drop]))
     assert 15 < first_drop < 25  # the wait grows by 50 ms a message: ~1 s after ~20
     assert max(sent) <= profile.max_queue_s + 1000 / 1e4 + 1e-9
     # Below capacity nothing waits: 1000 bits every 0.2 s at 10 kbit/s.
@@ -176,5 +177,5 @@ def test_a_profile_missing_a_value_is_refused(tmp_path: Path) -> None:
 
 
 def test_an_unknown_profile_name_suggests_the_bundled_ones() -> None:
-    with pytest.raises(InputError, match="did you mean 'office-2.4ghz'"):
+    with pytest.raises(InputError, match=r"did you mean 'office-2\.4ghz'"):
         load_profile("ofice-2.4ghz")
