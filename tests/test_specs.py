@@ -163,7 +163,7 @@ def test_variants_lists_parameters_with_defaults_and_units() -> None:
     lf = {p["key"]: p for p in rows["behaviour.lf"]["parameters"]}
     assert lf["behaviour.utility"]["default"] == "original"
     assert "behaviour.collision.danger_radius" in lf  # nested parameters, dotted
-    assert rows["threshold.ssd"]["network_types"] == ["ah"]
+    assert rows["threshold.ssd"]["network_types"] == ["ah", "radio"]
     assert rows["behaviour.lf"]["uses_aon"] is True
     text = mrcomm("variants", "threshold")
     assert text.returncode == 0 and "threshold.warning_dbm" in text.stdout

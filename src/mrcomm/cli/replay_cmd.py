@@ -67,8 +67,10 @@ def print_summary(summary: RecordingSummary, console: Console) -> None:
 
     outcomes = Table(title="Message outcomes (/messages)")
     outcomes.add_column("topic")
-    for o in OUTCOMES:
+    # The radio's causes only when the recording has them.
+    shown = [o for o in OUTCOMES if any(o in c for c in summary.outcomes.values())]
+    for o in shown:
         outcomes.add_column(o.replace("_", " "), justify="right")
     for topic, counts in summary.outcomes.items():
-        outcomes.add_row(topic, *(str(counts[o]) for o in OUTCOMES))
+        outcomes.add_row(topic, *(str(counts.get(o, 0)) for o in shown))
     console.print(outcomes)
