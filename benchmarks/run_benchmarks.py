@@ -31,6 +31,8 @@ CASES: dict[str, dict[str, object]] = {
     "S1-AH-SPL50-NB-SSD": {"network": "ah", "spl": 50, "behaviour": "nb", "threshold": "ssd"},
     "S1-AH-SPL50-LF-SLT": {"network": "ah", "spl": 50, "behaviour": "lf", "threshold": "slt"},
     "S1-AH-SPL50-LF-SSD": {"network": "ah", "spl": 50, "behaviour": "lf", "threshold": "ssd"},
+    "S1-RADIO-SPL50-LF-SLT": {"network": "radio", "spl": 50, "behaviour": "lf", "threshold": "slt"},
+    "S1-RADIO-SPL50-LF-SSD": {"network": "radio", "spl": 50, "behaviour": "lf", "threshold": "ssd"},
 }
 
 
@@ -84,6 +86,18 @@ def main() -> None:
             f"\nSSD costs {100 * (1 - ssd / base):.1f} % of the no-threshold real-time factor "
             f"(ratio of medians); paired by seed: median {statistics.median(paired):.1f} %, "
             f"range {min(paired):.1f}..{max(paired):.1f} %"
+        )
+    base_lf, radio_lf = "S1-AH-SPL50-LF-SLT", "S1-RADIO-SPL50-LF-SSD"
+    if base_lf in cases and radio_lf in cases:
+        base = statistics.median(factors[base_lf])
+        radio = statistics.median(factors[radio_lf])
+        paired = [
+            100 * (1 - r / b) for b, r in zip(factors[base_lf], factors[radio_lf], strict=True)
+        ]
+        print(
+            f"\nThe radio with SSD costs {100 * (1 - radio / base):.1f} % of AH LF SLT's "
+            f"real-time factor (ratio of medians; target within 35 %); paired by seed: median "
+            f"{statistics.median(paired):.1f} %, range {min(paired):.1f}..{max(paired):.1f} %"
         )
 
 

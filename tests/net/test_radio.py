@@ -5,12 +5,15 @@ from __future__ import annotations
 
 import itertools
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 from mrcomm.errors import InputError
 from mrcomm.messaging.messages import PoseMsg, encode
+from mrcomm.net.link_sensors import MeasuredSensor
+from mrcomm.net.links import LinkModel
 from mrcomm.net.radio.channel import RadioChannel, fading_gain_db
 from mrcomm.net.radio.model import (
     RadioNetwork,
@@ -18,8 +21,9 @@ from mrcomm.net.radio.model import (
     mean_power_dbm,
     packet_error_rate,
 )
-from mrcomm.net.radio.profile import bundled_profiles, load_profile, profile_path
+from mrcomm.net.radio.profile import RadioProfile, bundled_profiles, load_profile, profile_path
 from mrcomm.net.radio.shadowing import ShadowingField
+from mrcomm.world.geometry import Pose
 from mrcomm.world.occupancy import OccupancyGrid
 
 OFFICE = load_profile("office-2.4ghz")
@@ -179,3 +183,43 @@ def test_a_profile_missing_a_value_is_refused(tmp_path: Path) -> None:
 def test_an_unknown_profile_name_suggests_the_bundled_ones() -> None:
     with pytest.raises(InputError, match=r"did you mean 'office-2\.4ghz'"):
         load_profile("ofice-2.4ghz")
+
+
+def _pulse_on_walls_grid(profile: RadioProfile) -> tuple[Any, Any, dict[str, MeasuredSensor]]:
+    """Robots a and b 6 m apart in line of sight, c 6 m from a behind the thin wall."""
+    from mrcomm.net.thresholds import NoThreshold
+    from mrcomm.run.wiring import RadioPulse
+
+    grid = _walls_grid()
+    network = RadioNetwork(profile=profile, extent=grid.extent, seed=1)
+    ids = ("a", "b", "c")
+    links = LinkModel(ids, grid, network, NoThreshold())
+    sensors = {r: MeasuredSensor(-41.0) for r in ids}
+    pulse = RadioPulse(network, sensors, ids, seed=1)
+    state = links.update([(4.5, 1.0), (4.5, 3.9), (4.5 + 6.0, 1.0)], 0.0)
+    return pulse, state, sensors
+
+
+def test_esd_readings_follow_distance_and_walls() -> None:
+    """No shadowing: what a's pulse reads of b (line of sight, 2.9 m) and of c (6 m,
+    one wall) is the mean power rounded to 1 dBm; at equal distance a wall reads lower."""
+    quiet = OFFICE.model_copy(update={"shadowing_sigma_db": 0.0, "asymmetry_db": 0.0})
+    pulse, state, sensors = _pulse_on_walls_grid(quiet)
+    pulse.step(0.0, state)
+    own = Pose(4.5, 1.0, 0.0)
+    seen_b = sensors["a"].rssi("b", own, 0, 0, 0.0)
+    seen_c = sensors["a"].rssi("c", own, 0, 0, 0.0)
+    assert seen_b == round(float(mean_power_dbm(quiet, 2.9, 0)))
+    assert seen_c == round(float(mean_power_dbm(quiet, 6.0, 1)))
+    assert seen_c < round(float(mean_power_dbm(quiet, 6.0, 0)))
+
+
+def test_a_peer_out_of_range_gives_no_reading_and_goes_stale() -> None:
+    deaf = OFFICE.model_copy(update={"shadowing_sigma_db": 0.0, "sensitivity_dbm": -45.0})
+    pulse, state, sensors = _pulse_on_walls_grid(deaf)
+    assert not state.connected[2, 0]  # c's packets do not reach a through the wall
+    pulse.step(0.0, state)
+    own = Pose(4.5, 1.0, 0.0)
+    assert sensors["a"].rssi("c", own, 0, 0, 0.0) is None
+    assert sensors["a"].rssi("b", own, 0, 0, 0.0) is not None
+    assert sensors["a"].rssi("b", own, 0, 0, 10.0) is None  # no new reading: stale

@@ -79,10 +79,35 @@ def test_message_statistics_show_radio_causes_and_delays(
     assert "dropped_radio" not in plain.messages["pose"]
 
 
-@pytest.mark.parametrize("threshold", ["slt", "ssd"])
+@pytest.mark.parametrize("threshold", ["slt", "ssd", "esd"])
 def test_lf_succeeds_on_s1_under_the_radio(s1_resources: ScenarioResources, threshold: str) -> None:
+    # ESD measures the radio: its warning level on the radio's scale (the default -41 dBm
+    # is the original robots' and is warned about, see test_esd_default_is_warned_about).
+    params = {"threshold": {"warning_dbm": -70.0}} if threshold == "esd" else {}
     for seed in (1, 2):
         result = run_mission(
-            _config(behaviour="lf", threshold=threshold, spl=25, seed=seed), s1_resources
+            _config(behaviour="lf", threshold=threshold, spl=25, seed=seed, params=params),
+            s1_resources,
         )
         assert result.mission["successful"], (threshold, seed, result.mission["failed_tasks"])
+
+
+def test_esd_on_the_radio_records_the_measured_signal(s1_resources: ScenarioResources) -> None:
+    """ESD without a trace: the robots' pulses measure the radio, and the run's 2 Hz
+    RSSI series is the radio's power as the cards report it (whole dBm)."""
+    config = _config(
+        behaviour="lf", threshold="esd", seed=3, params={"threshold": {"warning_dbm": -70.0}}
+    )
+    result = run_mission(config, s1_resources)
+    values = [v for _, _, _, v in result.rssi_series]
+    assert len(values) > 100
+    assert all(v == round(v) for v in values)
+    assert min(values) < max(values) - 10  # the signal changes as the robots move
+
+
+def test_esd_default_is_warned_about() -> None:
+    advice = _config(behaviour="lf", threshold="esd").ignored_settings()
+    assert len(advice) == 1 and "ESD warns below -41 dBm" in advice[0]
+    tuned = _config(behaviour="lf", threshold="esd", params={"threshold": {"warning_dbm": -70}})
+    assert tuned.ignored_settings() == []
+    assert _config(behaviour="lf", threshold="ssd").ignored_settings() == []

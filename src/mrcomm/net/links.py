@@ -120,7 +120,7 @@ class LinkModel:
             line_of_sight = self._sight_matrix(sight)
             if self._count_walls:
                 power = self._power(xy, pair_distance, walls)
-        pairs = PairGeometry(distance, self.layout, pair_distance, sight)
+        pairs = PairGeometry(distance, self.layout, pair_distance, sight, power)
         rssi, warning = self.threshold.evaluate(pairs, now)
         warning = warning & self._off_diagonal
         if self._expand is not None:

@@ -56,6 +56,11 @@ class NetworkModel:
         parameters."""
         return cls(params)
 
+    @classmethod
+    def advice(cls, config: Any) -> list[str]:
+        """Warnings about a run configuration with this model (one line each)."""
+        return []
+
     def channel(self, ids: Sequence[str]) -> Any:
         """The per-message part of the model for the nodes ``ids`` (a
         :class:`~mrcomm.net.radio.channel.RadioChannel`), or None when messages are

@@ -6,8 +6,10 @@ registry of :mod:`mrcomm.net.thresholds`.
   evaluated through a precomputed lookup table (never scikit-learn per step); warning
   below -42 dBm by default; ad-hoc networks only.
 * ESD — effective signal degradation: the RSSI each robot measured of each peer (its
-  pulse process on a real robot; a recorded trace replayed in simulation); warning
-  below -41 dBm by default. A pair without a reading yet never warns.
+  pulse process on a real robot; in simulation a recorded trace replayed, or — with the
+  ``radio`` network model — the modelled received power of each link, rounded to the
+  card's 1 dBm); warning below -41 dBm by default. A pair without a reading yet never
+  warns.
 """
 
 from __future__ import annotations
@@ -104,31 +106,42 @@ class EsdParams(BaseModel):
     trace: Path | None = Field(
         None,
         description="recorded RSSI trace CSV (time,from,to,rssi) replayed by the pulses; "
-        "needed in simulation",
+        "needed in simulation unless the network model is radio (then the pulses measure "
+        "the radio)",
     )
 
 
 class MeasuredThreshold(Threshold):
-    """ESD: measured RSSI replayed from a trace (time, from, to, rssi)."""
+    """ESD: measured RSSI replayed from a trace (time, from, to, rssi), or without a
+    trace the radio's received power of each link as the card reports it (1 dBm)."""
 
     name = "esd"
 
     @classmethod
     def build(cls, params: BaseModel, resources: SignalResources, ids: Sequence[str]) -> Threshold:
-        assert isinstance(params, EsdParams) and params.trace is not None
-        return cls(resources.rssi_trace(params.trace), ids, params.warning_dbm)
+        assert isinstance(params, EsdParams)
+        trace = resources.rssi_trace(params.trace) if params.trace is not None else None
+        return cls(trace, ids, params.warning_dbm)
 
     @classmethod
     def sensor(cls, params: BaseModel, resources: SignalResources) -> LinkSensor:
         assert isinstance(params, EsdParams)
         return MeasuredSensor(params.warning_dbm)
 
-    def __init__(self, trace: RssiTrace, ids: Sequence[str], warning_dbm: float = -41.0) -> None:
+    def __init__(
+        self, trace: RssiTrace | None, ids: Sequence[str], warning_dbm: float = -41.0
+    ) -> None:
         self.trace = trace
         self.ids = tuple(ids)
         self.warning_dbm = warning_dbm
 
     def evaluate(self, pairs: PairGeometry, now: float) -> tuple[FloatArray | None, BoolArray]:
+        if self.trace is None:
+            if pairs.power is None:
+                raise ValueError("ESD without a trace measures the radio: use --network radio")
+            # rssi[a, b]: what a measures of b, i.e. the power of b's packets at a.
+            rssi = np.round(pairs.power.T)
+            return rssi, rssi < self.warning_dbm  # NaN never warns
         if now > self.trace.t1 + STALE_AFTER_S:
             rssi = np.full((len(self.ids), len(self.ids)), np.nan)  # recording ended
         else:

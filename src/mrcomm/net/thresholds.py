@@ -64,6 +64,8 @@ class PairGeometry:
     layout: PairLayout
     pair_distance: list[float]
     pair_sight: list[bool] | None = None
+    #: (n, n) received power of each link, dBm, when the network model has a radio.
+    power: FloatArray | None = None
 
 
 class SignalResources(Protocol):

@@ -72,8 +72,15 @@ class RunConfig(BaseModel):
                     f"{kind} {spec.name!r} needs network "
                     f"{' or '.join(repr(n) for n in sorted(spec.network_types))}"
                 )
-        if self.threshold == "esd" and self.variant_params("threshold").trace is None:
-            raise ValueError("threshold 'esd' in simulation needs --rssi-trace CSV")
+        if (
+            self.threshold == "esd"
+            and self.variant_params("threshold").trace is None
+            and not self.spec("network").load().needs_walls
+        ):
+            raise ValueError(
+                "threshold 'esd' in simulation needs --rssi-trace CSV (or --network radio, "
+                "whose signal the pulses then measure)"
+            )
         return self
 
     def _check_params(self, kind: Kind) -> dict[str, Any]:  # only given, non-default values
@@ -113,16 +120,19 @@ class RunConfig(BaseModel):
                 )
 
     def ignored_settings(self) -> list[str]:
-        """Settings accepted that change nothing the team does, one line each (the
+        """Settings accepted that change nothing the team does, or that the network model
+        finds doubtful (a threshold on another scale than its signal), one line each (the
         commands warn about them)."""
         behaviour = self.spec("behaviour")
+        network: list[str] = self.spec("network").load().advice(self)
         if self.threshold != "none" and not behaviour.uses_threshold:
             return [
                 f"{behaviour.name.upper()} ignores the threshold ({self.threshold}): its runs "
                 "are those of --threshold none; the threshold is recorded for link "
-                "statistics only"
+                "statistics only",
+                *network,
             ]
-        return []
+        return network
 
     def label(self) -> str:
         """Short configuration label, e.g. ``AH_NB_SPL25_SSD``."""

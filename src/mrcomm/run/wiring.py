@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.net.link_sensors import MeasuredSensor
-from mrcomm.net.links import LinkModel, LinkRecorder
+from mrcomm.net.links import LinkModel, LinkRecorder, LinkState
 from mrcomm.net.network import NetworkModel
 from mrcomm.net.signal.trace import RssiTrace
 from mrcomm.net.thresholds import Threshold
@@ -79,16 +79,72 @@ def esd_trace_path(config: RunConfig) -> Path | None:
     return trace
 
 
-def build_trace_pulse(
-    config: RunConfig, resources: ScenarioResources, sensors: Mapping[str, LinkSensor]
-) -> TracePulse | None:
-    """ESD in simulation: the pulses replaying the run's RSSI trace to each robot's
-    measured sensor (None without a trace)."""
-    path = esd_trace_path(config)
-    if path is None:
+def build_pulse(
+    config: RunConfig,
+    resources: ScenarioResources,
+    sensors: Mapping[str, LinkSensor],
+    network: NetworkModel,
+) -> TracePulse | RadioPulse | None:
+    """ESD in simulation: the pulses that hand each robot's measured sensor its
+    readings — replayed from the run's RSSI trace, or measured on the radio when there
+    is no trace (None for other thresholds)."""
+    if config.threshold != "esd":
         return None
     measured = {r: s for r, s in sensors.items() if isinstance(s, MeasuredSensor)}
-    return TracePulse(resources.rssi_trace(path), measured, tuple(sensors))
+    path = esd_trace_path(config)
+    if path is not None:
+        return TracePulse(resources.rssi_trace(path), measured, tuple(sensors))
+    return RadioPulse(network, measured, tuple(sensors), config.seed)
+
+
+class RadioPulse:
+    """ESD on the radio: each robot's pulse reads, at the pulse rate (2 Hz), the power
+    at which each peer's packets reach it — the link's modelled power, plus a fast-fading
+    gain per reading when the profile has fading, rounded to the card's 1 dBm. A peer
+    out of range gives no reading (the card hears no frame of it), so its last reading
+    goes stale as on a real robot."""
+
+    period = 0.5
+
+    def __init__(
+        self,
+        network: NetworkModel,
+        sensors: dict[str, MeasuredSensor],
+        robots: Sequence[str],
+        seed: int,
+    ) -> None:
+        profile = getattr(network, "profile", None)
+        self.network = network
+        self.sensors = sensors
+        self.robots = tuple(robots)
+        self._next = 0.0
+        self._fading = profile is not None and profile.fading != "none"
+        self._k_db = profile.rician_k_db if profile is not None else None
+        self._rngs = {r: stream(seed, "radio", "pulse", r) for r in self.robots}
+
+    def step(self, now: float, links: LinkState) -> None:
+        if now < self._next or links.power is None:
+            return
+        self._next = now + self.period
+        from mrcomm.net.radio.channel import fading_gain_db
+
+        index = {node: i for i, node in enumerate(links.ids)}
+        power, connected = links.power, links.connected
+        sight = links.line_of_sight
+        for robot in self.robots:
+            sensor = self.sensors.get(robot)
+            if sensor is None:
+                continue
+            r = index[robot]
+            for peer in self.robots:
+                p = index[peer]
+                if p == r or not connected[p, r]:
+                    continue
+                value = float(power[p, r])
+                if self._fading:
+                    k_db = self._k_db if sight is None or sight[p, r] else None
+                    value += fading_gain_db(self._rngs[robot], k_db)
+                sensor.update(peer, float(round(value)), now)
 
 
 class TracePulse:
@@ -105,7 +161,7 @@ class TracePulse:
         self.robots = tuple(robots)
         self._next = 0.0
 
-    def step(self, now: float) -> None:
+    def step(self, now: float, links: LinkState | None = None) -> None:
         if now < self._next:
             return
         self._next = now + self.period

@@ -31,7 +31,7 @@ from mrcomm.run.result import MissionResult
 from mrcomm.run.wiring import (
     build_executor,
     build_link_sensor,
-    build_trace_pulse,
+    build_pulse,
     make_bases,
     make_links,
 )
@@ -61,7 +61,7 @@ class Mission:
         ranks = stream(seed, "tie-break").permutation(len(self.robot_ids))
         rank_of = {rid: float(ranks[i]) for i, rid in enumerate(self.robot_ids)}
         self.sensors = {rid: build_link_sensor(config, self.resources) for rid in self.robot_ids}
-        self.pulse = build_trace_pulse(config, self.resources, self.sensors)
+        self.pulse = build_pulse(config, self.resources, self.sensors, self.links.network)
         self.executors: dict[str, TaskExecutor] = {
             rid: build_executor(
                 config,
@@ -115,7 +115,7 @@ class Mission:
             executor.set_time(now)
         self.network.deliver(now)
         if self.pulse is not None:
-            self.pulse.step(now)
+            self.pulse.step(now, links)
         self.assigner.step(now)
         for executor in self.executors.values():
             executor.step(now)

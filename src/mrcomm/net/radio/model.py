@@ -37,6 +37,12 @@ REFERENCE_DISTANCE_M = 1.0
 REACH_MARGIN_SIGMAS = 4.0
 
 
+#: Below this line-of-sight distance an ESD warning level is doubtful (the AH limit).
+ESD_ADVICE_M = 8.0
+#: A warning level on the bundled office profile's scale: mean power ~20 m away.
+ESD_RADIO_WARNING_DBM = -70.0
+
+
 class RadioParams(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
@@ -121,6 +127,25 @@ class RadioNetwork(NetworkModel):
         if not isinstance(params, RadioParams):
             params = RadioParams.model_validate({})
         return cls(params, extent=resources.scenario.grid.extent, seed=seed)
+
+    @classmethod
+    def advice(cls, config: Any) -> list[str]:
+        """ESD measures this radio: a warning level the radio passes within a few metres
+        (the original robots' -41 dBm) would keep an LF team huddled together."""
+        if config.threshold != "esd":
+            return []
+        warning = float(config.variant_params("threshold").warning_dbm)
+        params = config.variant_params("network")
+        profile = load_profile(params.profile)
+        budget = profile.tx_power_dbm - profile.reference_loss_db - warning
+        reach = REFERENCE_DISTANCE_M * 10.0 ** (max(budget, 0.0) / (10.0 * profile.exponent))
+        if reach >= ESD_ADVICE_M:
+            return []
+        return [
+            f"ESD warns below {warning:g} dBm, which the radio ({profile.name}) passes "
+            f"{reach:.1f} m away in line of sight: set threshold.warning_dbm to this "
+            f"radio's scale (e.g. {ESD_RADIO_WARNING_DBM:g})"
+        ]
 
     def offsets(self, n: int) -> FloatArray:
         """The fixed per-direction offsets of n nodes, dB ((n, n), antisymmetric so the
