@@ -10,6 +10,7 @@ case and tree, and the ratio new/old.
 
     git worktree add /tmp/mrcomm-old <commit>
     .venv/bin/python benchmarks/compare_versions.py --old /tmp/mrcomm-old --rounds 7
+        [--old-python /tmp/oldvenv/bin/python]
 """
 
 from __future__ import annotations
@@ -55,11 +56,13 @@ print(json.dumps(out))
 """
 
 
-def measure(tree: Path, seeds: list[int]) -> list[dict[str, float | str]]:
+def measure(
+    tree: Path, seeds: list[int], python: str = sys.executable
+) -> list[dict[str, float | str]]:
     env = {**os.environ, "PYTHONPATH": str(tree / "src")}
     scenario = str(ROOT / "data" / "scenarios" / "s1.yaml")
     done = subprocess.run(
-        [sys.executable, "-c", _PROBE, json.dumps(CASES), json.dumps(seeds), scenario],
+        [python, "-c", _PROBE, json.dumps(CASES), json.dumps(seeds), scenario],
         env=env,
         capture_output=True,
         text=True,
@@ -73,6 +76,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--old", type=Path, required=True, help="source tree of the old version")
     parser.add_argument("--new", type=Path, default=ROOT, help="source tree of the new version")
+    parser.add_argument(
+        "--old-python",
+        default=sys.executable,
+        help="interpreter for the old tree (a venv with the old version installed, when the "
+        "two register different variants)",
+    )
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--seeds", type=int, default=2, help="missions per case and round")
     args = parser.parse_args()
@@ -83,7 +92,10 @@ def main() -> None:
         seeds = [k * args.seeds + s + 1 for s in range(args.seeds)]
         order = ("old", "new") if k % 2 == 0 else ("new", "old")
         for which in order:
-            runs[which] += measure(args.old if which == "old" else args.new, seeds)
+            if which == "old":
+                runs[which] += measure(args.old, seeds, args.old_python)
+            else:
+                runs[which] += measure(args.new, seeds)
     uptime = subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
     print(f"after:  {uptime}")
     print()

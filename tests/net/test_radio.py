@@ -46,6 +46,17 @@ def test_walls_are_counted_once_each_however_thick() -> None:
     assert grid.walls_between(7.0, 2.0, 15.0, 3.0) == 1  # the thick wall alone
 
 
+def test_a_ray_grazing_along_a_wall_crosses_one_wall() -> None:
+    """A diagonal wall drawn as a staircase of cells: a ray along it steps in and out of
+    its cells, which is one wall, not one per step."""
+    occ = np.zeros((200, 200), dtype=np.bool_)
+    for i in range(20, 180):
+        occ[i, i] = True  # the diagonal y = x, one cell thick
+    grid = OccupancyGrid(occ, 0.05)
+    assert grid.walls_between(1.0, 1.02, 8.9, 8.93) == 1
+    assert grid.walls_between(2.0, 6.0, 6.0, 2.0) == 1  # straight across it
+
+
 def test_bundled_profiles_load() -> None:
     assert {"office-2.4ghz", "corridor-los", "outdoor"} <= set(bundled_profiles())
     for name in bundled_profiles():

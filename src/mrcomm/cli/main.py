@@ -57,7 +57,9 @@ COMMANDS: dict[str, Command] = {
     "pulse": Command(_CLI + "pulse_cmd", "pulse", "ESD pulse: publish the measured RSSI"),
     "signal": Command(_CLI + "signal_cmd", "signal_app", "SSD signal models: fit, show, plot"),
     "radio": Command(
-        _CLI + "radio_cmd", "radio_app", "Radio profiles of the radio network model: list, show"
+        _CLI + "radio_cmd",
+        "radio_app",
+        "Radio profiles of the radio network model: list, show, plot",
     ),
     "fsm": Command(_CLI + "fsm_cmd", "fsm", "Write a behaviour's state machine as a diagram"),
     "variants": Command(

@@ -148,23 +148,32 @@ class OccupancyGrid:
         cells = abs(end_x - ix) + abs(end_y - iy) + 1
         return iy * width + ix, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy
 
-    def walls_between(self, x0: float, y0: float, x1: float, y1: float) -> int:
+    def walls_between(
+        self, x0: float, y0: float, x1: float, y1: float, min_gap: float = 0.3
+    ) -> int:
         """How many walls the straight segment crosses: the runs of occupied cells it
-        passes through (a wall several cells thick is one wall), by the same exact
-        traversal as :meth:`line_of_sight`. Ends off the map or on its outermost cells
-        count as one wall (the map says nothing about what lies there)."""
+        passes through, by the same exact traversal as :meth:`line_of_sight`. A wall
+        several cells thick is one wall, and so are occupied runs separated by less than
+        ``min_gap`` metres of free cells (a ray grazing along a wall steps in and out of
+        its cells: that is one wall, not dozens). Ends off the map or on its outermost
+        cells count as one wall (the map says nothing about what lies there)."""
         ray = self._ray(x0, y0, x1, y1)
         if ray is None:
             return 1
         k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy = ray
         clear = self._clearances()
+        # Cells visited, not metres: a diagonal step covers up to √2 cells' width; count
+        # the gap in cells of the shorter kind (conservative: gaps merge sooner).
+        gap_cells = max(1, math.ceil(min_gap / self.resolution))
         walls = 0
-        inside = False
+        free_run = gap_cells  # before the first wall: any run starts a wall
         for _ in range(cells):
-            occupied = clear[k] == 0.0
-            if occupied and not inside:
-                walls += 1
-            inside = occupied
+            if clear[k] == 0.0:
+                if free_run >= gap_cells:
+                    walls += 1
+                free_run = 0
+            else:
+                free_run += 1
             if t_max_x < t_max_y:
                 k += step_x
                 t_max_x += t_dx
