@@ -101,6 +101,26 @@ def test_only_non_default_parameters_are_kept_and_legacy_options_fold_in() -> No
     assert plain == explicit
 
 
+def test_a_section_named_after_a_variant_applies_to_that_variant_only() -> None:
+    """``threshold.esd.warning_dbm``: ESD runs get it, SLT runs of the same study do not
+    (and stay the configuration they were); a typo in it is an error in any run."""
+    scoped = {"threshold": {"esd": {"warning_dbm": -70.0}, "slt": {"warning_m": 3.0}}}
+    esd = make_config(None, scenario=S1_PATH, network="radio", threshold="esd", params=scoped)
+    slt = make_config(None, scenario=S1_PATH, network="radio", threshold="slt", params=scoped)
+    assert esd.params == {"threshold": {"warning_dbm": -70.0}}
+    assert slt.params == {"threshold": {"warning_m": 3.0}}
+    ssd = make_config(None, scenario=S1_PATH, network="radio", threshold="ssd", params=scoped)
+    assert ssd == make_config(None, scenario=S1_PATH, network="radio", threshold="ssd")
+    with pytest.raises(InputError, match="warning_dbn"):
+        make_config(
+            None,
+            scenario=S1_PATH,
+            threshold="slt",
+            network="ah",
+            params={"threshold": {"esd": {"warning_dbn": -70.0}}},
+        )
+
+
 def test_parameters_reach_the_variants(s1_resources: Any) -> None:
     """The AH range and the SLT warning distance set as parameters change the run."""
     base = {"scenario": S1_PATH, "network": "ah", "threshold": "slt", "seed": 3, "max_time": 120}

@@ -42,6 +42,17 @@ def test_ah_set_runs_nb_once() -> None:
     assert len(ah.runs()) == 360
 
 
+def test_radio_set_sets_esd_on_the_radios_scale() -> None:
+    """The radio set: SSD and ESD with NB and LF, NB once; ESD's warning level (a
+    parameter scoped to ESD) reaches the ESD configurations only."""
+    radio = load_experiment(EXPERIMENTS / "radio.yaml")
+    configs = {c.label: c.config for c in radio.configurations}
+    assert len(configs) == 9 and len(radio.runs()) == 270
+    assert configs["RADIO_LF_SPL25_ESD"].variant_params("threshold").warning_dbm == -70.0
+    assert configs["RADIO_LF_SPL25_SSD"].variant_params("threshold").warning_dbm == -42.0
+    assert not any(label.startswith("RADIO_NB") and label.endswith("ESD") for label in configs)
+
+
 def test_runs_ids_and_seeds(tmp_path: Path) -> None:
     exp = load_experiment(write_schema(tmp_path))
     runs = exp.runs()

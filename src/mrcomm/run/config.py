@@ -18,7 +18,7 @@ from typing import Any
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from mrcomm.errors import InputError, did_you_mean
-from mrcomm.specs import Kind, VariantSpec, get_spec
+from mrcomm.specs import Kind, VariantSpec, get_spec, variant_names
 
 #: The kinds a run chooses one variant of, in the order of its label.
 RUN_KINDS: tuple[Kind, ...] = ("network", "behaviour", "threshold")
@@ -85,7 +85,18 @@ class RunConfig(BaseModel):
 
     def _check_params(self, kind: Kind) -> dict[str, Any]:  # only given, non-default values
         spec = self.spec(kind)
-        model = spec.make_params(self.params.get(kind, {}))
+        given = dict(self.params.get(kind, {}))
+        # A section named after a variant of this kind holds parameters of that variant
+        # only (``threshold.esd.warning_dbm``): a study sweeping thresholds can set ESD's
+        # warning level without giving SLT a key it does not have.
+        for name in variant_names(kind):
+            scoped = given.get(name)
+            if isinstance(scoped, dict):
+                del given[name]
+                get_spec(kind, name).make_params(scoped)  # a typo is an error in any run
+                if name == spec.name:
+                    given.update(scoped)
+        model = spec.make_params(given)
         dumped: dict[str, Any] = model.model_dump(mode="json", exclude_defaults=True)
         return dumped
 
