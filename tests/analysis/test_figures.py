@@ -210,12 +210,37 @@ def test_rssi_figure_one_curve_per_pair_with_warning() -> None:
         for s, d in (("robot_1", "robot_2"), ("robot_2", "robot_1"))
     ]
     rssi = pd.DataFrame(rows, columns=["run_id", "t", "src", "dst", "rssi"])
-    fig = FT.rssi_figure(rssi, runs, ["a", "b"])
+    fig = FT.rssi_figure(rssi, runs, ["a", "b"], {"a": -42.0, "b": -41.0})
     first, second = fig.axes[0], fig.axes[1]
     curves = [line for line in first.lines if len(line.get_xdata()) > 2]
     assert len(curves) == 1 and len(curves[0].get_xdata()) == len(t)
     assert [line.get_ydata()[0] for line in first.lines if len(line.get_xdata()) == 2] == [-42.0]
     assert [line.get_ydata()[0] for line in second.lines if len(line.get_xdata()) == 2] == [-41.0]
+
+
+def test_warning_levels_are_each_runs_own() -> None:
+    """A run's warning line is the level it ran with: a parameter of its configuration,
+    else its threshold's default; thresholds without an RSSI level have none."""
+    from mrcomm.analysis.figures_report import warning_levels
+
+    runs = pd.DataFrame(
+        {
+            "run_id": ["r1", "r2", "r3"],
+            "config_id": ["c1", "c2", "c3"],
+            "threshold": ["esd", "ssd", "slt"],
+        }
+    )
+    configs = pd.DataFrame(
+        {
+            "config_id": ["c1", "c2", "c3"],
+            "options": [
+                '{"params": {"threshold": {"warning_dbm": -70.0}}}',
+                '{"params": {}}',
+                '{"params": {"threshold": {"warning_m": 3.0}}}',
+            ],
+        }
+    )
+    assert warning_levels(runs, configs) == {"r1": -70.0, "r2": -42.0}
 
 
 def test_figures_of_a_real_study_render(study: Any, tmp_path: Any) -> None:
@@ -253,7 +278,11 @@ def test_rssi_of_a_real_ssd_mission(s1_resources: Any) -> None:
     )
     run_id = str(frames.runs["run_id"].iloc[0])
     assert not frames.rssi.empty
-    fig = FT.rssi_figure(frames.rssi, frames.runs, [run_id])
+    from mrcomm.analysis.figures_report import warning_levels
+
+    levels = warning_levels(frames.runs, frames.configs)
+    assert levels == {run_id: -42.0}
+    fig = FT.rssi_figure(frames.rssi, frames.runs, [run_id], levels)
     ax = fig.axes[0]
     curves = [line for line in ax.lines if len(line.get_xdata()) > 2]
     assert len(curves) == 3  # robot pairs of a team of three, one curve each

@@ -254,7 +254,9 @@ def _draw_figures(
                 "rssi",
                 "Signal strength over time",
                 "RSSI of every robot pair" + (" (SSD vs ESD)." if len(rssi_runs) > 1 else "."),
-                figures_time.rssi_figure(rssi, runs, rssi_runs),
+                figures_time.rssi_figure(
+                    rssi, runs, rssi_runs, warning_levels(runs, frame_of(data, "configs"))
+                ),
                 encoder,
             )
         )
@@ -336,6 +338,34 @@ def _communication_figures(
                     encoder,
                 )
             )
+
+
+def warning_levels(runs: pd.DataFrame, configs: pd.DataFrame) -> dict[str, float]:
+    """run id -> the RSSI warning level (dBm) its threshold had: the configuration's
+    ``warning_dbm`` parameter, or the threshold's default (runs of thresholds without
+    one are left out)."""
+    from mrcomm.errors import InputError
+    from mrcomm.specs import get_spec
+
+    options = {}
+    for record in configs.to_dict("records"):
+        try:
+            options[str(record["config_id"])] = json.loads(str(record.get("options") or "{}"))
+        except ValueError:
+            continue
+    levels: dict[str, float] = {}
+    for run in runs[["run_id", "config_id", "threshold"]].to_dict("records"):
+        given = options.get(str(run["config_id"]), {}).get("params", {}).get("threshold", {})
+        if "warning_dbm" in given:
+            levels[str(run["run_id"])] = float(given["warning_dbm"])
+            continue
+        try:
+            field = get_spec("threshold", str(run["threshold"])).params_model().model_fields
+        except InputError:
+            continue  # a threshold of a plugin not installed here
+        if "warning_dbm" in field:
+            levels[str(run["run_id"])] = float(field["warning_dbm"].default)
+    return levels
 
 
 def _scenarios(configs: pd.DataFrame) -> dict[str, Any]:

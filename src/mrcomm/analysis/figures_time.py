@@ -73,7 +73,6 @@ EVENT_MARKERS: dict[str, tuple[str, str]] = {
     L.DISCONNECT_DETECTED: ("v", "black"),
 }
 #: Warning thresholds drawn on the RSSI figure (the SSD and ESD defaults).
-RSSI_WARNING = {"ssd": -42.0, "esd": -41.0}
 
 
 def _col(frame: pd.DataFrame, name: str) -> np.ndarray:
@@ -212,9 +211,15 @@ def _label_colour(label: str, seen: dict[str, str]) -> str:
     return seen[label]
 
 
-def rssi_figure(rssi: pd.DataFrame, runs: pd.DataFrame, run_ids: Sequence[str]) -> Figure:
+def rssi_figure(
+    rssi: pd.DataFrame,
+    runs: pd.DataFrame,
+    run_ids: Sequence[str],
+    warnings: dict[str, float] | None = None,
+) -> Figure:
     """RSSI of every robot pair over time, one panel per run (e.g. SSD next to ESD),
-    with the run's warning threshold."""
+    with the run's warning level (``warnings``: run id -> dBm, as the run had it)."""
+    warnings = warnings or {}
     info = runs.set_index("run_id")
     fig, axes = panel_grid(len(run_ids), width=6.0, height=3.6, ncols=min(len(run_ids), 2))
     for ax, run_id in zip(axes.flat, run_ids, strict=False):
@@ -228,14 +233,13 @@ def rssi_figure(rssi: pd.DataFrame, runs: pd.DataFrame, run_ids: Sequence[str]) 
         for (a, b), group in pairs.groupby(["a", "b"]):
             group = group.sort_values("t")
             ax.plot(group["t"], group["rssi"], lw=0.9, label=f"{a}–{b}")
-        threshold = str(info.loc[run_id, "threshold"]) if run_id in info.index else ""
-        if threshold in RSSI_WARNING:
+        if run_id in warnings:
             ax.axhline(
-                RSSI_WARNING[threshold],
+                warnings[run_id],
                 color="firebrick",
                 ls="--",
                 lw=1,
-                label=f"warning {RSSI_WARNING[threshold]:g} dBm",
+                label=f"warning {warnings[run_id]:g} dBm",
             )
         label = info.loc[run_id, "label"] if run_id in info.index else run_id
         ax.set_title(f"{label} ({run_id})", fontsize=10)
