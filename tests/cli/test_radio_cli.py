@@ -4,27 +4,12 @@ exit status 2 with a one-line error on bad input, nothing written on error."""
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
-import pytest
-
-from mrcomm.cli.main import app
 from mrcomm.net.radio.profile import profile_path
+from tests.cli.test_signal_cli import mrcomm
 
 S1 = Path(__file__).parents[2] / "data" / "scenarios" / "s1.yaml"
-
-
-def mrcomm(
-    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], *args: str
-) -> tuple[int, str, str]:
-    """Run the console entry point in-process: (exit status, stdout, stderr)."""
-    monkeypatch.setattr(sys, "argv", ["mrcomm", *args])
-    with pytest.raises(SystemExit) as done:
-        app()
-    out, err = capsys.readouterr()
-    code = done.value.code
-    return (code if isinstance(code, int) else 0), out, err
 
 
 def test_list_names_every_bundled_profile(monkeypatch, capsys) -> None:  # type: ignore[no-untyped-def]

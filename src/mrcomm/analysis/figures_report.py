@@ -340,6 +340,18 @@ def _communication_figures(
             )
 
 
+def config_options(configs: pd.DataFrame) -> dict[str, dict[str, Any]]:
+    """config_id -> its stored options (the run configuration as JSON; an unreadable
+    one is left out)."""
+    out: dict[str, dict[str, Any]] = {}
+    for record in configs.to_dict("records"):
+        try:
+            out[str(record["config_id"])] = json.loads(str(record.get("options") or "{}"))
+        except ValueError:
+            continue
+    return out
+
+
 def warning_levels(runs: pd.DataFrame, configs: pd.DataFrame) -> dict[str, float]:
     """run id -> the RSSI warning level (dBm) its threshold had: the configuration's
     ``warning_dbm`` parameter, or the threshold's default (runs of thresholds without
@@ -347,12 +359,7 @@ def warning_levels(runs: pd.DataFrame, configs: pd.DataFrame) -> dict[str, float
     from mrcomm.errors import InputError
     from mrcomm.specs import get_spec
 
-    options = {}
-    for record in configs.to_dict("records"):
-        try:
-            options[str(record["config_id"])] = json.loads(str(record.get("options") or "{}"))
-        except ValueError:
-            continue
+    options = config_options(configs)
     levels: dict[str, float] = {}
     for run in runs[["run_id", "config_id", "threshold"]].to_dict("records"):
         given = options.get(str(run["config_id"]), {}).get("params", {}).get("threshold", {})
@@ -376,16 +383,13 @@ def _scenarios(configs: pd.DataFrame) -> dict[str, Any]:
 
     loaded: dict[str, Any] = {}
     out: dict[str, Any] = {}
-    for record in configs.to_dict("records"):
-        try:
-            path = str(json.loads(str(record.get("options") or "{}")).get("scenario", ""))
-        except ValueError:
-            continue
+    for config_id, options in config_options(configs).items():
+        path = str(options.get("scenario", ""))
         if path and path not in loaded:
             try:
                 loaded[path] = load_scenario(path)
             except (InputError, OSError):
                 loaded[path] = None
         if loaded.get(path) is not None:
-            out[str(record["config_id"])] = loaded[path]
+            out[config_id] = loaded[path]
     return out

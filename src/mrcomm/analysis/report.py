@@ -38,7 +38,7 @@ from mrcomm.analysis.inference import Correction
 from mrcomm.errors import InputError
 from mrcomm.experiment.tables import RUN_MODES
 from mrcomm.fileio import atomic_write_bytes
-from mrcomm.net.delivery import COUNT_KEYS, DROP_CAUSES, RADIO_COUNT_KEYS
+from mrcomm.net.delivery import DROP_CAUSES, RADIO_COUNT_KEYS, count_keys
 
 TABLE_TITLES = {
     "comparisons": "Mann-Whitney U, SPL0 vs SPLX (one-sided; p corrected across the table)",
@@ -370,7 +370,7 @@ def provenance_rows(runs: pd.DataFrame) -> list[list[str]]:
 def _count_keys(table: pd.DataFrame) -> list[str]:
     """The count columns to show: the radio's only when some run had a radio."""
     radio = not table.empty and bool(table[list(RADIO_COUNT_KEYS)].to_numpy().sum() > 0)
-    return [k for k in COUNT_KEYS if radio or k not in RADIO_COUNT_KEYS]
+    return count_keys(radio)
 
 
 def _message_columns(runs: pd.DataFrame, messages: pd.DataFrame) -> list[str]:

@@ -21,9 +21,11 @@ from mrcomm.cli.db_option import (
 from mrcomm.cli.display import fmt
 from mrcomm.cli.run_options import warn_ignored_settings, with_run_options
 from mrcomm.fileio import atomic_write
+from mrcomm.metrics.compute import LF_TOTALS
 from mrcomm.metrics.units import unit_of
-from mrcomm.net.delivery import COUNT_KEYS, DELAY_KEYS, DROP_CAUSES, RADIO_COUNT_KEYS
+from mrcomm.net.delivery import DELAY_KEYS, DROP_CAUSES, count_keys, has_radio_counts
 from mrcomm.output_paths import FIGURE_SUFFIXES, RECORDING_SUFFIXES, check_output_file
+from mrcomm.run.assemble import AON_TOTAL_KEYS
 from mrcomm.run.result import MissionResult
 from mrcomm.sim.mission import run_mission
 
@@ -133,25 +135,8 @@ _ROBOT_KEYS = (
     "min_separation",
     "max_separation",
 )
-_LF_KEYS = (
-    "na_movement_time",
-    "leader_movement_time",
-    "follower_movement_time",
-    "leader_disconnect_time",
-    "follower_waiting_time",
-    "role_assignment_time",
-    "switching_time",
-)
-_AON_KEYS = (
-    "statuses_sent",
-    "publications",
-    "resend_publications",
-    "replies",
-    "restarts",
-    "pending",
-    "left_out_reports",
-    "max_finish_time",
-)
+_LF_KEYS = LF_TOTALS
+_AON_KEYS = ("statuses_sent", *AON_TOTAL_KEYS, "max_finish_time")
 
 
 def _named(key: str) -> str:
@@ -212,8 +197,8 @@ def print_result(result: MissionResult, console: Console) -> None:
 
     _print_links(result, console)
 
-    radio = any(RADIO_COUNT_KEYS[0] in c for c in result.messages.values())
-    keys = [k for k in COUNT_KEYS if radio or k not in RADIO_COUNT_KEYS]
+    radio = has_radio_counts(result.messages.values())
+    keys = count_keys(radio)
     drops = [k for k in keys if k in DROP_CAUSES]
     headers = ["topic", "sent", "received", *(DROP_CAUSES[k] for k in drops), "not received %"]
     if radio:

@@ -31,7 +31,7 @@ from mrcomm.errors import InputError
 from mrcomm.live.protocol import WORLD_ID
 from mrcomm.messaging.aon_state import AON_COUNTERS
 from mrcomm.metrics.timeline import Event, Interval, Timeline
-from mrcomm.net.delivery import COUNT_KEYS, RADIO_COUNT_KEYS
+from mrcomm.net.delivery import count_keys
 from mrcomm.run.assemble import AonAgentFacts, RobotTruth, RunFacts, assemble
 from mrcomm.run.config import make_config
 from mrcomm.run.result import MissionResult
@@ -223,7 +223,7 @@ def _counts_by_agent(journals: list[JournalData]) -> dict[str, dict[str, dict[st
             mine = out.setdefault(agent, {})
             for topic, counts in topics.items():
                 # Live mode has no radio: its causes are never counted.
-                t = mine.setdefault(topic, {k: 0 for k in COUNT_KEYS if k not in RADIO_COUNT_KEYS})
+                t = mine.setdefault(topic, dict.fromkeys(count_keys(radio=False), 0))
                 for key in t:
                     t[key] += int(counts.get(key, 0))
     return {a: dict(sorted(t.items())) for a, t in sorted(out.items())}

@@ -20,7 +20,7 @@ The in-process bus (simulation) and the Zenoh bus (live mode) both call
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,6 +48,17 @@ COUNT_KEYS = ("sent", *OUTCOMES)
 RADIO_COUNT_KEYS = (DROPPED_RADIO, DROPPED_QUEUE)
 #: The radio's delay statistics of the received messages.
 DELAY_KEYS = ("delay_mean_s", "delay_max_s")
+
+
+def count_keys(radio: bool) -> list[str]:
+    """The count keys a run's results have: the radio's only when it had a radio."""
+    return [key for key in COUNT_KEYS if radio or key not in RADIO_COUNT_KEYS]
+
+
+def has_radio_counts(counts: Iterable[Mapping[str, float]]) -> bool:
+    """Whether per-topic counts come from a run with a radio (they carry its causes)."""
+    return any(key in c for c in counts for key in RADIO_COUNT_KEYS)
+
 
 _UNIFORM_BATCH = 1024
 
@@ -102,9 +113,7 @@ class TopicCounts:
     def as_dict(self, radio: bool = False) -> dict[str, int]:
         """The counts (:data:`COUNT_KEYS`; without a ``radio``, none of
         :data:`RADIO_COUNT_KEYS`, which are then always 0)."""
-        return {
-            key: getattr(self, key) for key in COUNT_KEYS if radio or key not in RADIO_COUNT_KEYS
-        }
+        return {key: getattr(self, key) for key in count_keys(radio)}
 
     def delays(self) -> dict[str, float]:
         """Mean and largest radio delay of the received messages, s."""

@@ -120,10 +120,13 @@ class InProcessNetwork:
             if not receivers:
                 continue
             links = self._connected[sender]
+            # Per message, not per receiver: lost to the sender's queue, and its delay.
+            queued_out = delay is None and not exempt(topic)
+            delay_s = delay or 0.0
             for receiver, handlers in receivers.items():
                 if receiver == sender:
                     continue
-                if delay is None and not exempt(topic):
+                if queued_out:
                     outcome = DROPPED_QUEUE
                 else:
                     per = (
@@ -132,7 +135,7 @@ class InProcessNetwork:
                         else 0.0
                     )
                     outcome = decide(topic, links[receiver], streams[receiver], per)
-                self._count(receiver, topic).count(outcome, delay or 0.0)
+                self._count(receiver, topic).count(outcome, delay_s)
                 if self.observer is not None:
                     self.observer(
                         now, topic, self.ids[sender], self.ids[receiver], message, outcome

@@ -17,7 +17,7 @@ from typing import Any
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robot_metrics
 from mrcomm.metrics.timeline import Timeline
-from mrcomm.net.delivery import COUNT_KEYS, RADIO_COUNT_KEYS
+from mrcomm.net.delivery import count_keys, has_radio_counts
 from mrcomm.run.config import RunConfig
 from mrcomm.run.result import MissionResult
 from mrcomm.world.scenario import Scenario
@@ -150,8 +150,8 @@ def sum_counts(
     largest delay of the messages received)."""
     per_agent = list(per_agent)
     # The radio's causes appear only in runs with a radio (present in the agents' counts).
-    radio = any(RADIO_COUNT_KEYS[0] in c for counts in per_agent for c in counts.values())
-    keys = [k for k in COUNT_KEYS if radio or k not in RADIO_COUNT_KEYS]
+    radio = has_radio_counts(c for counts in per_agent for c in counts.values())
+    keys = count_keys(radio)
     totals: dict[str, dict[str, Any]] = {}
     for counts in per_agent:
         for topic, c in counts.items():

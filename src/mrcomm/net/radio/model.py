@@ -22,8 +22,10 @@ from pydantic import BaseModel, ConfigDict, Field
 from scipy.special import erfc
 
 from mrcomm.net.network import NetworkModel
+from mrcomm.net.radio.channel import RadioChannel, fading_gain_db
 from mrcomm.net.radio.profile import DEFAULT_PROFILE, RadioProfile, load_profile, profile_path
 from mrcomm.net.radio.shadowing import ShadowingField
+from mrcomm.net.signal.pathloss import log_distance_range, log_distance_rssi
 from mrcomm.seeding import stream
 from mrcomm.specs import VariantSpec
 
@@ -57,15 +59,24 @@ class RadioParams(BaseModel):
         return {"profile": profile_path(self.profile)}
 
 
+def _loss_at_1m(profile: RadioProfile) -> float:
+    """The log-distance model's A: minus the power received at the 1 m reference."""
+    return profile.reference_loss_db - profile.tx_power_dbm
+
+
 def mean_power_dbm(profile: RadioProfile, distance: ArrayLike, walls: ArrayLike) -> FloatArray:
-    """Mean received power without shadowing, dBm."""
+    """Mean received power without shadowing, dBm: the log-distance law (distances
+    below the 1 m reference count as 1 m) less the walls' loss."""
     d = np.maximum(np.asarray(distance, dtype=np.float64), REFERENCE_DISTANCE_M)
-    return np.asarray(
-        profile.tx_power_dbm
-        - profile.reference_loss_db
-        - 10.0 * profile.exponent * np.log10(d / REFERENCE_DISTANCE_M)
-        - profile.wall_loss_db * np.asarray(walls, dtype=np.float64)
-    )
+    line_of_sight = log_distance_rssi(d, _loss_at_1m(profile), profile.exponent)
+    return np.asarray(line_of_sight - profile.wall_loss_db * np.asarray(walls, dtype=np.float64))
+
+
+def line_of_sight_distance(profile: RadioProfile, power_dbm: float) -> float:
+    """How far away (m, at least the 1 m reference) the mean power in line of sight
+    falls to ``power_dbm``."""
+    d = float(log_distance_range(power_dbm, _loss_at_1m(profile), profile.exponent))
+    return max(d, REFERENCE_DISTANCE_M)
 
 
 def bit_error_rate(profile: RadioProfile, power_dbm: FloatArray | float) -> FloatArray:
@@ -83,13 +94,8 @@ def packet_error_rate(ber: FloatArray | float, bits: FloatArray | float) -> Floa
 def reach_m(profile: RadioProfile) -> float:
     """Distance beyond which even a line-of-sight link with a 4σ shadowing gain is
     below the sensitivity."""
-    budget = (
-        profile.tx_power_dbm
-        - profile.reference_loss_db
-        + REACH_MARGIN_SIGMAS * (profile.shadowing_sigma_db + profile.asymmetry_db)
-        - profile.sensitivity_dbm
-    )
-    return REFERENCE_DISTANCE_M * 10.0 ** (max(budget, 0.0) / (10.0 * profile.exponent))
+    margin = REACH_MARGIN_SIGMAS * (profile.shadowing_sigma_db + profile.asymmetry_db)
+    return line_of_sight_distance(profile, profile.sensitivity_dbm - margin)
 
 
 class RadioNetwork(NetworkModel):
@@ -124,8 +130,6 @@ class RadioNetwork(NetworkModel):
     def build(cls, params: BaseModel, resources: Any, seed: int) -> RadioNetwork:
         """The run's radio: its profile, and a shadowing field over the scenario's map
         drawn from the run's seed."""
-        if not isinstance(params, RadioParams):
-            params = RadioParams.model_validate({})
         return cls(params, extent=resources.scenario.grid.extent, seed=seed)
 
     @classmethod
@@ -137,8 +141,7 @@ class RadioNetwork(NetworkModel):
         warning = float(config.variant_params("threshold").warning_dbm)
         params = config.variant_params("network")
         profile = load_profile(params.profile)
-        budget = profile.tx_power_dbm - profile.reference_loss_db - warning
-        reach = REFERENCE_DISTANCE_M * 10.0 ** (max(budget, 0.0) / (10.0 * profile.exponent))
+        reach = line_of_sight_distance(profile, warning)
         if reach >= ESD_ADVICE_M:
             return []
         return [
@@ -186,8 +189,6 @@ class RadioNetwork(NetworkModel):
         return out
 
     def channel(self, ids: Sequence[str]) -> Any:
-        from mrcomm.net.radio.channel import RadioChannel
-
         rngs = {a: stream(self.seed, "radio", "fading", a) for a in ids}
         return RadioChannel(self.profile, ids, rngs)
 
@@ -235,8 +236,6 @@ def delivery_ratio(
     ``distance`` through ``walls`` walls: in range and free of packet error, averaged
     over the shadowing (and the per-direction offset and fast fading, where the profile
     has them)."""
-    from mrcomm.net.radio.channel import fading_gain_db
-
     d = np.asarray(distance, dtype=np.float64)
     nodes, weights = _NODES, _WEIGHTS
     if profile.fading != "none":  # fading smooths the curve: a coarser grid will do
