@@ -165,7 +165,7 @@ def test_live_esd_needs_a_trace(tmp_path: Path) -> None:
     )  # fmt: skip
     assert done.returncode == 2
     assert done.stderr.strip().splitlines() == [
-        "mrcomm: error: threshold 'esd' in simulation needs --rssi-trace CSV (or --network "
+        "mrcomm: error: threshold 'esd' needs --rssi-trace CSV (or --network "
         "radio, whose signal the pulses then measure)"
     ]
     assert not list(tmp_path.iterdir())  # nothing started

@@ -206,7 +206,7 @@ def _pulse_on_walls_grid(profile: RadioProfile) -> tuple[Any, Any, dict[str, Mea
     ids = ("a", "b", "c")
     links = LinkModel(ids, grid, network, NoThreshold())
     sensors = {r: MeasuredSensor(-41.0) for r in ids}
-    pulse = RadioPulse(network, sensors, ids, seed=1)
+    pulse = RadioPulse(network, ids, ids, 1, sensors)
     state = links.update([(4.5, 1.0), (4.5, 3.9), (4.5 + 6.0, 1.0)], 0.0)
     return pulse, state, sensors
 

@@ -115,12 +115,15 @@ def test_esd_default_is_warned_about() -> None:
     assert _config(behaviour="lf", threshold="ssd").ignored_settings() == []
 
 
-#: Digests of three radio runs recorded before the review's restructuring (shared
-#: count-key helpers, the log-distance law from net/signal/pathloss): results unchanged.
+#: Digests of three radio runs. Recorded before the review's restructuring (shared
+#: count-key helpers, the log-distance law from net/signal/pathloss), which left them
+#: unchanged; recorded again when wall counts became exact at every step (an obstructed
+#: ray is cast again as soon as an end moves, no longer after 0.25 m), the one change
+#: in them since — verified by running the old digests with the old recast distance.
 RADIO_DIGESTS = {
-    "slt-nb": "e11b6dd24c041a1e0a4a02676cbf8ed59dbd8c7a7a4a86ecccb19d5932436066",
-    "ssd-lf": "f022a95e69a0b12a1bb31105fd6d49b4aba34ca74fe137fea6aefa81c9314bb4",
-    "esd-lf": "5e56049f31152d7500d7e4cccc10143bc08a07f20289183cf265a81ce61386c9",
+    "slt-nb": "fecbf96c898ce19a7de138316f354ca68309b49b46db0757efa9ac34a6cc57e4",
+    "ssd-lf": "c082968f789a365048f2478600a4af47421a80ecebb9eb1ca7f0607201ba6229",
+    "esd-lf": "1dadf528b0ea3e8583540d40eb07190faa7bfb7e59d332526a2cdcfcdea1ad9f",
 }
 
 

@@ -69,7 +69,12 @@ from mrcomm.net.zenoh_bus import (
 )
 from mrcomm.net.zenoh_config import check_key_chunk
 from mrcomm.run.resources import ScenarioResources
-from mrcomm.run.wiring import build_link_sensor, build_network
+from mrcomm.run.wiring import (
+    build_link_sensor,
+    build_network,
+    build_radio_links,
+    measures_radio,
+)
 from mrcomm.seeding import stream
 from mrcomm.world.scenario import Scenario
 
@@ -141,10 +146,10 @@ class AgentProcess:
             positions.aliases[ASSIGNER_ID] = spec.host
         elif spec.kind == "base_station" and spec.position is not None:
             positions.fixed[ASSIGNER_ID] = (spec.position[0], spec.position[1])
+        network = build_network(run, self.resources)
+        radio = build_radio_links(run, self.resources, network)
         self.bus = ZenohBus(
-            self.node,
-            LinkRules(network=build_network(run), loss_percent=run.spl),
-            positions,
+            self.node, LinkRules(network=network, loss_percent=run.spl, radio=radio), positions
         )
         self.journal = Journal(journal_path(settings.record_dir, agent, incarnation))
         executor_class = behaviour_class(run.behaviour)
@@ -238,9 +243,11 @@ class AgentProcess:
         self.node.listen(f"{prefix}/*/{CH_SYNC_REQUEST}", CH_SYNC_REQUEST, decoder_of(SyncRequest))
         self.node.listen(f"{prefix}/*/{CH_SYNC_REPLY}", CH_SYNC_REPLY, decoder_of(SyncReply))
         if self.measured is not None:
-            # Only this robot's own pulse: readings measured BY this robot, of its peers.
+            # Only this robot's own pulse: readings measured BY this robot, of its peers;
+            # published by the world when it measures the modelled radio for the robots.
             key = f"{prefix}/{pulse_id(self.agent)}/{TOPIC_RSSI}"
-            self.node.listen(key, _CH_PULSE, decode)
+            pulse_node = self.infra if measures_radio(self.settings.run) else self.node
+            pulse_node.listen(key, _CH_PULSE, decode)
         self.node.watch_presence()
         if self.infra is not self.node:
             self.infra.watch_presence(WORLD_ID)
@@ -327,7 +334,7 @@ class AgentProcess:
         if tick is None:
             return
         self.now = now = tick.time
-        self.bus.now = now
+        self.bus.release(now)  # also the messages still on the radio that are now due
         if tick.end:
             self._end(tick.end_time, tick.timed_out)
             return

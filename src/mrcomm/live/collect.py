@@ -31,8 +31,7 @@ from mrcomm.errors import InputError
 from mrcomm.live.protocol import WORLD_ID
 from mrcomm.messaging.aon_state import AON_COUNTERS
 from mrcomm.metrics.timeline import Event, Interval, Timeline
-from mrcomm.net.delivery import count_keys
-from mrcomm.run.assemble import AonAgentFacts, RobotTruth, RunFacts, assemble
+from mrcomm.run.assemble import AonAgentFacts, RobotTruth, RunFacts, assemble, sum_counts
 from mrcomm.run.config import make_config
 from mrcomm.run.result import MissionResult
 from mrcomm.world.scenario import load_scenario
@@ -212,21 +211,17 @@ def _assigner_receipts(journals: list[JournalData]) -> set[tuple[str, str]]:
     return received
 
 
-def _counts_by_agent(journals: list[JournalData]) -> dict[str, dict[str, dict[str, float]]]:
-    """Per agent and topic, summed over incarnations (each journal's last snapshot)."""
-    out: dict[str, dict[str, dict[str, float]]] = {}
+def _counts_by_agent(journals: list[JournalData]) -> dict[str, dict[str, dict[str, Any]]]:
+    """Per agent and topic, summed over incarnations (each journal's last snapshot;
+    with a radio also the delays)."""
+    snapshots: dict[str, list[dict[str, dict[str, float]]]] = {}
     for j in journals:
         snapshot = j.last("counts")
         if snapshot is None:
             continue
         for agent, topics in snapshot["agents"].items():
-            mine = out.setdefault(agent, {})
-            for topic, counts in topics.items():
-                # Live mode has no radio: its causes are never counted.
-                t = mine.setdefault(topic, dict.fromkeys(count_keys(radio=False), 0))
-                for key in t:
-                    t[key] += int(counts.get(key, 0))
-    return {a: dict(sorted(t.items())) for a, t in sorted(out.items())}
+            snapshots.setdefault(agent, []).append(topics)
+    return {agent: sum_counts(s) for agent, s in sorted(snapshots.items())}
 
 
 def _aon_facts(journals: list[JournalData]) -> dict[str, AonAgentFacts]:

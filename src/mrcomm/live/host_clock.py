@@ -157,7 +157,7 @@ class HostClockAgent(AgentProcess):
 
     def _host_step(self, now: float) -> None:
         self.now = now
-        self.bus.now = now
+        self.bus.release(now)
         limit = self.settings.run.max_time
         if now >= limit - 1e-9:
             # No end of mission reached us (a world gone, or none: a real robot).

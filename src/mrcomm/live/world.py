@@ -10,7 +10,9 @@ tick of ``dt`` simulated seconds, paced at ``speed`` times wall-clock time:
 3. publish a :class:`~mrcomm.live.protocol.Tick`: the time and every base's state;
 4. record ground truth (trajectories, separations, link summaries, distance, and the
    RSSI of every robot pair at 2 Hz where the threshold has one: ESD's trace, SSD's
-   model).
+   model); with ESD on the ``radio`` network model and no trace, also read every
+   robot's pulse on the modelled radio and publish the readings on that robot's pulse
+   key, so live ESD runs without hardware.
 
 It starts once every team member reports ready with the same run configuration, and
 ends the mission when every robot is done and the assigner has settled (after a short
@@ -39,11 +41,20 @@ from mrcomm.live.protocol import (
     decoder_of,
     encoder,
 )
+from mrcomm.live.pulse import PublishingEndpoint
 from mrcomm.live.settings import LiveSettings, config_crc
+from mrcomm.messaging.messages import TOPIC_RSSI, RssiMsg
+from mrcomm.net.pulse import pulse_id
 from mrcomm.net.zenoh_bus import Incoming, Lane, ZenohNode
 from mrcomm.run.bodies import RobotBodies
 from mrcomm.run.resources import ScenarioResources
-from mrcomm.run.wiring import esd_trace_path, make_bases, make_links
+from mrcomm.run.wiring import (
+    RadioPulse,
+    esd_trace_path,
+    make_bases,
+    make_links,
+    measures_radio,
+)
 
 END_GRACE_SIM = 1.0  # simulated s everyone must stay done before the mission ends ...
 END_GRACE_WALL = 0.3  # ... and wall s, for messages still in flight
@@ -65,6 +76,15 @@ class WorldProcess:
         self.bases = self.bodies.bases
         self.node_ids = (*self.robot_ids, ASSIGNER_ID)
         self.links, self.link_recorder = make_links(self.resources, run)
+        #: ESD on the radio without hardware: the world reads every robot's pulse on the
+        #: modelled radio and publishes the readings as that robot's pulse would.
+        self.radio_pulse = (
+            RadioPulse(self.links.network, self.robot_ids, self.robot_ids, run.seed)
+            if measures_radio(run)
+            else None
+        )
+        self.pulse_endpoints: dict[str, PublishingEndpoint] = {}
+        self._pulse_seq = 0
         self.incarnation = incarnation
         self.team = team_processes(scenario)
         self.node = ZenohNode(settings.zenoh)
@@ -86,6 +106,11 @@ class WorldProcess:
             self.node.listen(f"{prefix}/*/{CH_AGENT_STATE}", CH_AGENT_STATE, decoder_of(AgentState))
             self.node.watch_presence()
             self.node.prepare(self.node.key(WORLD_ID, CH_TICK), Lane.BEST_EFFORT)
+            if self.radio_pulse is not None:
+                self.pulse_endpoints = {
+                    r: PublishingEndpoint(self.node, pulse_id(r), (TOPIC_RSSI,))
+                    for r in self.robot_ids
+                }
             self.node.declare_alive(WORLD_ID, self.incarnation)
             config = self.settings.run.model_dump(mode="json")
             # Collection may run elsewhere: name the scenario by its absolute path.
@@ -262,6 +287,8 @@ class WorldProcess:
     def _record(self) -> None:
         positions = self.bodies.node_positions(self.bodies.true_xy())
         links = self.links.update(positions, self.now)
+        if self.radio_pulse is not None:
+            self._publish_readings(self.radio_pulse.readings(self.now, links))
         # The RSSI of every robot pair at the pulse rate (the threshold's: ESD's trace,
         # SSD's model), as the simulation samples its ``rssi_series``.
         samples = self.link_recorder.record(links, self.settings.run.dt, self.now)
@@ -273,6 +300,21 @@ class WorldProcess:
             self.journal.write("traj", t=round(self.now, 3), p=points)
             self.journal.write("clock", sim=self.now, wall=time.time())
             self.journal.flush()
+
+    def _publish_readings(self, readings: list[tuple[str, str, float]]) -> None:
+        for robot, peer, rssi in readings:
+            self._pulse_seq += 1
+            endpoint = self.pulse_endpoints[robot]
+            message = RssiMsg(
+                sender=endpoint.owner,
+                incarnation=self.incarnation,
+                seq=self._pulse_seq,
+                stamp=self.now,
+                robot=robot,
+                peer=peer,
+                rssi=rssi,
+            )
+            endpoint.publish(TOPIC_RSSI, message)
 
     def _write_truth(self, end: float, timed_out: bool) -> None:
         truth = {rid: asdict(t) for rid, t in self.bodies.truth(self.link_recorder).items()}

@@ -16,7 +16,9 @@ each end moves less than c (exact); an obstructed ray is cast again once an end 
 moved ``los_refresh`` (0.25 m), so a pair coming into sight through a door switches
 model within that distance. Nothing is cast while both ends stand still. Walls are
 counted (a full traversal) only when a cast finds the ray obstructed and the network
-model needs the count.
+model needs the count; then an obstructed ray is cast again as soon as an end moves,
+so the count is exact at every step (the same count a live receiver casting the one
+link a message came over finds: :mod:`mrcomm.net.radio.links`).
 """
 
 from __future__ import annotations
@@ -34,6 +36,8 @@ from mrcomm.net.thresholds import BoolArray, FloatArray, PairGeometry, PairLayou
 from mrcomm.world.occupancy import OccupancyGrid
 
 RSSI_PERIOD = 0.5  # s between recorded RSSI samples (the pulse rate, 2 Hz)
+#: An end that moved at least this far (m) has moved.
+_MOVED = 1e-12
 
 
 @dataclass(frozen=True)
@@ -163,6 +167,10 @@ class LinkModel:
         hypot = math.hypot
         cast_from, cast_walls, cast_slack = self._cast_from, self._cast_walls, self._cast_slack
         grid = self.grid
+        # Counted walls change wherever the ray crosses a wall's edge: recast an
+        # obstructed ray as soon as an end moves (the count is then exact, as a live
+        # receiver's fresh cast); only its line of sight may wait ``los_refresh``.
+        obstructed_slack = _MOVED if count else self.los_refresh
         walls: list[int] = []
         for k, (a, b) in enumerate(self.layout.pairs):
             dist = distance[k]
@@ -176,16 +184,24 @@ class LinkModel:
                 or hypot(ax - last[0], ay - last[1]) >= cast_slack[k]
                 or hypot(bx - last[2], by - last[3]) >= cast_slack[k]
             ):
-                clearance = grid.ray_clearance(ax, ay, bx, by)
+                cast_walls[k], clearance = cast_ray(grid, ax, ay, bx, by, count)
+                cast_slack[k] = clearance if clearance >= 0.0 else obstructed_slack
                 self.casts += 1
-                if clearance >= 0.0:
-                    cast_walls[k], cast_slack[k] = 0, clearance
-                else:
-                    cast_walls[k] = grid.walls_between(ax, ay, bx, by) if count else 1
-                    cast_slack[k] = self.los_refresh
                 cast_from[k] = (ax, ay, bx, by)
             walls.append(cast_walls[k])
         return walls
+
+
+def cast_ray(
+    grid: OccupancyGrid, ax: float, ay: float, bx: float, by: float, count_walls: bool
+) -> tuple[int, float]:
+    """One ray cast between two antennas: the walls it crosses (0: line of sight; an
+    obstructed ray counts as 1 unless ``count_walls``) and its clearance (-1 when
+    obstructed; see :meth:`~mrcomm.world.occupancy.OccupancyGrid.ray_clearance`)."""
+    clearance = grid.ray_clearance(ax, ay, bx, by)
+    if clearance >= 0.0:
+        return 0, clearance
+    return (grid.walls_between(ax, ay, bx, by) if count_walls else 1), -1.0
 
 
 #: Link states of a robot pair by code (0, connected, is not recorded as an interval).

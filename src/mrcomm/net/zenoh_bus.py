@@ -30,6 +30,7 @@ several (a robot and the task assigner it hosts).
 from __future__ import annotations
 
 import contextlib
+import heapq
 import math
 import queue
 import struct
@@ -50,14 +51,29 @@ from mrcomm.messaging.messages import (
     encode,
 )
 from mrcomm.messaging.topics import AGENT_TOPICS, Lane, lane_of
-from mrcomm.net.delivery import RECEIVED, DeliveryPolicy, LossStream, TopicCounts
+from mrcomm.net.delivery import (
+    DROPPED_QUEUE,
+    RECEIVED,
+    DeliveryPolicy,
+    LossStream,
+    TopicCounts,
+)
 from mrcomm.net.inprocess import DeliveryObserver
 from mrcomm.net.network import NetworkModel, Wlan
+from mrcomm.net.radio.links import RadioLinks
 from mrcomm.net.zenoh_config import ZenohOptions, build_config
 from mrcomm.ports import Handler
 
 Point = tuple[float, float]
+#: Slack on due times (s): a message due at the current tick is handed over at it.
+_DUE_SLACK = 1e-9
 _STAMP = struct.Struct("<q")  # wall-clock send time (ns) carried as a Zenoh attachment
+#: With a radio the attachment also carries the sender's mission time at publication
+#: and the radio delay of its queue (s; NaN: the queue overflowed and lost it).
+_RADIO_STAMP = struct.Struct("<qdd")
+
+#: A message's radio facts from its sender: (mission time published, delay or NaN).
+Airtime = tuple[float, float]
 
 
 @dataclass(frozen=True, slots=True)
@@ -69,6 +85,7 @@ class Incoming:
     value: Any
     sent_wall: float | None  # sender's wall clock at put (s), when it sent one
     recv_wall: float
+    radio: Airtime | None = None  # the sender's radio queue (radio network model only)
 
 
 @dataclass(frozen=True, slots=True)
@@ -148,12 +165,16 @@ class ZenohNode:
         return key[len(self.prefix) + 1 :].split("/", 1)[0]
 
     # -- publishing ------------------------------------------------------------------
-    def put(self, key: str, data: bytes, lane: Lane) -> None:
-        """Publish without ever blocking the caller (blocking lanes use a worker)."""
+    def put(self, key: str, data: bytes, lane: Lane, radio: Airtime | None = None) -> None:
+        """Publish without ever blocking the caller (blocking lanes use a worker);
+        ``radio``: the message's facts from the sender's radio queue."""
         if self._closed:
             return
         publisher = self._publisher(key, lane)
-        attachment = _STAMP.pack(time.time_ns())
+        if radio is None:
+            attachment = _STAMP.pack(time.time_ns())
+        else:
+            attachment = _RADIO_STAMP.pack(time.time_ns(), *radio)
         if lane is Lane.BEST_EFFORT:
             with contextlib.suppress(self._zenoh.ZError):
                 publisher.put(data, attachment=attachment)
@@ -205,12 +226,16 @@ class ZenohNode:
             except (msgspec.DecodeError, msgspec.ValidationError, ValueError):
                 return
             sent: float | None = None
+            radio: Airtime | None = None
             attachment = sample.attachment
             if attachment is not None:
                 raw = attachment.to_bytes()
                 if len(raw) == _STAMP.size:
                     sent = _STAMP.unpack(raw)[0] / 1e9
-            inbox.put(Incoming(channel, str(sample.key_expr), value, sent, recv))
+                elif len(raw) == _RADIO_STAMP.size:
+                    stamp_ns, published, delay = _RADIO_STAMP.unpack(raw)
+                    sent, radio = stamp_ns / 1e9, (published, delay)
+            inbox.put(Incoming(channel, str(sample.key_expr), value, sent, recv, radio))
 
         self._subscribers.append(self.session.declare_subscriber(key_expr, on_sample))
 
@@ -299,6 +324,10 @@ class ZenohNode:
             self.session.close()
 
 
+def _arrival(held: tuple[float, int, Any, str, str, Message, Airtime]) -> int:
+    return held[1]
+
+
 def _open_error(err: BaseException) -> str:
     text = str(err).strip().splitlines()
     first = text[0] if text else type(err).__name__
@@ -312,10 +341,13 @@ def _open_error(err: BaseException) -> str:
 @dataclass(frozen=True)
 class LinkRules:
     """The receiver-side network model of a run, as in simulation: the network model's
-    range cut and the delivery policy (:mod:`mrcomm.net.delivery`)."""
+    range cut and the delivery policy (:mod:`mrcomm.net.delivery`); with the ``radio``
+    network model, the radio's links (range from received power, packet error, the
+    senders' queues) in place of the range cut."""
 
     network: NetworkModel = field(default_factory=Wlan)
     loss_percent: float = 0.0
+    radio: RadioLinks | None = None
     policy: DeliveryPolicy = field(init=False)
 
     def __post_init__(self) -> None:
@@ -371,8 +403,16 @@ class ZenohEndpoint:
 
     def publish(self, topic: str, message: Message) -> None:
         self._count(topic).sent += 1
-        node = self._bus.node
-        node.put(node.key(self._owner, topic), encode(message), lane_of(topic))
+        bus = self._bus
+        node = bus.node
+        data = encode(message)
+        radio = bus.rules.radio
+        airtime: Airtime | None = None
+        if radio is not None:
+            # Queued here, at the sender, as in simulation; receivers learn the delay.
+            delay = radio.transmit(self._owner, bus.now, radio.bits(message))
+            airtime = (bus.now, math.nan if delay is None else delay)
+        node.put(node.key(self._owner, topic), data, lane_of(topic), airtime)
 
     def subscribe(self, topic: str, handler: Handler) -> None:
         self._handlers.setdefault(topic, []).append(handler)
@@ -383,17 +423,38 @@ class ZenohEndpoint:
         for handler in self._handlers.get(topic, ()):
             handler(message)
 
-    def _receive(self, topic: str, sender: str, message: Message) -> None:
-        handlers = self._handlers.get(topic)
-        if not handlers or sender == self._owner:
+    def _receive(
+        self, topic: str, sender: str, message: Message, airtime: Airtime | None = None
+    ) -> None:
+        if sender == self._owner or topic not in self._handlers:
             return
-        outcome = self._bus._decide(self, topic, sender)
-        self._count(topic).count(outcome)
-        observer = self._bus.observer
+        bus = self._bus
+        if airtime is not None and bus.rules.radio is not None:
+            due = airtime[0] + airtime[1]  # NaN (lost to the queue) is never held
+            if due > bus.now + _DUE_SLACK:
+                # Still on the air: judged when it arrives, as the in-process bus does.
+                bus._hold(due, self, topic, sender, message, airtime)
+                return
+        self._settle(topic, sender, message, airtime)
+
+    def _settle(self, topic: str, sender: str, message: Message, airtime: Airtime | None) -> None:
+        """Decide, count and record what becomes of one message here, and hand it to
+        the agent when it was received."""
+        bus = self._bus
+        if bus.rules.radio is None:
+            outcome, delay = bus._decide(self, topic, sender), 0.0
+        else:
+            outcome, delay = bus._decide_radio(self, topic, sender, message, airtime)
+        self._count(topic).count(outcome, delay)
+        observer = bus.observer
         if observer is not None:
-            observer(self._bus.now, topic, sender, self._owner, message, outcome)
-        if outcome != RECEIVED:
-            return
+            observer(bus.now, topic, sender, self._owner, message, outcome)
+        if outcome == RECEIVED:
+            self._hand(topic, message)
+
+    def _hand(self, topic: str, message: Message) -> None:
+        """Hand a received message to the agent (through the gate)."""
+        handlers = self._handlers.get(topic, [])
         if self.gate is not None:
             gated = self.gate(topic, message)
             if gated is None:
@@ -408,8 +469,17 @@ class ZenohEndpoint:
             counts = self.counts[topic] = TopicCounts()
         return counts
 
-    def counts_dict(self) -> dict[str, dict[str, int]]:
-        return {topic: c.as_dict() for topic, c in sorted(self.counts.items())}
+    def counts_dict(self) -> dict[str, dict[str, float]]:
+        """topic -> counts (and, with a radio, the delays of what it received), as the
+        in-process bus reports them."""
+        radio = self._bus.rules.radio is not None
+        out: dict[str, dict[str, float]] = {}
+        for topic, c in sorted(self.counts.items()):
+            entry: dict[str, float] = dict(c.as_dict(radio))
+            if radio:
+                entry.update(c.delays())
+            out[topic] = entry
+        return out
 
 
 class ZenohBus:
@@ -427,6 +497,10 @@ class ZenohBus:
         self.now = 0.0
         #: Transport latency (s) of every pose sample that reached this process.
         self.pose_latency: list[float] = []
+        #: Messages still on the air (due mission time, order, endpoint, topic, sender,
+        #: message, airtime): judged by :meth:`release` once the clock reaches them.
+        self._held: list[tuple[float, int, ZenohEndpoint, str, str, Message, Airtime]] = []
+        self._held_order = 0
 
     def endpoint(self, owner: str, rng: np.random.Generator) -> ZenohEndpoint:
         if owner in self.endpoints:
@@ -447,7 +521,35 @@ class ZenohBus:
             if item.sent_wall is not None:
                 self.pose_latency.append(item.recv_wall - item.sent_wall)
         for endpoint in self.endpoints.values():
-            endpoint._receive(topic, sender, message)
+            endpoint._receive(topic, sender, message, item.radio)
+
+    def release(self, now: float) -> None:
+        """Set the mission clock and judge the messages on the air now due (in due
+        order, as the in-process bus delivers at the first step at or after the due
+        time)."""
+        self.now = now
+        held = self._held
+        due = []
+        while held and held[0][0] <= now + _DUE_SLACK:
+            due.append(heapq.heappop(held))
+        # Those due together in the order they arrived, as the in-process bus takes its
+        # outbox in publication order.
+        for _, _, endpoint, topic, sender, message, airtime in sorted(due, key=_arrival):
+            endpoint._settle(topic, sender, message, airtime)
+
+    def _hold(
+        self,
+        due: float,
+        endpoint: ZenohEndpoint,
+        topic: str,
+        sender: str,
+        message: Message,
+        airtime: Airtime,
+    ) -> None:
+        self._held_order += 1
+        heapq.heappush(
+            self._held, (due, self._held_order, endpoint, topic, sender, message, airtime)
+        )
 
     def _want(self, topic: str) -> None:
         if topic not in self._topics:
@@ -460,6 +562,33 @@ class ZenohBus:
         connected = policy.exempt(topic) or self._in_range(sender, receiver.owner)
         return policy.decide(topic, connected, receiver._loss)
 
+    def _decide_radio(
+        self,
+        receiver: ZenohEndpoint,
+        topic: str,
+        sender: str,
+        message: Message,
+        airtime: Airtime | None,
+    ) -> tuple[str, float]:
+        """The outcome of one message under the radio and its delay, as the in-process
+        bus decides it: lost to the sender's queue; else the link's range from its power
+        and its packet error (one fading draw when in range, whatever the topic), then
+        the delivery policy."""
+        radio = self.rules.radio
+        assert radio is not None
+        policy = self.rules.policy
+        delay = 0.0 if airtime is None else airtime[1]
+        if delay != delay:  # NaN: the sender's queue overflowed
+            if not policy.exempt(topic):
+                return DROPPED_QUEUE, 0.0
+            delay = 0.0  # the task assignment is never lost
+        if not (radio.knows(sender) and radio.knows(receiver.owner)):
+            return policy.decide(topic, True, receiver._loss), delay  # not a team node
+        at = self.positions.position(sender)
+        to = self.positions.position(receiver.owner)
+        connected, per = radio.judge(sender, at, receiver.owner, to, radio.bits(message))
+        return policy.decide(topic, connected, receiver._loss, per), delay
+
     def _in_range(self, sender: str, receiver: str) -> bool:
         a = self.positions.position(sender)
         b = self.positions.position(receiver)
@@ -467,5 +596,5 @@ class ZenohBus:
             return True
         return self.rules.network.in_range(math.hypot(a[0] - b[0], a[1] - b[1]))
 
-    def counts_by_agent(self) -> dict[str, dict[str, dict[str, int]]]:
+    def counts_by_agent(self) -> dict[str, dict[str, dict[str, float]]]:
         return {owner: ep.counts_dict() for owner, ep in self.endpoints.items()}

@@ -78,7 +78,7 @@ class RunConfig(BaseModel):
             and not self.spec("network").load().needs_walls
         ):
             raise ValueError(
-                "threshold 'esd' in simulation needs --rssi-trace CSV (or --network radio, "
+                "threshold 'esd' needs --rssi-trace CSV (or --network radio, "
                 "whose signal the pulses then measure)"
             )
         return self

@@ -14,6 +14,9 @@ from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.net.link_sensors import MeasuredSensor
 from mrcomm.net.links import LinkModel, LinkRecorder, LinkState
 from mrcomm.net.network import NetworkModel
+from mrcomm.net.radio.channel import fading_gain_db
+from mrcomm.net.radio.links import RadioLinks
+from mrcomm.net.radio.model import RadioNetwork
 from mrcomm.net.signal.trace import RssiTrace
 from mrcomm.net.thresholds import Threshold
 from mrcomm.ports import Base, Bus, LinkSensor
@@ -21,6 +24,7 @@ from mrcomm.robot.base import SimBase
 from mrcomm.run.config import RunConfig
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.seeding import stream
+from mrcomm.world.scenario import Scenario
 
 if TYPE_CHECKING:
     from mrcomm.agents.executor import TaskExecutor
@@ -94,7 +98,13 @@ def build_pulse(
     path = esd_trace_path(config)
     if path is not None:
         return TracePulse(resources.rssi_trace(path), measured, tuple(sensors))
-    return RadioPulse(network, measured, tuple(sensors), config.seed)
+    return RadioPulse(network, tuple(measured), tuple(sensors), config.seed, measured)
+
+
+def measures_radio(config: RunConfig) -> bool:
+    """Whether the run's ESD pulses read the radio (ESD without a trace; the live world
+    then publishes every robot's readings, as :func:`build_pulse`'s pulse takes them)."""
+    return config.threshold == "esd" and esd_trace_path(config) is None
 
 
 class RadioPulse:
@@ -109,13 +119,17 @@ class RadioPulse:
     def __init__(
         self,
         network: NetworkModel,
-        sensors: dict[str, MeasuredSensor],
+        measuring: Sequence[str],
         robots: Sequence[str],
         seed: int,
+        sensors: Mapping[str, MeasuredSensor] | None = None,
     ) -> None:
+        """``measuring``: the robots whose pulse reads (of their peers among
+        ``robots``); ``sensors``: where :meth:`step` hands their readings."""
         profile = getattr(network, "profile", None)
         self.network = network
-        self.sensors = sensors
+        self.measuring = frozenset(measuring)
+        self.sensors = dict(sensors or {})
         self.robots = tuple(robots)
         self._next = 0.0
         self._fading = profile is not None and profile.fading != "none"
@@ -123,17 +137,23 @@ class RadioPulse:
         self._rngs = {r: stream(seed, "radio", "pulse", r) for r in self.robots}
 
     def step(self, now: float, links: LinkState) -> None:
-        if now < self._next or links.power is None:
-            return
-        self._next = now + self.period
-        from mrcomm.net.radio.channel import fading_gain_db
+        """Hand each robot's sensor its readings when a reading is due."""
+        for robot, peer, value in self.readings(now, links):
+            self.sensors[robot].update(peer, value, now)
 
+    def readings(self, now: float, links: LinkState) -> list[tuple[str, str, float]]:
+        """(robot, peer, dBm) of every reading taken now by the robots with a sensor —
+        none until a reading is due. The live world publishes them as each robot's
+        pulse would."""
+        if now < self._next or links.power is None:
+            return []
+        self._next = now + self.period
         index = {node: i for i, node in enumerate(links.ids)}
         power, connected = links.power, links.connected
         sight = links.line_of_sight
+        out: list[tuple[str, str, float]] = []
         for robot in self.robots:
-            sensor = self.sensors.get(robot)
-            if sensor is None:
+            if robot not in self.measuring:
                 continue
             r = index[robot]
             for peer in self.robots:
@@ -144,7 +164,8 @@ class RadioPulse:
                 if self._fading:
                     k_db = self._k_db if sight is None or sight[p, r] else None
                     value += fading_gain_db(self._rngs[robot], k_db)
-                sensor.update(peer, float(round(value)), now)
+                out.append((robot, peer, float(round(value))))
+        return out
 
 
 class TracePulse:
@@ -200,10 +221,7 @@ def make_links(resources: ScenarioResources, config: RunConfig) -> tuple[LinkMod
     host's (evaluated once; ESD's trace has no row for it: it measures with its host's
     card) and its link to its host is not a link."""
     scenario = resources.scenario
-    robot_ids = tuple(r.id for r in scenario.robots)
-    node_ids = (*robot_ids, ASSIGNER_ID)
-    host = scenario.assigner.host
-    aliases = {ASSIGNER_ID: host} if host else {}
+    node_ids, aliases = link_nodes(scenario)
     evaluated = tuple(n for n in node_ids if n not in aliases)
     links = LinkModel(
         node_ids,
@@ -212,5 +230,25 @@ def make_links(resources: ScenarioResources, config: RunConfig) -> tuple[LinkMod
         build_threshold(config, resources, evaluated),
         aliases=aliases,
     )
+    host = scenario.assigner.host
     skip = {(ASSIGNER_ID, host), (host, ASSIGNER_ID)} if host else set()
-    return links, LinkRecorder(node_ids, len(robot_ids), skip)
+    return links, LinkRecorder(node_ids, len(scenario.robots), skip)
+
+
+def link_nodes(scenario: Scenario) -> tuple[tuple[str, ...], dict[str, str]]:
+    """The nodes of the link model in its order (the robots, then the task assigner)
+    and the aliases among them (an assigner hosted on a robot shares its position)."""
+    node_ids = (*(r.id for r in scenario.robots), ASSIGNER_ID)
+    host = scenario.assigner.host
+    return node_ids, ({ASSIGNER_ID: host} if host else {})
+
+
+def build_radio_links(
+    config: RunConfig, resources: ScenarioResources, network: NetworkModel
+) -> RadioLinks | None:
+    """Live mode: the radio one process judges its agents' links with (None unless the
+    network model is the radio)."""
+    if not isinstance(network, RadioNetwork):
+        return None
+    node_ids, aliases = link_nodes(resources.scenario)
+    return RadioLinks(network, resources.scenario.grid, node_ids, aliases)

@@ -105,15 +105,26 @@ class RadioChannel:
         if self._power is None:
             return 0.0
         if self._fading is None:
-            ber = self._ber[sender][receiver]
-        else:
-            power = self._power[sender][receiver]
-            if power != power:  # NaN: virtual node, no radio
-                return 0.0
-            in_sight = self._sight is None or self._sight[sender][receiver]
-            k_db = self.profile.rician_k_db if in_sight else None
-            power += fading_gain_db(self._fading[receiver], k_db)
-            ber = _ber(power, self._noise)
-        if ber <= 0.0:
+            return _per(self._ber[sender][receiver], bits)
+        in_sight = self._sight is None or self._sight[sender][receiver]
+        return self.error_at(receiver, self._power[sender][receiver], in_sight, bits)
+
+    def error_at(self, receiver: int, power_dbm: float, in_sight: bool, bits: int) -> float:
+        """Probability that one message of ``bits`` is lost at ``receiver`` over a link
+        of mean power ``power_dbm`` (NaN: a node without a position, never lost), with
+        this packet's fast fading drawn from the receiver's stream where the profile has
+        fading. For a receiver that judges one link at a time (live mode)."""
+        if power_dbm != power_dbm:
             return 0.0
-        return -math.expm1(bits * math.log1p(-ber))
+        if self._fading is not None:
+            k_db = self.profile.rician_k_db if in_sight else None
+            power_dbm += fading_gain_db(self._fading[receiver], k_db)
+        return _per(_ber(power_dbm, self._noise), bits)
+
+
+def _per(ber: float, bits: int) -> float:
+    """PER = 1 − (1 − BER)^bits; the scalar form of
+    :func:`~mrcomm.net.radio.model.packet_error_rate`."""
+    if ber <= 0.0:
+        return 0.0
+    return -math.expm1(bits * math.log1p(-ber))

@@ -208,9 +208,8 @@ RADIO_SPEC = VariantSpec(
     params=RadioParams,
     summary=(
         "radio that follows the building: log-distance path loss, walls, correlated "
-        "shadowing, packet error from SNR and size, a sender queue (simulation only)"
+        "shadowing, packet error from SNR and size, a sender queue"
     ),
-    modes=frozenset({"sim"}),
 )
 
 
