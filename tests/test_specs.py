@@ -255,3 +255,26 @@ def test_the_report_lists_each_configurations_parameters_and_versions() -> None:
     assert row[:2] == ["c", "L"]
     assert row[2] == "behaviour.collision.danger_radius=1.2, behaviour.utility=greedy"
     assert row[3] == "behaviour lf-v1"
+
+
+def test_a_variant_for_simulation_only_is_refused_in_live_mode() -> None:
+    from mrcomm.net.network import AdHoc
+
+    spec = VariantSpec(
+        kind="network",
+        name="simonly",
+        entry=AdHoc,
+        params=get_spec("network", "ah").params,
+        modes=frozenset({"sim"}),
+    )
+    with REGISTRY.registered(spec):
+        config = make_config(None, scenario=S1_PATH, network="simonly")
+        config.check_mode("sim")
+        with pytest.raises(InputError) as err:
+            config.check_mode("live")
+    assert (
+        err.value.one_line()
+        == "--network: network 'simonly' runs in sim mode only, not in live mode"
+    )
+    # The radio runs in both modes.
+    make_config(None, scenario=S1_PATH, network="radio").check_mode("live")

@@ -70,16 +70,6 @@ def test_plot_checks_its_output_before_any_work(monkeypatch, capsys, tmp_path: P
     assert code == 2 and "--from needs --scenario" in err
 
 
-def test_live_refuses_the_simulation_only_radio(monkeypatch, capsys, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
-    code, _, err = mrcomm(
-        monkeypatch, capsys, "live", str(S1), "--network", "radio", "--record-dir", str(tmp_path)
-    )
-    assert code == 2
-    assert err.strip().splitlines() == [
-        "mrcomm: error: --network: network 'radio' runs in sim mode only, not in live mode"
-    ]
-
-
 def test_run_prints_the_radio_causes_and_delays(monkeypatch, capsys) -> None:  # type: ignore[no-untyped-def]
     monkeypatch.setenv("COLUMNS", "200")  # the whole message table on one line per topic
     code, out, err = mrcomm(

@@ -46,6 +46,8 @@ TABLE_TITLES = {
     "descriptive": "Descriptive statistics per configuration",
     "success_counts": "Successful missions (contingency tables)",
     "success_tests": "Chi-squared tests of mission success",
+    "rssi": "RSSI seen under two thresholds (Mann-Whitney U per run, two-sided; "
+    "p corrected across the table)",
 }
 
 
@@ -171,7 +173,37 @@ _COLUMNS: dict[str, list[Column]] = {
         ("min expected", lambda r, _: fmt_num(r["min_expected"], 2)),
         ("note", lambda r, _: str(r["note"])),
     ],
+    "rssi": [
+        ("configuration", lambda r, multi: _rssi_config(r, multi)),
+        ("SPL", lambda r, _: f"{float(r['spl']):g}"),
+        ("compared", lambda r, _: f"{r['threshold_a']} − {r['threshold_b']}".upper()),
+        ("RSSI per run (dBm)", lambda r, _: str(r["statistic"])),
+        ("m/n", lambda r, _: f"{r['m']}/{r['n']}"),
+        ("medians", lambda r, _: _medians_ab(r)),
+        ("shift [95% CI]", lambda r, _: _shift(r)),
+        ("p", lambda r, _: fmt_p(r["p"])),
+        ("p corr.", lambda r, _: fmt_p(r["p_adj"])),
+        ("r [95% CI]", lambda r, _: _r_ci(r)),
+        ("decision", lambda r, _: str(r["decision"])),
+    ],
 }
+
+
+def _rssi_config(r: pd.Series, multi: bool) -> str:
+    text = f"{str(r['network']).upper()}+{str(r['behaviour']).upper()}"
+    return (f"{r['scenario']} " if multi else "") + text
+
+
+def _medians_ab(r: pd.Series) -> str:
+    a, b = float(r["median_a"]), float(r["median_b"])
+    return "–" if not (math.isfinite(a) and math.isfinite(b)) else f"{a:.1f} vs {b:.1f}"
+
+
+def _shift(r: pd.Series) -> str:
+    text = fmt_num(r["shift"], 1)
+    if math.isfinite(float(r["shift_low"])):
+        text += f" [{float(r['shift_low']):.1f}, {float(r['shift_high']):.1f}]"
+    return text
 
 
 def _with_ci(r: pd.Series, key: str) -> str:
@@ -197,6 +229,15 @@ COMPACT: dict[str, list[Column]] = {
         ("p corr.", lambda r, _: _p_adj(r)),
         ("r [95% CI]", lambda r, _: _r_ci(r)),
         ("effect", lambda r, _: str(r["effect"])),
+        ("decision", lambda r, _: str(r["decision"])),
+    ],
+    "rssi": [
+        ("config", lambda r, multi: _rssi_config(r, multi)),
+        ("SPL", lambda r, _: f"{float(r['spl']):g}"),
+        ("RSSI per run", lambda r, _: str(r["statistic"])),
+        ("medians (dBm)", lambda r, _: _medians_ab(r)),
+        ("shift [95% CI]", lambda r, _: _shift(r)),
+        ("p corr.", lambda r, _: fmt_p(r["p_adj"])),
         ("decision", lambda r, _: str(r["decision"])),
     ],
 }
@@ -442,7 +483,14 @@ def build_report(
     runs = frame_of(data, "runs")
     check_runs(runs, db_path)
     chosen = metrics_with_data(runs, metrics)
-    tables = st.study_tables(runs, chosen, alpha, correction)
+    tables = st.study_tables(
+        runs,
+        chosen,
+        alpha,
+        correction,
+        rssi=frame_of(data, "rssi"),
+        trajectories=frame_of(data, "trajectories"),
+    )
     figures = build_figures(data, chosen, pick_timeline_runs(runs, timeline_runs), svg, jobs)
     status = runs["status"].value_counts().to_dict() if "status" in runs else {}
     meta = _meta(data)

@@ -56,7 +56,7 @@ ALPHA = 0.05
 GROUP = ("scenario", "network", "threshold", "behaviour")
 #: Largest number of distinct splits enumerated for an exact test with ties.
 EXACT_PERMUTATIONS = 200_000
-Alternative = Literal["less", "greater"]
+Alternative = Literal["less", "greater", "two-sided"]
 SUPPORTED = "H_A supported"
 NOT_REJECTED = "H0 not rejected"
 
@@ -545,7 +545,14 @@ def success_tests(runs: pd.DataFrame) -> pd.DataFrame:
 
 
 #: Table names of a study, in the order they are printed and written.
-TABLE_NAMES = ("comparisons", "normality", "descriptive", "success_counts", "success_tests")
+TABLE_NAMES = (
+    "comparisons",
+    "normality",
+    "descriptive",
+    "success_counts",
+    "success_tests",
+    "rssi",
+)
 
 
 @dataclass(frozen=True)
@@ -557,6 +564,8 @@ class StudyTables:
     descriptive: pd.DataFrame
     success_counts: pd.DataFrame
     success_tests: pd.DataFrame
+    #: SSD vs ESD: the RSSI of configurations differing only in their threshold.
+    rssi: pd.DataFrame
 
     def get(self, name: str) -> pd.DataFrame:
         frame: pd.DataFrame = getattr(self, name)
@@ -568,11 +577,26 @@ def study_tables(
     metrics: Sequence[str] | None = None,
     alpha: float = ALPHA,
     correction: Correction = "holm",
+    *,
+    rssi: pd.DataFrame | None = None,
+    trajectories: pd.DataFrame | None = None,
 ) -> StudyTables:
+    """Every table; the RSSI comparison needs the runs' ``rssi`` and ``trajectories``
+    (empty without them)."""
+    from mrcomm.analysis.rssi_compare import rssi_comparisons
+
+    empty = pd.DataFrame(columns=["run_id", "t", "src", "dst", "rssi"])
     return StudyTables(
         comparisons=comparison_table(runs, metrics, alpha, correction),
         normality=normality_table(runs, metrics, alpha),
         descriptive=describe_table(runs, metrics),
         success_counts=success_counts(runs),
         success_tests=success_tests(runs),
+        rssi=rssi_comparisons(
+            runs,
+            rssi if rssi is not None else empty,
+            trajectories if trajectories is not None else pd.DataFrame(),
+            alpha,
+            correction,
+        ),
     )

@@ -28,7 +28,7 @@ def analyze(
         list[str] | None,
         typer.Option(
             help="Table to print (repeatable): comparisons, normality, descriptive, "
-            "success_counts, success_tests (default: all)."
+            "success_counts, success_tests, rssi (default: all)."
         ),
     ] = None,
     experiment: Annotated[
@@ -65,7 +65,14 @@ def analyze(
     data = rp.load_study(db, experiment, mode)  # checks --mode before loading
     runs = data.runs
     rp.check_runs(runs, db)
-    tables = st.study_tables(runs, metrics_with_data(runs, metric), alpha, method)
+    tables = st.study_tables(
+        runs,
+        metrics_with_data(runs, metric),
+        alpha,
+        method,
+        rssi=data.rssi,
+        trajectories=data.trajectories,
+    )
     console = Console() if fmt == "table" else None
     if console is not None and rp.study_mode(runs) == "live":
         console.print("[bold]Live runs[/] (every agent its own process over Zenoh)")
@@ -81,6 +88,8 @@ def analyze(
             assert console is not None
             if name == "comparisons":
                 _print_comparisons(console, frame, rp, st, method, alpha)
+            elif name == "rssi":
+                _print_rssi(console, frame, rp)
             else:
                 shown = rp.display_frame(name, frame)
                 console.print(_rich_table(rp.TABLE_TITLES[name], shown))
@@ -121,6 +130,27 @@ def _print_comparisons(
     )
     for warning in st.unreachable(frame, alpha):
         console.print(f"warning: {warning}", style="yellow", markup=False)
+
+
+def _print_rssi(console: Console, frame: Any, rp: Any) -> None:
+    """SSD vs ESD, one table per pair of thresholds compared."""
+    from mrcomm.analysis.rssi_compare import compared_pairs
+
+    if frame.empty:
+        console.print(f"[bold]{rp.TABLE_TITLES['rssi']}[/]")
+        console.print("no two configurations differing only in their threshold recorded RSSI")
+        return
+    groups = frame.groupby(["threshold_a", "threshold_b"], sort=False)
+    for pair, (_, rows) in zip(compared_pairs(frame), groups, strict=True):
+        title = f"{rp.TABLE_TITLES['rssi']}: {pair}"
+        console.print(_rich_table(title, rp.display_frame("rssi", rows, compact=True)))
+    console.print(
+        "shift: Hodges–Lehmann median of the per-run differences (first − second), dBm; "
+        "at D m (a-b m): the readings taken while the two robots were a-b m apart, moved "
+        "to D m along one log-distance slope fitted to both. "
+        "All columns (U, Z, raw p, r): --format csv or latex.",
+        style="dim",
+    )
 
 
 def _rich_table(title: str, frame: object) -> Table:
