@@ -66,6 +66,8 @@ def test_killed_robot_leaves_the_team_carrying_on_and_its_tasks_failed(tmp_path:
     assert result.robots["robot_1"]["movement_time"] > 10.0
     assert report["processes"]["robot_1"]["finished"] == [False]
     assert all(report["processes"][r]["finished"] == [True] for r in ("robot_2", "robot_3"))
+    # `mrcomm live` exits non-zero on this: a process of the team died.
+    assert report["died"] == ["robot_1 killed by signal 9"]
 
 
 def test_restarted_robot_resyncs_and_does_not_redo_known_tasks(tmp_path: Path) -> None:
@@ -116,3 +118,70 @@ def test_lease_leaves_a_silent_member_out_and_updates_it_when_it_returns(
     # Brought up to date: nothing pending anywhere at the end.
     assert result.aon["total"]["pending"] == 0
     assert sorted(completed(tmp_path, "robot_3")) == ["3", "6"]
+
+
+def test_a_rogue_peer_publishing_garbage_on_every_topic_takes_no_agent_down(
+    tmp_path: Path,
+) -> None:
+    """A process on the team's network publishes, all mission long, a message of the
+    wrong type on every topic under every member's key (a heartbeat on a pose key used
+    to kill every agent), statuses and poses in a member's name under its own key,
+    undecodable bytes: the bus edge refuses all of it, counted by cause, no agent dies
+    and the mission succeeds as without it."""
+    import threading
+
+    from mrcomm.messaging.messages import Heartbeat, PoseMsg, TaskState, TaskStatus, encode
+    from mrcomm.messaging.topics import TOPICS, lane_of
+    from mrcomm.net.zenoh_bus import ZenohNode
+
+    stop = threading.Event()
+    sent = {"samples": 0}
+
+    def attack(node: ZenohNode, members: list[str]) -> None:
+        seq = 0
+        while not stop.is_set():
+            seq += 1
+            for topic, spec in TOPICS.items():
+                lane = lane_of(topic)
+                for member in members:
+                    # The wrong type under the member's own key and name.
+                    wrong: object = (
+                        PoseMsg(sender=member, incarnation=1, seq=seq, stamp=0.0, x=0, y=0, theta=0)
+                        if spec.message is Heartbeat
+                        else Heartbeat(sender=member, incarnation=1, seq=seq, stamp=0.0)
+                    )
+                    node.put(node.key(member, topic), encode(wrong), lane)  # type: ignore[arg-type]
+                node.put(node.key("evil", topic), b"\xc1 garbage", lane)
+            forged = TaskStatus(
+                sender="robot_1", incarnation=1, seq=seq, stamp=0.0, robot="robot_1",
+                task_id="4", state=TaskState.SUCCESS,
+            )  # fmt: skip
+            node.put(node.key("evil", "task_status"), encode(forged), lane_of("task_status"))
+            sent["samples"] += len(TOPICS) * (len(members) + 1) + 1
+            stop.wait(0.05)
+
+    with team(tmp_path, max_time=KILL_MISSION_LIMIT) as t:
+        t.start()
+        wait_for(lambda: "1" in completed(tmp_path, "robot_1"), 60, "robot_1's first task")
+        peers = [f"tcp/127.0.0.1:{port}" for port in t.ports.values()]
+        rogue = ZenohNode(make_options(team=t.settings.zenoh.team, connect=peers))
+        thread = threading.Thread(
+            target=attack, args=(rogue, ["robot_1", "robot_2", "robot_3", "assigner"])
+        )
+        thread.start()
+        try:
+            t.wait()
+        finally:
+            stop.set()
+            thread.join()
+            rogue.close()
+        result, report = t.collect()
+    assert report["died"] == []
+    assert result.mission["successful"] is True and result.mission["timed_out"] is False
+    assert sent["samples"] > 1000
+    for robot in ("robot_1", "robot_2", "robot_3"):
+        refused = report["processes"][robot]["refused"]
+        assert refused.get("wrong_type", 0) > 100, (robot, refused)
+        assert refused.get("undecodable", 0) > 10, (robot, refused)
+    # The forged SUCCESS under "evil" reached the assigner's process and was refused.
+    assert report["processes"]["robot_2"]["refused"].get("forged_sender", 0) > 10

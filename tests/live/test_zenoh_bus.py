@@ -258,3 +258,58 @@ def test_counts_add_up_over_agents() -> None:
 def test_rules_reject_impossible_loss() -> None:
     with pytest.raises(ValueError):
         LinkRules(loss_percent=120.0)
+
+
+def test_the_edge_refuses_what_no_agent_should_see() -> None:
+    """A rogue peer's samples — a heartbeat on a pose key (the message that used to
+    kill every agent), a pose claiming another sender, a pose from a non-member,
+    bytes that decode to nothing, an oversized payload — are counted by cause and never
+    reach a handler; the team's own poses still do."""
+    from mrcomm.messaging.messages import Heartbeat, encode
+    from mrcomm.net.zenoh_bus import MAX_SAMPLE_BYTES
+
+    with nodes(mesh_options(2)) as (rogue, node):
+        bus = ZenohBus(node, LinkRules(), PositionBook(), members=frozenset({"robot_1", "robot_2"}))
+        me = bus.endpoint("robot_2", stream(1, "loss", "robot_2"))
+        mate = ZenohBus(rogue, LinkRules(), PositionBook()).endpoint(
+            "robot_1", stream(1, "loss", "robot_1")
+        )
+        got: list[Message] = []
+        me.subscribe(TOPIC_POSE, got.append)
+        wait_for(lambda: rogue.peers() and node.peers(), 10, "the peers to connect")
+        wait_for(lambda: _publish_pose_until(mate, bus, got), 10, "the mate's pose")
+        got.clear()
+        lane = lane_of(TOPIC_POSE)
+        beat = Heartbeat(sender="evil", incarnation=1, seq=1, stamp=0.0)
+        bad = [
+            (rogue.key("evil", TOPIC_POSE), encode(beat)),  # wrong type
+            (rogue.key("evil", TOPIC_POSE), encode(pose("robot_1", 7, 1.0))),  # forged
+            (rogue.key("evil", TOPIC_POSE), encode(pose("evil", 8, 1.0))),  # not a member
+            (rogue.key("robot_1", TOPIC_POSE), b"\xc1\xff not msgpack"),  # undecodable
+            (rogue.key("robot_1", TOPIC_POSE), b"\x00" * (MAX_SAMPLE_BYTES + 1)),  # oversized
+        ]
+        expected = {
+            "wrong_type": 1,
+            "forged_sender": 1,
+            "not_member": 1,
+            "undecodable": 1,
+            "oversized": 1,
+        }
+
+        def all_refused() -> bool:
+            for key, data in bad:
+                rogue.put(key, data, lane)
+            _handle_all(bus, 0.1)
+            return all(node.refused.get(c, 0) >= n for c, n in expected.items())
+
+        wait_for(all_refused, 10, "every bad sample refused")
+        mate.publish(TOPIC_POSE, pose("robot_1", 99, 2.0))
+        wait_for(lambda: _handle_all(bus) or any(m.seq == 99 for m in got), 5, "a good pose")
+    assert all(isinstance(m, PoseMsg) and m.sender == "robot_1" for m in got)
+    assert set(node.refused) == set(expected)
+
+
+def _publish_pose_until(sender, bus, got) -> bool:  # type: ignore[no-untyped-def]
+    sender.publish(TOPIC_POSE, pose(sender.owner, 1, 0.0))
+    _handle_all(bus, 0.1)
+    return bool(got)

@@ -281,6 +281,11 @@ def live(
         f"p99 {latency.get('p99', '-')} ms"
     )
     show_result(result, live_summary(result, report), stored, as_json, footer)
+    if report["died"]:
+        # The mission ran on without it: its result is shown and stored, but it is not
+        # the run that was asked for.
+        typer.echo(f"mrcomm: error: {report['died'][0]}", err=True)
+        raise typer.Exit(1)
 
 
 def collect_cmd(

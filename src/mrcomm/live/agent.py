@@ -149,7 +149,10 @@ class AgentProcess:
         network = build_network(run, self.resources)
         radio = build_radio_links(run, self.resources, network)
         self.bus = ZenohBus(
-            self.node, LinkRules(network=network, loss_percent=run.spl, radio=radio), positions
+            self.node,
+            LinkRules(network=network, loss_percent=run.spl, radio=radio),
+            positions,
+            members=frozenset((*self.robot_ids, ASSIGNER_ID)),
         )
         self.journal = Journal(journal_path(settings.record_dir, agent, incarnation))
         executor_class = behaviour_class(run.behaviour)

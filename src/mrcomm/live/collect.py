@@ -285,6 +285,8 @@ def _live_report(
             "host_clock": _host_clock(js),
             # ESD: readings of the robot's own pulse that fed its sensor (all incarnations).
             "pulse_readings": _pulse_readings(js),
+            # Samples from peers the bus edge refused, by cause (all incarnations).
+            "refused": _refused(js),
             "left_out": [
                 {"time": line["time"], "msg": line["msg"], "absent": line["absent"]}
                 for j in js
@@ -318,6 +320,17 @@ def _pulse_readings(js: list[JournalData]) -> int | None:
     """Pulse readings an agent took, summed over its incarnations (None: no ESD)."""
     lasts = [line for line in (j.last("pulse") for j in js) if line is not None]
     return sum(int(line["readings"]) for line in lasts) if lasts else None
+
+
+def _refused(js: list[JournalData]) -> dict[str, int]:
+    """Samples the bus edge refused, by cause, summed over the incarnations."""
+    out: dict[str, int] = {}
+    for j in js:
+        line = j.last("refused")
+        if line is not None:
+            for cause, count in line["causes"].items():
+                out[cause] = out.get(cause, 0) + int(count)
+    return dict(sorted(out.items()))
 
 
 def _percentiles(samples: list[float]) -> dict[str, Any]:

@@ -100,6 +100,8 @@ class LiveTeam:
             self.pulses = {pulse_id(r): r for r in self.robots if r in measuring}
         self.ports: dict[str, int] = {}
         self.children: dict[str, Child] = {}
+        #: Processes that died during the mission, one line each (after :meth:`wait`).
+        self.died: list[str] = []
         self.restarts: dict[str, int] = {}
 
     # -- processes ---------------------------------------------------------------------
@@ -252,13 +254,34 @@ class LiveTeam:
             self.stop()
             raise InputError(self.first_error() or f"world exited with status {world.returncode}")
         agents_deadline = time.monotonic() + EXIT_GRACE
+        lingered: set[str] = set()
         for child in self.children.values():
             remaining = max(agents_deadline - time.monotonic(), 0.1)
             try:
                 child.process.wait(timeout=remaining)
             except subprocess.TimeoutExpired:
+                lingered.add(child.name)
                 child.process.terminate()
                 child.process.wait(timeout=10)
+        self.died = [
+            self.death(child)
+            for child in self.children.values()
+            if child.name not in lingered and child.process.returncode not in (0, None)
+        ]
+
+    def death(self, child: Child) -> str:
+        """One line on a process that died: how, and the first line of its error."""
+        code = child.process.returncode
+        how = f"killed by signal {-code}" if code < 0 else f"exited with status {code}"
+        if not child.handle.closed:
+            child.handle.flush()
+        lines = child.log.read_text(errors="replace").splitlines()
+        said = next((line for line in lines if line.startswith("mrcomm: error:")), "")
+        said = said.removeprefix("mrcomm: error:").strip()
+        if not said and any(line.startswith("Traceback") for line in lines):
+            # The last line of a traceback says what was raised.
+            said = next(line for line in reversed(lines) if line and not line[0].isspace())
+        return f"{child.name} {how}" + (f": {said}" if said else "")
 
     def first_error(self) -> str | None:
         """The first one-line error any process printed (``name: message``)."""
@@ -283,7 +306,11 @@ class LiveTeam:
             child.handle.close()
 
     def collect(self) -> tuple[MissionResult, dict[str, Any]]:
-        return collect(self.settings.record_dir)
+        """The run's result and live report; the report's ``died`` lists the processes
+        that died during the mission (one line each)."""
+        result, report = collect(self.settings.record_dir)
+        report["died"] = list(self.died)
+        return result, report
 
     def __enter__(self) -> LiveTeam:
         return self

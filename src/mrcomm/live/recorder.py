@@ -99,6 +99,8 @@ class AgentRecorder:
     def counts(self) -> None:
         """Cumulative message counts and AON statistics (the last snapshot counts)."""
         self.journal.write("counts", agents=self.bus.counts_by_agent())
+        # What peers sent that the bus edge refused (cumulative, by cause).
+        self.journal.write("refused", causes=dict(self.bus.node.refused))
         for agent, aon in self.aon_endpoints().items():
             st = aon.stats
             self.journal.write(

@@ -25,6 +25,14 @@ bus does (``net.inprocess``), on the agent thread, and counts every decision:
 
 Each :class:`ZenohEndpoint` is one agent's endpoint (the Bus port); a process may host
 several (a robot and the task assigner it hosts).
+
+**The edge validates.** Nothing a peer sends is raised into an agent: a sample larger
+than :data:`MAX_SAMPLE_BYTES` or that does not decode is dropped on the Zenoh thread;
+on the agent thread :meth:`ZenohBus.handle` drops a message of another type than its
+topic carries (:data:`~mrcomm.messaging.topics.TOPICS`),
+whose ``sender`` is not the agent whose key it came under, or from an agent that is not
+a team member. Every refusal is counted by cause (:data:`REFUSALS`; the journal's
+``refused`` lines, ``mrcomm live --json`` under ``live.processes.<agent>.refused``).
 """
 
 from __future__ import annotations
@@ -50,7 +58,7 @@ from mrcomm.messaging.messages import (
     decode,
     encode,
 )
-from mrcomm.messaging.topics import AGENT_TOPICS, Lane, lane_of
+from mrcomm.messaging.topics import AGENT_TOPICS, TOPICS, Lane, lane_of
 from mrcomm.net.delivery import (
     DROPPED_QUEUE,
     RECEIVED,
@@ -65,6 +73,17 @@ from mrcomm.net.zenoh_config import ZenohOptions, build_config
 from mrcomm.ports import Handler
 
 Point = tuple[float, float]
+#: A sample larger than this (bytes) is refused before decoding: the largest message a
+#: team sends (an assignment of a few hundred tasks) is a few kB.
+MAX_SAMPLE_BYTES = 256 * 1024
+#: Why the bus edge refused a sample.
+REFUSALS = (
+    "oversized",  # larger than MAX_SAMPLE_BYTES
+    "undecodable",  # not one of the team's messages
+    "wrong_type",  # a message of another type than its topic carries
+    "forged_sender",  # its sender field names another agent than its key
+    "not_member",  # from an agent that is not in the team
+)
 #: Slack on due times (s): a message due at the current tick is handed over at it.
 _DUE_SLACK = 1e-9
 _STAMP = struct.Struct("<q")  # wall-clock send time (ns) carried as a Zenoh attachment
@@ -155,6 +174,9 @@ class ZenohNode:
             Lane.CONTROL: _BlockingWorker("mrcomm-control"),
         }
         self._closed = False
+        #: Samples refused at the edge, by cause (:data:`REFUSALS`).
+        self.refused: dict[str, int] = {}
+        self._refused_lock = threading.Lock()
 
     # -- keys ------------------------------------------------------------------------
     def key(self, agent: str, topic: str) -> str:
@@ -221,9 +243,14 @@ class ZenohNode:
 
         def on_sample(sample: Any) -> None:
             recv = time.time()
+            payload = sample.payload
+            if len(payload) > MAX_SAMPLE_BYTES:
+                self.refuse("oversized")
+                return
             try:
-                value = decoder(sample.payload.to_bytes())
+                value = decoder(payload.to_bytes())
             except (msgspec.DecodeError, msgspec.ValidationError, ValueError):
+                self.refuse("undecodable")
                 return
             sent: float | None = None
             radio: Airtime | None = None
@@ -238,6 +265,11 @@ class ZenohNode:
             inbox.put(Incoming(channel, str(sample.key_expr), value, sent, recv, radio))
 
         self._subscribers.append(self.session.declare_subscriber(key_expr, on_sample))
+
+    def refuse(self, cause: str) -> None:
+        """Count one sample refused at the edge (from any thread)."""
+        with self._refused_lock:
+            self.refused[cause] = self.refused.get(cause, 0) + 1
 
     def poll(self, timeout: float | None) -> Incoming | None:
         """Next queued sample, waiting at most ``timeout`` seconds (None: no wait)."""
@@ -487,10 +519,18 @@ class ZenohBus:
     network model. Drive it from the agent thread: feed every :class:`Incoming` of
     channel ``"bus"`` to :meth:`handle`."""
 
-    def __init__(self, node: ZenohNode, rules: LinkRules, positions: PositionBook) -> None:
+    def __init__(
+        self,
+        node: ZenohNode,
+        rules: LinkRules,
+        positions: PositionBook,
+        members: frozenset[str] | None = None,
+    ) -> None:
+        """``members``: the agents of the team (None: anyone)."""
         self.node = node
         self.rules = rules
         self.positions = positions
+        self.members = members
         self.endpoints: dict[str, ZenohEndpoint] = {}
         self._topics: set[str] = set()
         self.observer: DeliveryObserver | None = None
@@ -515,6 +555,10 @@ class ZenohBus:
         topic = key.rsplit("/", 1)[-1]
         sender = self.node.sender_of(key)
         message = item.value
+        refusal = self._refusal(topic, sender, message)
+        if refusal is not None:
+            self.node.refuse(refusal)
+            return
         if isinstance(message, PoseMsg):
             if sender not in self.positions.own:
                 self.positions.heard[sender] = (message.x, message.y)
@@ -522,6 +566,17 @@ class ZenohBus:
                 self.pose_latency.append(item.recv_wall - item.sent_wall)
         for endpoint in self.endpoints.values():
             endpoint._receive(topic, sender, message, item.radio)
+
+    def _refusal(self, topic: str, sender: str, message: Any) -> str | None:
+        """Why the edge refuses this message (None: it may reach the agents)."""
+        spec = TOPICS.get(topic)
+        if spec is None or type(message) is not spec.message:
+            return "wrong_type"
+        if message.sender != sender:
+            return "forged_sender"
+        if self.members is not None and sender not in self.members:
+            return "not_member"
+        return None
 
     def release(self, now: float) -> None:
         """Set the mission clock and judge the messages on the air now due (in due
