@@ -185,3 +185,43 @@ def test_a_rogue_peer_publishing_garbage_on_every_topic_takes_no_agent_down(
         assert refused.get("undecodable", 0) > 10, (robot, refused)
     # The forged SUCCESS under "evil" reached the assigner's process and was refused.
     assert report["processes"]["robot_2"]["refused"].get("forged_sender", 0) > 10
+
+
+def _leader(record_dir: Path) -> str | None:
+    """The leader of the latest role round any robot took a role in."""
+    rounds = [
+        (line["time"], line["data"]["leader"])
+        for robot in ("robot_1", "robot_2", "robot_3")
+        for line in journal(record_dir, robot)
+        if line.get("k") == "ev" and line.get("label") == "role_assigned"
+    ]
+    return max(rounds)[1] if rounds else None
+
+
+def test_killing_the_lf_leader_lets_its_followers_carry_on(tmp_path: Path) -> None:
+    """SIGKILL of the LF leader mid-mission: its followers see its liveliness vanish,
+    dissolve the group and carry on among the living; the rest of the team finishes its
+    tasks, only the dead leader's fail (they used to wait for it until the time limit)."""
+    with team(tmp_path, max_time=900.0, behaviour="lf", network="ah", threshold="slt") as t:
+        t.start()
+        wait_for(lambda: _leader(tmp_path) is not None, 90, "a leader")
+        leader = _leader(tmp_path)
+        assert leader is not None
+        t.kill(leader, signal.SIGKILL)
+        t.wait()
+        result, report = t.collect()
+    assert report["died"] == [f"{leader} killed by signal 9"]
+    others = [r for r in ("robot_1", "robot_2", "robot_3") if r != leader]
+    reasons = {
+        robot: [
+            line["data"].get("reason")
+            for line in journal(tmp_path, robot)
+            if line.get("k") == "ev" and line.get("label") == "roles_dissolved"
+        ]
+        for robot in others
+    }
+    # A follower of the dead leader saw it go (one may have been leading itself).
+    assert any("leader's process has gone" in r for r in reasons.values()), reasons
+    for robot in others:
+        assert result.robots[robot]["failed_tasks"] == [], (robot, result.robots[robot])
+    assert result.robots[leader]["failed_tasks"]  # the dead leader's own tasks fail

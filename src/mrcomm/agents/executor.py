@@ -222,6 +222,15 @@ class TaskExecutor:
         are stamped with it (the runtime calls this first)."""
         self._now = now
 
+    def mate_presence(self, mate: str, present: bool) -> None:
+        """The runtime says a mate's process has gone (its liveliness vanished) or is
+        back (live mode). A behaviour treats a departed mate as gone: LF's followers
+        of a departed leader dissolve the group and carry on."""
+        if present:
+            self.team_view.departed.discard(mate)
+        else:
+            self.team_view.departed.add(mate)
+
     def step(self, now: float) -> None:
         self._now = now
         if self._t0 is None:

@@ -403,15 +403,19 @@ class LeaderFollowerExecutor(TaskExecutor):
         return (self.leader or "") if self._in("follower") else ""
 
     def _leader_gone(self) -> bool:
-        """The leader's own poses, sent since we follow it, say it no longer leads (its
-        completion may have reached us before we followed it)."""
+        """The leader's process has gone (live mode: its liveliness vanished), or its
+        own poses, sent since we follow it, say it no longer leads (its completion may
+        have reached us before we followed it)."""
         leader = self.leader or ""
+        if leader in self.team_view.departed:
+            return True
         fresh = self.team_view.heard.get(leader, -1.0) > self._state_since_role
         return fresh and self.team_view.roles.get(leader) not in (L.ROLE_LEADER, L.ROLE_ASSIGNING)
 
     def before_follower_step(self) -> bool:
         if self._leader_gone():
-            self._dissolve("leader no longer leads")
+            gone = self.leader in self.team_view.departed
+            self._dissolve("leader's process has gone" if gone else "leader no longer leads")
             return True
         return False
 

@@ -20,6 +20,9 @@ class TeamView:
         self.roles: dict[str, str] = {}
         #: mate -> the robot it follows ("" when none).
         self.leaders: dict[str, str] = {}
+        #: Mates whose process has gone, as the transport's liveliness says (live mode;
+        #: always empty in simulation, where no process dies).
+        self.departed: set[str] = set()
 
     def hear(self, message: PoseMsg, now: float) -> None:
         mate = message.sender

@@ -410,7 +410,15 @@ class AgentProcess:
         return host if agent == ASSIGNER_ID and host is not None else agent
 
     def _on_presence(self, presence: Presence) -> None:
+        before = bool(self.present.get(presence.agent))
         track_presence(self.present, presence, self.journal, self.now)
+        after = bool(self.present.get(presence.agent))
+        mate = presence.agent
+        is_mate = mate in self.robot_ids and mate != self.agent
+        if before != after and is_mate and self.executor is not None:
+            # Its process has gone (SIGKILL, a crash, a lost link past the lease) or is
+            # back: the behaviour decides what that means for the team.
+            self.executor.mate_presence(mate, after)
 
     def _heard_from_present(self, now: float) -> None:
         """A member whose liveliness token is present is alive for the AON lease (the
