@@ -5,6 +5,7 @@ a record directory without a world journal."""
 from __future__ import annotations
 
 import json
+import os
 import socket
 import subprocess
 import sys
@@ -128,11 +129,31 @@ def test_collect_needs_a_world_journal(tmp_path: Path) -> None:
     one_line_error(mrcomm("collect", str(tmp_path / "nope")), "not a directory")
 
 
-@pytest.mark.parametrize("value", ["0", "-1"])
-def test_speed_must_be_positive(value: str, tmp_path: Path) -> None:
+@pytest.mark.parametrize("value", ["0", "-1", "nan", "inf"])
+def test_speed_must_be_finite_and_positive_and_nothing_is_left(value: str, tmp_path: Path) -> None:
+    """Refused before any directory is made: the world's --record-dir, and the
+    temporary directory of ``mrcomm live`` (TMPDIR points into tmp_path)."""
+    records = tmp_path / "records"
     one_line_error(
-        mrcomm("world", str(S1), "--speed", value, "--record-dir", str(tmp_path)), "--speed"
+        mrcomm("world", str(S1), "--speed", value, "--record-dir", str(records)), "--speed"
     )
+    assert not records.exists()
+    temp = tmp_path / "tmp"
+    temp.mkdir()
+    done = subprocess.run(
+        [sys.executable, "-c", CODE, "live", str(S1), "--speed", value],
+        capture_output=True, text=True, timeout=60, env={**os.environ, "TMPDIR": str(temp)},
+    )  # fmt: skip
+    one_line_error(done, "--speed")
+    assert list(temp.iterdir()) == []
+
+
+def test_agent_errors_leave_no_record_directory(tmp_path: Path) -> None:
+    records = tmp_path / "records"
+    for args in (["--robot", "robot_9"], ["--robot", "robot_1", "--lease", "nan"]):
+        done = mrcomm("agent", str(S1), *args, "--record-dir", str(records))
+        one_line_error(done)
+        assert not records.exists(), args
 
 
 def test_live_over_udp_runs_a_mission_slice(tmp_path: Path) -> None:

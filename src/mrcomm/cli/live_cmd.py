@@ -109,7 +109,7 @@ def world(
 ) -> None:
     """Simulate every robot's base and publish the shared clock (live mode)."""
     run.check_mode("live")
-    from mrcomm.live.settings import LiveSettings, check_record_dir
+    from mrcomm.live.settings import LiveSettings
     from mrcomm.live.world import run_world
 
     zenoh = zenoh_options(
@@ -117,8 +117,8 @@ def world(
         zenoh_config, link_lease,
     )  # fmt: skip
     settings = LiveSettings(
-        run, zenoh, check_record_dir(record_dir), speed=speed, start_timeout=start_timeout
-    )
+        run, zenoh, record_dir.expanduser(), speed=speed, start_timeout=start_timeout
+    ).with_record_dir()
     raise typer.Exit(run_world(settings))
 
 
@@ -161,7 +161,7 @@ def agent(
     """Run one robot's agent (task executor, and the assigner it hosts) over Zenoh."""
     run.check_mode("live")
     from mrcomm.live.agent import check_agent_id, run_agent
-    from mrcomm.live.settings import LiveSettings, check_agent_clock, check_record_dir
+    from mrcomm.live.settings import LiveSettings, check_agent_clock
     from mrcomm.world.scenario import load_scenario
 
     check_agent_clock(clock, "--clock")
@@ -179,12 +179,12 @@ def agent(
     settings = LiveSettings(
         run,
         zenoh,
-        check_record_dir(record_dir),
+        record_dir.expanduser(),
         world=world_options,
         lease=lease,
         join_timeout=join_timeout,
         agent_clock=clock,
-    )
+    ).with_record_dir()
     raise typer.Exit(run_agent(settings, robot))
 
 
@@ -220,7 +220,12 @@ def live(
     run.check_mode("live")
     from mrcomm.live.collect import live_summary
     from mrcomm.live.launcher import TlsLayout, run_live
-    from mrcomm.live.settings import LiveSettings, check_agent_clock, check_record_dir
+    from mrcomm.live.settings import (
+        LiveSettings,
+        check_agent_clock,
+        check_positive,
+        check_record_dir,
+    )
 
     check_agent_clock(agent_clock, "--agent-clock", speed)
     if tls_dir is not None and not (tls_dir / "ca.pem").is_file():
@@ -228,6 +233,9 @@ def live(
     if acl and tls_dir is None:
         raise InputError("the ACL identifies members by certificate: add --tls-dir", field="--acl")
     check_db(db, experiment)  # before any process is launched
+    check_positive(speed, "--speed")  # before the record directory is made
+    if lease is not None:
+        check_positive(lease, "--lease")
     zenoh = make_options(team=team, protocol=protocol)
     directory = (
         check_record_dir(record_dir)
@@ -248,6 +256,12 @@ def live(
     try:
         with display:
             result, report = run_live(settings, tls=tls, on_progress=display.update)
+    except InputError:
+        # A process refused its input (its one line is the error): nothing was run, so
+        # no records are worth keeping in a temporary directory.
+        if record_dir is None:
+            shutil.rmtree(directory, ignore_errors=True)
+        raise
     except KeyboardInterrupt:
         if record_dir is None:
             shutil.rmtree(directory, ignore_errors=True)

@@ -6,6 +6,7 @@ clock)."""
 from __future__ import annotations
 
 import json
+import math
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,13 +41,25 @@ class LiveSettings:
     agent_clock: str = "shared"
 
     def __post_init__(self) -> None:
-        if self.speed <= 0.0:
-            raise InputError("must be positive", field="--speed")
-        if self.lease is not None and self.lease <= 0.0:
-            raise InputError("must be positive", field="--lease")
-        if self.join_timeout <= 0.0:
-            raise InputError("must be positive", field="--join-timeout")
+        check_positive(self.speed, "--speed")
+        if self.lease is not None:
+            check_positive(self.lease, "--lease")
+        check_positive(self.join_timeout, "--join-timeout")
+        check_positive(self.start_timeout, "--start-timeout")
         check_agent_clock(self.agent_clock, "--agent-clock", self.speed)
+
+    def with_record_dir(self) -> LiveSettings:
+        """The settings, their record directory created (after every other check, so
+        that bad input leaves nothing behind)."""
+        check_record_dir(self.record_dir)
+        return self
+
+
+def check_positive(value: float, option: str) -> float:
+    """A finite, positive number (NaN and infinity are refused in one line)."""
+    if not math.isfinite(value) or value <= 0.0:
+        raise InputError(f"must be a finite positive number, got {value:g}", field=option)
+    return value
 
 
 def check_agent_clock(clock: str, option: str, speed: float = 1.0) -> str:
