@@ -46,8 +46,11 @@ class RunConfig(BaseModel):
     threshold: str = "none"
     behaviour: str = "nb"
     seed: int = Field(1, ge=0)
-    max_time: float = Field(1800.0, gt=0.0, description="mission time limit, simulated s")
-    dt: float = Field(0.1, gt=0.0, le=0.5, description="simulation step, s")
+    max_time: float = Field(
+        1800.0, gt=0.0, le=1e6, description="mission time limit, simulated s (at most 1e6)"
+    )
+    # At least 1 ms: a smaller step only makes a run take forever (1e-9 s never ends).
+    dt: float = Field(0.1, ge=0.001, le=0.5, description="simulation step, s (0.001-0.5)")
     #: Parameters of the chosen variants by kind, as given (non-default values only).
     params: dict[str, dict[str, Any]] = Field(default_factory=dict)
 

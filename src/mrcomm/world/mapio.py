@@ -19,6 +19,7 @@ Image row 0 is the top of the map; the grid's row 0 is the bottom, so rows are f
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -31,6 +32,12 @@ from mrcomm.fileio import commit, stage
 from mrcomm.world.occupancy import OccupancyGrid
 from mrcomm.world.yamlfile import read_yaml
 
+#: Largest coordinate accepted anywhere on a map (m): far beyond any map, small enough
+#: that no grid arithmetic on it overflows.
+MAX_COORDINATE = 1e6
+#: Most cells a map image may have (a 500 m square at 5 cm): checked from its header,
+#: before any pixel is decoded.
+MAX_MAP_CELLS = 100_000_000
 MAP_KEYS = ("image", "resolution", "origin", "negate", "occupied_thresh", "free_thresh", "mode")
 MODES = ("trinary", "scale", "raw")
 #: map_saver's defaults (ROS 1), used when a key is absent and when saving.
@@ -56,12 +63,28 @@ def _read_image(
     path: Path, yaml_file: Path, mode: str
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """Channel-average grey level (0..255, image row order) and a transparency mask."""
+    if path.exists() and not path.is_file():
+        raise InputError(f"not a regular file: {path}", file=yaml_file, field="image")
     try:
-        with Image.open(path) as img:
+        with warnings.catch_warnings():
+            # Pillow warns of big images; the size is judged here, against our limit.
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            img = Image.open(path)  # reads the header only
+        with img:
+            if img.width * img.height > MAX_MAP_CELLS:
+                raise InputError(
+                    f"image {path} is {img.width} x {img.height} pixels: more than "
+                    f"{MAX_MAP_CELLS:,} cells",
+                    file=yaml_file,
+                    field="image",
+                )
             img.load()
             image = img.copy()
     except FileNotFoundError:
         raise InputError(f"image file not found: {path}", file=yaml_file, field="image") from None
+    except Image.DecompressionBombError as err:
+        message = f"cannot read image {path}: {err}"
+        raise InputError(message, file=yaml_file, field="image") from None
     except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as err:
         # Pillow reports a malformed header as SyntaxError/ValueError.
         raise InputError(
@@ -109,8 +132,12 @@ def load_map(yaml_path: str | Path) -> OccupancyGrid:
     if not isinstance(image_name, str) or not image_name:
         raise InputError(f"must be a file name, got {image_name!r}", file=file, field="image")
     resolution = _number(raw, "resolution", file)
-    if resolution <= 0:
-        raise InputError(f"must be positive, got {resolution}", file=file, field="resolution")
+    if not 0 < resolution <= 1000.0:
+        raise InputError(
+            f"must be positive and at most 1000 m per cell, got {resolution}",
+            file=file,
+            field="resolution",
+        )
     origin = raw.get("origin")
     if origin is None:
         raise InputError("required key is missing", file=file, field="origin")
@@ -118,7 +145,7 @@ def load_map(yaml_path: str | Path) -> OccupancyGrid:
         not isinstance(origin, list)
         or len(origin) != 3
         or any(isinstance(v, bool) or not isinstance(v, int | float) for v in origin)
-        or not all(math.isfinite(v) for v in origin)
+        or not all(math.isfinite(v) and abs(v) <= MAX_COORDINATE for v in origin)
     ):
         raise InputError(
             f"must be [x, y, yaw] (numbers), got {origin!r}", file=file, field="origin"

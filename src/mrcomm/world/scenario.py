@@ -35,7 +35,7 @@ from scipy import ndimage
 
 from mrcomm.errors import InputError
 from mrcomm.world.geometry import Pose
-from mrcomm.world.mapio import load_map
+from mrcomm.world.mapio import MAX_COORDINATE, load_map
 from mrcomm.world.occupancy import OccupancyGrid
 from mrcomm.world.tasks import TaskSpec
 from mrcomm.world.yamlfile import read_yaml, validation_error
@@ -46,6 +46,9 @@ ROBOT_RADIUS = 0.18
 ID_PATTERN = r"^[A-Za-z0-9_\-]+$"
 
 Number = Annotated[float, Field(allow_inf_nan=False)]
+Coordinate = Annotated[float, Field(allow_inf_nan=False, ge=-MAX_COORDINATE, le=MAX_COORDINATE)]
+#: Longest time accepted (s) for a task's arrival or duration (about 30 years).
+Duration = Annotated[float, Field(allow_inf_nan=False, ge=0.0, le=1e9)]
 
 
 class _Model(BaseModel):
@@ -61,23 +64,23 @@ def _id_to_str(value: Any) -> Any:
 
 
 class PointModel(_Model):
-    x: Number
-    y: Number
+    x: Coordinate
+    y: Coordinate
 
 
 class PoseModel(_Model):
-    x: Number
-    y: Number
-    theta: Number = 0.0
+    x: Coordinate
+    y: Coordinate
+    theta: Annotated[float, Field(allow_inf_nan=False, ge=-1e3, le=1e3)] = 0.0
 
 
 class TaskModel(_Model):
     task_id: str = Field(min_length=1)
     type: str = Field(min_length=1)
     location: PointModel
-    arrival_time: Number = Field(default=0.0, ge=0.0)
-    num_robots: int = Field(default=1, ge=1)
-    duration: Number = Field(default=0.0, ge=0.0)
+    arrival_time: Duration = 0.0
+    num_robots: int = Field(default=1, ge=1, le=1_000_000)
+    duration: Duration = 0.0
     depends: list[str] = Field(default_factory=list)
 
     @field_validator("task_id", mode="before")

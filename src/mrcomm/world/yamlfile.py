@@ -2,7 +2,10 @@
 :class:`~mrcomm.errors.InputError` messages.
 
 * :func:`read_yaml` — parse a file strictly (duplicate keys are an error, because
-  PyYAML would otherwise keep the last one silently).
+  PyYAML would otherwise keep the last one silently) and within limits: at most
+  :data:`MAX_YAML_BYTES`, nested at most :data:`MAX_DEPTH` levels, and at most
+  :data:`MAX_NODES` values once every alias is expanded (a few hundred bytes of nested
+  aliases can stand for billions of values: the "billion laughs").
 * :func:`validation_error` — the first error of a pydantic ``ValidationError`` as
   ``file: [3].location.x: must be a number, got 'abc'``, with "did you mean" for
   unknown keys.
@@ -19,9 +22,45 @@ import yaml
 
 from mrcomm.errors import InputError, did_you_mean
 
+#: Largest input file read (bytes): the biggest real scenario or schema is a few kB.
+MAX_YAML_BYTES = 16 * 1024 * 1024
+#: Deepest nesting of collections.
+MAX_DEPTH = 64
+#: Most values a document may hold with its aliases expanded.
+MAX_NODES = 1_000_000
+
 
 class _UniqueKeyLoader(yaml.SafeLoader):
-    """SafeLoader that rejects a key given twice in one mapping."""
+    """SafeLoader that rejects a key given twice in one mapping and documents nested
+    deeper than :data:`MAX_DEPTH`."""
+
+    _depth = 0
+
+    def compose_node(self, parent: Any, index: Any) -> Any:
+        self._depth += 1
+        try:
+            if self._depth > MAX_DEPTH:
+                mark = self.peek_event().start_mark
+                problem = f"nested deeper than {MAX_DEPTH} levels"
+                raise yaml.composer.ComposerError(None, None, problem, mark)
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
+
+
+def _expanded_size(node: yaml.Node, sizes: dict[int, int]) -> int:
+    """How many values ``node`` stands for with every alias expanded (an alias is the
+    same node object reached again: counted again, computed once)."""
+    known = sizes.get(id(node))
+    if known is not None:
+        return known
+    size = 1
+    if isinstance(node, yaml.SequenceNode):
+        size += sum(_expanded_size(child, sizes) for child in node.value)
+    elif isinstance(node, yaml.MappingNode):
+        size += sum(_expanded_size(k, sizes) + _expanded_size(v, sizes) for k, v in node.value)
+    sizes[id(node)] = size = min(size, MAX_NODES + 1)
+    return size
 
 
 def _construct_unique_mapping(loader: _UniqueKeyLoader, node: yaml.MappingNode) -> Any:
@@ -51,6 +90,11 @@ def read_yaml(path: str | Path, *, field: str | None = None) -> Any:
     """
     path = Path(path)
     try:
+        if path.exists() and not path.is_file() and not path.is_dir():
+            raise InputError("not a regular file", file=path, field=field)
+        if path.is_file() and path.stat().st_size > MAX_YAML_BYTES:
+            limit = MAX_YAML_BYTES // (1024 * 1024)
+            raise InputError(f"larger than {limit} MB: not an input file", file=path, field=field)
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise InputError("file not found", file=path, field=field) from None
@@ -58,8 +102,18 @@ def read_yaml(path: str | Path, *, field: str | None = None) -> Any:
         raise InputError("is a directory, expected a YAML file", file=path, field=field) from None
     except (OSError, UnicodeDecodeError) as err:
         raise InputError(f"cannot read file ({err})", file=path, field=field) from None
+    loader = _UniqueKeyLoader(text)
     try:
-        return yaml.load(text, Loader=_UniqueKeyLoader)  # a SafeLoader subclass
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        if _expanded_size(node, {}) > MAX_NODES:
+            raise InputError(
+                f"more than {MAX_NODES:,} values once its aliases are expanded", file=path
+            )
+        return loader.construct_document(node)
+    except RecursionError:
+        raise InputError(f"nested deeper than {MAX_DEPTH} levels", file=path) from None
     except yaml.MarkedYAMLError as err:
         mark = err.problem_mark or err.context_mark
         where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark else ""
@@ -67,6 +121,8 @@ def read_yaml(path: str | Path, *, field: str | None = None) -> Any:
         raise InputError(f"not valid YAML: {problem}{where}", file=path) from None
     except yaml.YAMLError as err:
         raise InputError(f"not valid YAML: {err}", file=path) from None
+    finally:
+        loader.dispose()
 
 
 def format_loc(loc: tuple[int | str, ...]) -> str:

@@ -192,6 +192,8 @@ def load_model(path: str | Path) -> SignalModel:
         raise InputError("is a directory, expected a model JSON file", file=p) from None
     except (json.JSONDecodeError, UnicodeDecodeError) as err:
         raise InputError(f"not a JSON signal model ({err})", file=p) from None
+    except RecursionError:
+        raise InputError("not a JSON signal model (nested too deeply)", file=p) from None
     except OSError as err:
         raise InputError(f"cannot read: {err}", file=p) from None
     return model_from_json(data, file=p)
