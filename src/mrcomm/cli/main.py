@@ -59,7 +59,7 @@ COMMANDS: dict[str, Command] = {
     "radio": Command(
         _CLI + "radio_cmd",
         "radio_app",
-        "Radio profiles of the radio network model: list, show, plot",
+        "Radio profiles of the radio network model: list, show, plot, fit",
     ),
     "fsm": Command(_CLI + "fsm_cmd", "fsm", "Write a behaviour's state machine as a diagram"),
     "variants": Command(

@@ -1,6 +1,10 @@
 """``mrcomm signal``: fit SSD signal models from measurements, show and plot them.
 
 * ``mrcomm signal fit CSV --out MODEL.json`` — fit and save (atomically), print a summary.
+* ``mrcomm signal fit RESULTS.duckdb --out MODEL.json [--config LABEL] [--map MAP.yaml]``
+  — the same from the RSSI that a results database's ESD runs measured on the radio
+  (the calibration set: distance between the robots, RSSI, line of sight = no wall
+  between them on the map; see :mod:`mrcomm.net.radio.readings`).
 * ``mrcomm signal show [MODEL] [--threshold -42] [--json]`` — threshold crossings and
   RSSI at 1, 2, 4 and 8 m for line of sight and obstructed.
 * ``mrcomm signal plot [MODEL] [--csv CSV] --out FIG`` — a figure (PNG, SVG or PDF).
@@ -10,6 +14,7 @@ Without MODEL the bundled model (fitted from the synthetic calibration set) is u
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 from typing import Annotated, Any
@@ -99,27 +104,91 @@ def _print_summary(info: dict[str, Any]) -> None:
         )
 
 
+def calibration_from_database(
+    source: Path, config: str | None, map_path: Path | None
+) -> tuple[Any, list[str]]:
+    """The calibration set of a results database's runs that measured the radio, and
+    what was done to build it (one line each)."""
+    from mrcomm.net.radio.profile import DEFAULT_PROFILE, load_profile
+    from mrcomm.net.radio.readings import calibration_from_readings, read_database_readings
+    from mrcomm.world.mapio import load_map
+
+    grid = load_map(map_path) if map_path is not None else None
+    found = read_database_readings(source, config=config, grid=grid)
+    notes = list(found.readings.notes)
+    profile_name = found.profiles[0] if len(found.profiles) == 1 else DEFAULT_PROFILE
+    try:
+        sensitivity = load_profile(profile_name).sensitivity_dbm
+    except InputError:
+        sensitivity = load_profile(DEFAULT_PROFILE).sensitivity_dbm
+    if found.modes == ("sim",):
+        notes.insert(0, "SYNTHETIC: RSSI of simulated runs (the radio network model)")
+    extra: list[str] = []
+    calibration = calibration_from_readings(found.readings, sensitivity, notes=extra)
+    # The comments travel into the model's provenance ("SYNTHETIC" marks it so).
+    return dataclasses.replace(calibration, comments=(*notes, *extra)), notes + extra
+
+
 @signal_app.command("fit")
 def fit_cmd(
-    csv: Annotated[Path, typer.Argument(help="Calibration CSV: distance,rssi,line_of_sight.")],
+    source: Annotated[
+        Path,
+        typer.Argument(
+            help="Calibration CSV (distance,rssi,line_of_sight), or a results database "
+            "(.duckdb, .db, .ddb) whose ESD runs measured the radio."
+        ),
+    ],
     out: Annotated[Path, typer.Option("--out", "-o", help="Model JSON to write.")],
     gamma: Annotated[float, typer.Option(help="RBF kernel gamma (1/m^2).", min=1e-9)] = 0.1,
     c: Annotated[float, typer.Option("--C", help="SVR regularisation C.", min=1e-9)] = 100.0,
     epsilon: Annotated[float, typer.Option(help="SVR epsilon tube (dB).", min=0.0)] = 0.1,
     threshold: Annotated[float, typer.Option(help="Default warning threshold (dBm).")] = -42.0,
+    config: Annotated[
+        str | None,
+        typer.Option(
+            help="Database: only the runs of this configuration label.", show_default=False
+        ),
+    ] = None,
+    map_path: Annotated[
+        Path | None,
+        typer.Option(
+            "--map",
+            help="Database: the ROS map YAML line of sight is cast on (default: each "
+            "run's scenario map).",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
-    """Fit line-of-sight and obstructed SVR models to a calibration CSV."""
+    """Fit line-of-sight and obstructed SVR models to a calibration CSV or to the RSSI
+    recorded by a results database's ESD runs."""
+    from mrcomm.net.radio.readings import source_kind
     from mrcomm.net.signal.calibration import load_calibration
     from mrcomm.net.signal.pathloss import fit_log_distance
     from mrcomm.net.signal.svr import fit, save_model
 
     check_output_file(out, "--out", (".json",))
-    calibration = load_calibration(csv)
+    # A results database by its suffix or content; anything else is read as a CSV,
+    # whatever its suffix (as before databases were accepted).
+    kind = source_kind(source, strict=False)
+    notes: list[str] = []
+    if kind == "database":
+        calibration, notes = calibration_from_database(source, config, map_path)
+    else:
+        for option, value in (("--config", config), ("--map", map_path)):
+            if value is not None:
+                raise InputError(
+                    "applies to a results database, not to a calibration CSV",
+                    file=source,
+                    field=option,
+                )
+        calibration = load_calibration(source)
     model = fit(calibration, gamma=gamma, C=c, epsilon=epsilon, threshold_dbm=threshold)
     try:
         save_model(model, out)
     except OSError as err:
         raise InputError(f"cannot write: {err.strerror or err}", file=out, field="--out") from None
+    for note in notes:
+        typer.echo(f"note: {note}")
     typer.echo(f"wrote {out}")
     typer.echo(f"SVR: rbf, gamma {gamma:g}, C {c:g}, epsilon {epsilon:g}")
     for los, label in ((True, "line of sight"), (False, "obstructed")):
