@@ -39,6 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mrcomm.errors import InputError, did_you_mean
+from mrcomm.net.links import cast_ray
 from mrcomm.net.radio.fit import Readings, censor
 from mrcomm.net.radio.profile import DEFAULT_PROFILE
 from mrcomm.net.signal.calibration import MIN_READINGS as MIN_CLASS_READINGS
@@ -104,8 +105,7 @@ class WallCounter:
         key = (*a, *b) if a <= b else (*b, *a)
         found = self._cache.get(key)
         if found is None:
-            grid = self.grid
-            found = 0 if grid.line_of_sight(ax, ay, bx, by) else grid.walls_between(ax, ay, bx, by)
+            found = cast_ray(self.grid, ax, ay, bx, by, True)[0]  # the link model's cast
             self._cache[key] = found
         return found
 
