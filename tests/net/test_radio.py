@@ -111,6 +111,30 @@ def test_shadowing_correlation_follows_the_decorrelation_distance(lag_m: float) 
     assert np.std(v) == pytest.approx(6.0, rel=0.08)
 
 
+@pytest.mark.parametrize(
+    ("lag_m", "low", "high"), [(0.25, 0.55, 1.0), (1.5, 0.85, 1.05), (5.0, 0.92, 1.06)]
+)
+def test_shadowing_between_grid_points_keeps_its_semivariogram(
+    lag_m: float, low: float, high: float
+) -> None:
+    """Where the robots are — between grid points — half the mean squared difference of
+    readings lag_m apart follows σ²(1 − exp(−Δ/dc)): closely from 0.3·dc up; below one
+    grid spacing the interpolation smooths it (documented bound)."""
+    sigma, dc = 6.0, 5.0
+    rng = np.random.default_rng(1)
+    halves = []
+    for seed in range(10):
+        field = ShadowingField(sigma, dc, (0, 60, 0, 40), np.random.default_rng(seed))
+        points = rng.uniform([5, 5], [55, 35], size=(1500, 2))
+        angle = rng.uniform(0, 2 * np.pi, len(points))
+        moved = points + lag_m * np.c_[np.cos(angle), np.sin(angle)]
+        a = np.array([field.at(x, y) for x, y in points])
+        b = np.array([field.at(x, y) for x, y in moved])
+        halves.append(0.5 * np.mean((a - b) ** 2))
+    nominal = sigma**2 * (1 - np.exp(-lag_m / dc))
+    assert low * nominal < np.mean(halves) < high * nominal
+
+
 def test_shadowing_is_seeded_and_reciprocal() -> None:
     one = ShadowingField(6.0, 5.0, (0, 30, 0, 20), np.random.default_rng(7))
     same = ShadowingField(6.0, 5.0, (0, 30, 0, 20), np.random.default_rng(7))

@@ -20,8 +20,12 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-#: Grid spacing as a fraction of the decorrelation distance.
-SPACING_FRACTION = 0.125
+#: Grid spacing as a fraction of the decorrelation distance. Reading between grid points
+#: smooths the field below one spacing: with 1/32 its semivariogram between arbitrary
+#: points is within 7 % of Gudmundson's from 0.3·dc up and 32 % low at 0.05·dc (with
+#: 1/8 it was 24 % low at 0.3·dc and 73 % at 0.05·dc, which biased fitted
+#: decorrelation distances high); 1/64 would triple the cost of drawing it.
+SPACING_FRACTION = 1.0 / 32.0
 #: Largest number of grid points along one side (a coarser grid beyond it).
 MAX_SIDE = 2048
 
