@@ -102,8 +102,9 @@ def read_yaml(path: str | Path, *, field: str | None = None) -> Any:
         raise InputError("is a directory, expected a YAML file", file=path, field=field) from None
     except (OSError, UnicodeDecodeError) as err:
         raise InputError(f"cannot read file ({err})", file=path, field=field) from None
-    loader = _UniqueKeyLoader(text)
+    loader: _UniqueKeyLoader | None = None
     try:
+        loader = _UniqueKeyLoader(text)  # reading the text can already fail
         node = loader.get_single_node()
         if node is None:
             return None
@@ -122,7 +123,8 @@ def read_yaml(path: str | Path, *, field: str | None = None) -> Any:
     except yaml.YAMLError as err:
         raise InputError(f"not valid YAML: {err}", file=path) from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
 
 
 def format_loc(loc: tuple[int | str, ...]) -> str:

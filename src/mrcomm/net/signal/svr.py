@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -244,9 +245,13 @@ class _Reader:
     def number(self, value: Any, where: str) -> float:
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.error(where, f"expected a number, got {value!r}")
-        if not np.isfinite(value):
-            raise self.error(where, f"expected a finite number, got {value!r}")
-        return float(value)
+        try:
+            number = float(value)  # a JSON integer can be larger than any float
+        except OverflowError:
+            number = math.inf
+        if not math.isfinite(number):
+            raise self.error(where, f"expected a finite number, got {str(value)[:40]}")
+        return number
 
     def vector(self, value: Any, where: str) -> FloatArray:
         if not isinstance(value, list) or not value:

@@ -27,6 +27,12 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 
 
+#: Latest reading time accepted (s, about 115 days): readings are looked up by time
+#: plus an offset per pair in one float array, exact to well under a millisecond only
+#: while the times stay this small (a trace spanning 1e20 s looked up wrong readings).
+MAX_TRACE_S = 1e7
+
+
 @dataclass(eq=False)
 class RssiTrace:
     """Readings of directed pairs over time, ready for zero-order-hold lookup."""
@@ -80,7 +86,11 @@ class RssiTrace:
             raise InputError("no readings", file=table.path)
         times, sources, targets, values = [], [], [], []
         for lineno, row in table.rows:
-            times.append(table.number(lineno, row, "time"))
+            time = table.number(lineno, row, "time")
+            if not 0.0 <= time <= MAX_TRACE_S:
+                limit = f"{MAX_TRACE_S:g}"
+                raise table.error(lineno, "time", f"{time:g} s is not within 0-{limit} s")
+            times.append(time)
             for column in ("from", "to"):
                 if not row[column]:
                     raise table.error(lineno, column, "empty robot id")
