@@ -172,9 +172,9 @@ def _fingerprint(path: Path) -> str:
 def test_bad_databases_and_names_are_refused_untouched(tmp_path: Path, sim: MissionResult) -> None:
     text = tmp_path / "notes.duckdb"
     text.write_text("not a database\n")
-    with pytest.raises(InputError, match="not a readable DuckDB database"):
+    with pytest.raises(InputError, match="damaged or not a DuckDB database"):
         check_target(text)
-    with pytest.raises(InputError, match="not a readable DuckDB database"):
+    with pytest.raises(InputError, match="damaged or not a DuckDB database"):
         store_result(text, sim)
     assert text.read_text() == "not a database\n"
     with pytest.raises(InputError, match="--experiment: 'a b' is not a valid name"):

@@ -13,6 +13,7 @@ import duckdb
 import pytest
 
 from mrcomm.errors import InputError
+from mrcomm.experiment.api import load_results
 from mrcomm.experiment.rows import failure_rows, result_rows
 from mrcomm.experiment.runner import plan_sweep
 from mrcomm.experiment.schema import load_experiment
@@ -99,7 +100,7 @@ def test_other_schema_versions_are_refused_untouched(tmp_path: Path) -> None:
 def test_foreign_files_are_refused(tmp_path: Path) -> None:
     text = tmp_path / "notes.duckdb"
     text.write_text("not a database\n" * 100)
-    with pytest.raises(InputError, match="not a readable DuckDB database"):
+    with pytest.raises(InputError, match="damaged or not a DuckDB database"):
         inspect_database(text)
     assert text.read_text() == "not a database\n" * 100
     other = tmp_path / "other.duckdb"
@@ -108,6 +109,25 @@ def test_foreign_files_are_refused(tmp_path: Path) -> None:
     con.close()
     with pytest.raises(InputError, match="not an MRComm results database"):
         inspect_database(other)
+
+
+@pytest.mark.parametrize("keep", [100, 12288, 0.5])
+def test_a_truncated_database_is_reported_as_damaged(tmp_path: Path, keep: float) -> None:
+    """Cut short (a disk full, a copy interrupted): damaged, never "in use", never a
+    traceback — whether DuckDB fails on opening it or only on reading a table."""
+    db = tmp_path / "r.duckdb"
+    store = ResultStore.open(db)
+    store.close()
+    con = duckdb.connect(str(db))
+    con.execute("CREATE TABLE filler AS SELECT range AS x FROM range(200000)")
+    con.close()
+    size = db.stat().st_size
+    with db.open("r+b") as f:
+        f.truncate(int(size * keep) if keep < 1 else int(keep))
+    with pytest.raises(InputError, match="damaged or not a DuckDB database") as err:
+        inspect_database(db)
+        load_results(db)
+    assert "in use" not in str(err.value)
 
 
 def test_a_database_in_use_is_reported(tmp_path: Path) -> None:

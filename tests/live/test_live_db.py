@@ -78,8 +78,8 @@ def test_a_bad_db_is_refused_before_any_process_starts(tmp_path: Path) -> None:
     bad.write_text("hello\n")
     records = tmp_path / "records"
     done = mrcomm("live", str(S1), "--db", str(bad), "--record-dir", str(records), timeout=30)
-    one_line_error(done, str(bad), "not a readable DuckDB database")
+    one_line_error(done, str(bad), "damaged or not a DuckDB database")
     assert not records.exists()  # nothing launched, nothing recorded
     done = mrcomm("collect", str(records), "--db", str(bad), timeout=30)
-    one_line_error(done, "not a readable DuckDB database")
+    one_line_error(done, "damaged or not a DuckDB database")
     assert bad.read_text() == "hello\n"

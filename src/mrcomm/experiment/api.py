@@ -17,7 +17,7 @@ from pathlib import Path
 import duckdb
 import pandas as pd
 
-from mrcomm.experiment.store import open_readonly
+from mrcomm.experiment.store import damaged, open_readonly
 from mrcomm.experiment.tables import RUN_TABLES
 
 _ORDER = {
@@ -90,5 +90,9 @@ def load_results(
             )
         else:
             query = f"SELECT x.* FROM {table} x JOIN runs USING (run_id) WHERE {condition}"
-        frames[table] = con.execute(f"{query} ORDER BY {_ORDER[table]}", params).df()
+        try:
+            frames[table] = con.execute(f"{query} ORDER BY {_ORDER[table]}", params).df()
+        except duckdb.Error as err:  # a file damaged past its first pages
+            con.close()
+            raise damaged(Path(db_path), err) from None
     return Results(con=con, **frames)

@@ -63,18 +63,33 @@ def _connect(path: Path, *, read_only: bool) -> duckdb.DuckDBPyConnection:
     try:
         return duckdb.connect(str(path), read_only=read_only)
     except duckdb.Error as err:
-        text = str(err)
-        if "lock" in text.lower():
+        # DuckDB says "Could not set lock on file ... Conflicting lock is held" when
+        # another process has it open; anything else is a file it cannot read.
+        if "conflicting lock" in str(err).lower():
             raise InputError(
                 "database is in use by another process (a sweep still running?)", file=path
             ) from None
-        first = text.strip().splitlines()[0] if text.strip() else type(err).__name__
-        raise InputError(f"not a readable DuckDB database ({first})", file=path) from None
+        raise damaged(path, err) from None
+
+
+def damaged(path: Path, err: BaseException) -> InputError:
+    """The one-line error for a database DuckDB cannot read (truncated, overwritten,
+    not a database at all), with the first line of DuckDB's own message."""
+    text = str(err).strip()
+    first = text.splitlines()[0] if text else type(err).__name__
+    return InputError(f"damaged or not a DuckDB database ({first})", file=path)
 
 
 def _check_version(con: duckdb.DuckDBPyConnection, path: Path) -> bool:
     """True for an MRComm results database of this version; False for an empty file.
-    Raise InputError for anything else."""
+    Raise InputError for anything else (a damaged file too)."""
+    try:
+        return _read_version(con, path)
+    except duckdb.Error as err:
+        raise damaged(path, err) from None
+
+
+def _read_version(con: duckdb.DuckDBPyConnection, path: Path) -> bool:
     tables = {row[0] for row in con.execute("SELECT table_name FROM duckdb_tables()").fetchall()}
     if not tables:
         return False
