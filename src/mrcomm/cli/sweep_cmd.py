@@ -38,6 +38,10 @@ if TYPE_CHECKING:
 EXIT_RUNS_FAILED = 1
 
 
+#: Most sweep workers per CPU ``--jobs`` may ask for.
+JOBS_PER_CPU = 4
+
+
 def sweep(
     schema: Annotated[
         Path, typer.Argument(help="Experiment schema YAML (e.g. data/experiments/ah.yaml).")
@@ -81,6 +85,13 @@ def sweep(
     experiment = load_experiment(schema, parse_assignments(sets))
     if jobs is not None and jobs < 1:
         raise InputError(f"must be at least 1, got {jobs}", field="--jobs")
+    # Each worker is a process holding a scenario and a mission (~100 MB): more than a
+    # few per core only thrashes the machine.
+    most = JOBS_PER_CPU * (os.cpu_count() or 1)
+    if jobs is not None and jobs > most:
+        raise InputError(
+            f"at most {most} ({JOBS_PER_CPU} per CPU on this machine), got {jobs}", field="--jobs"
+        )
     if jobs is not None and scheduler is not None:
         raise InputError("give --jobs or --scheduler, not both (the cluster sets its workers)")
     if not run_timeout > 0:

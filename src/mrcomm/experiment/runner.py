@@ -16,6 +16,7 @@
 from __future__ import annotations
 
 import multiprocessing
+import os
 import time
 from collections import deque
 from collections.abc import Callable, Sequence
@@ -28,7 +29,7 @@ from mrcomm.errors import InputError
 from mrcomm.experiment.adhoc import ADHOC_SOURCE
 from mrcomm.experiment.schema import Experiment, RunSpec
 from mrcomm.experiment.store import ResultStore, inspect_database
-from mrcomm.experiment.worker import RunOutcome, RunTask, failed_outcome, ignore_interrupts, run_one
+from mrcomm.experiment.worker import RunOutcome, RunTask, failed_outcome, run_one, start_worker
 
 #: Times a run may be in flight when a worker process dies before it counts as failed.
 MAX_STRIKES = 2
@@ -118,14 +119,17 @@ def plan_sweep(
 
 
 def process_pool(jobs: int) -> ProcessPoolExecutor:
-    """The local executor: ``jobs`` worker processes that ignore Ctrl-C.
+    """The local executor: ``jobs`` worker processes that ignore Ctrl-C and end with
+    this process (:func:`~mrcomm.experiment.worker.start_worker`).
 
     forkserver, not fork: the parent has threads (progress bar, DuckDB), and forking a
     threaded process can deadlock the child.
     """
     methods = multiprocessing.get_all_start_methods()
     context = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
-    return ProcessPoolExecutor(max_workers=jobs, mp_context=context, initializer=ignore_interrupts)
+    return ProcessPoolExecutor(
+        max_workers=jobs, mp_context=context, initializer=start_worker, initargs=(os.getpid(),)
+    )
 
 
 def dask_executor(

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import os
 import signal
 import threading
 import time
@@ -162,3 +163,28 @@ def ignore_interrupts() -> None:
     """Process-pool initializer: Ctrl-C is the parent's to handle (it stops submitting
     and lets the runs in flight end); a worker must not die of it mid-run."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+#: How often a worker checks that the sweep that started it is still there (s).
+PARENT_CHECK_S = 1.0
+
+
+def start_worker(sweep_pid: int) -> None:
+    """Process-pool initializer: ignore Ctrl-C (:func:`ignore_interrupts`) and end with
+    the sweep process ``sweep_pid``. A worker's parent is the pool's fork server, not
+    the sweep, so a sweep killed outright (SIGKILL) would leave its workers running a
+    run nobody will store: a daemon thread checks every second that the sweep is still
+    there and ends the worker when it is not."""
+    ignore_interrupts()
+
+    def watch() -> None:
+        while True:
+            time.sleep(PARENT_CHECK_S)
+            try:
+                os.kill(sweep_pid, 0)  # signal 0: only asks whether it exists
+            except ProcessLookupError:
+                os._exit(1)
+            except PermissionError:
+                pass  # exists, owned by someone else (a recycled pid): keep going
+
+    threading.Thread(target=watch, name="sweep-watch", daemon=True).start()
