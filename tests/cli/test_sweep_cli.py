@@ -81,7 +81,7 @@ def test_runs_over_their_time_limit_are_failures_exit_1(tmp_path: Path) -> None:
         (("spl: [0, 50]", "spl: []"), (), "empty factorial"),
         (("spl: [0, 50]", "spl: [0, -5]"), (), "factors.spl"),
         ((), ("--jobs", "0"), "--jobs: must be at least 1"),
-        ((), ("--jobs", "100000"), "per CPU on this machine, got 100000"),
+        ((), ("--jobs", "100000"), "per CPU on this machine), got 100000"),
         ((), ("--reps", "0"), "--reps: must be at least 1"),
         ((), ("--scheduler", "tcp://127.0.0.1:9", "--connect-timeout", "0.5"), "Dask scheduler"),
     ],
