@@ -128,6 +128,21 @@ def test_bad_inputs_exit_2_and_write_nothing(
         (("signal", "plot", str(bad_model), "--out", str(fig)), "bad.json: not a JSON"),
         (("signal", "plot", "--csv", str(bad_csv), "--out", str(fig)), "bad.csv: line 3"),
         (("signal", "plot", "--out", str(tmp_path / "fig.gif")), "unsupported extension '.gif'"),
+        *(
+            (
+                (
+                    "signal",
+                    "fit",
+                    str(bundled_calibration_path()),
+                    "--out",
+                    str(out),
+                    option,
+                    value,
+                ),
+                f"{option}: must be a finite number",
+            )
+            for option, value in (("--C", "inf"), ("--epsilon", "inf"), ("--threshold", "nan"))
+        ),
     ]
     for args, expected in cases:
         code, _, stderr = mrcomm(monkeypatch, capsys, *args)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -166,6 +167,12 @@ def fit_cmd(
     from mrcomm.net.signal.pathloss import fit_log_distance
     from mrcomm.net.signal.svr import fit, save_model
 
+    # Infinite or NaN hyper-parameters hang the SVR fit or write a model that loading
+    # then refuses: every one must be a finite number.
+    given = {"--gamma": gamma, "--C": c, "--epsilon": epsilon, "--threshold": threshold}
+    for option, value in given.items():
+        if not math.isfinite(value):
+            raise InputError(f"must be a finite number, got {value:g}", field=option)
     check_output_file(out, "--out", (".json",))
     # A results database by its suffix or content; anything else is read as a CSV,
     # whatever its suffix (as before databases were accepted).
