@@ -62,3 +62,27 @@ def test_workers_end_when_the_sweep_is_killed(tmp_path: Path) -> None:
     finally:
         for pid in session_members(sweep.pid):
             os.kill(pid, signal.SIGKILL)
+
+
+def test_a_resumed_sweep_removes_what_a_killed_one_left_of_its_recordings(
+    tmp_path: Path,
+) -> None:
+    from mrcomm.experiment.schema import load_experiment
+    from tests.experiment.helpers import MINI
+
+    schema = write_schema(tmp_path, MINI)
+    record = tmp_path / "rec"
+    record.mkdir()
+    run_ids = [spec.run_id for spec in load_experiment(schema).runs(1)]
+    partial = record / f".{run_ids[0]}.mcap.x1y2z3.tmp"  # as fileio.stage names it
+    partial.write_bytes(b"half a recording")
+    other = record / "notes.txt"
+    other.write_text("not ours")
+    done = subprocess.run(
+        [sys.executable, "-c", "from mrcomm.cli.main import app; app()", "sweep", str(schema),
+         "--db", str(tmp_path / "r.duckdb"), "--reps", "1", "--jobs", "1", "--record", str(record)],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert not partial.exists() and other.read_text() == "not ours"
+    assert sorted(p.name for p in record.glob("*.mcap")) == sorted(f"{r}.mcap" for r in run_ids)

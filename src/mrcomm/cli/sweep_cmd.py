@@ -100,6 +100,8 @@ def sweep(
     if record is not None:
         _check_record_dir(record)
     plan = plan_sweep(experiment, db, repetitions=reps, record_dir=record)
+    if record is not None:
+        _remove_partial_recordings(record, [s.run_id for s in plan.todo])
     console = Console(stderr=True)
     if not plan.todo:
         typer.echo(_summary(plan, SweepReport(len(plan.runs), plan.skipped)))
@@ -182,6 +184,16 @@ def _warn_ignored(experiment: Experiment) -> None:
             "with an 'exclude' entry if they are not wanted",
             err=True,
         )
+
+
+def _remove_partial_recordings(record: Path, run_ids: list[str]) -> None:
+    """Remove what a killed sweep left of the recordings of the runs this one will redo
+    (a recording is written to ``.<run>.mcap.<random>.tmp`` and renamed when complete;
+    a sweep killed outright cannot remove it; the database's lock makes these runs
+    this sweep's)."""
+    for run_id in run_ids:
+        for partial in record.glob(f".{run_id}.mcap.*.tmp"):
+            partial.unlink(missing_ok=True)
 
 
 def _check_record_dir(record: Path) -> None:
