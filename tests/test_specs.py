@@ -246,12 +246,12 @@ def test_a_new_variant_version_is_a_new_configuration(
 def test_the_report_lists_each_configurations_parameters_and_versions() -> None:
     import pandas as pd
 
-    from mrcomm.analysis.report import _config_rows
+    from mrcomm.analysis.report_provenance import config_rows
 
     options = {"params": {"behaviour": {"utility": "greedy", "collision": {"danger_radius": 1.2}}}}
     options["variants"] = {"behaviour": "lf-v1"}
     frame = pd.DataFrame([{"config_id": "c", "label": "L", "options": json.dumps(options)}])
-    row = _config_rows(frame)[0]
+    row = config_rows(frame)[0]
     assert row[:2] == ["c", "L"]
     assert row[2] == "behaviour.collision.danger_radius=1.2, behaviour.utility=greedy"
     assert row[3] == "behaviour lf-v1"

@@ -17,6 +17,7 @@ import mrcomm
 from mrcomm.analysis import figures_report as fr
 from mrcomm.analysis import report as rp
 from mrcomm.analysis import stats as st
+from mrcomm.analysis.study import TABLE_NAMES
 from mrcomm.errors import InputError
 
 IMG = re.compile(r'<img src="([^"]+)" alt="([^"]*)">')
@@ -34,9 +35,7 @@ def test_report_writes_html_figures_and_tables(built: rp.Report, study: Any) -> 
     assert {f"qq_{m}" for m in st.CORE_METRICS} <= set(built.figures)
     # One timeline per behaviour by default.
     assert len([f for f in built.figures if f.startswith("timeline_")]) == 2
-    assert sorted(p.stem for p in (built.out_dir / "tables").glob("*.csv")) == sorted(
-        st.TABLE_NAMES
-    )
+    assert sorted(p.stem for p in (built.out_dir / "tables").glob("*.csv")) == sorted(TABLE_NAMES)
 
 
 def test_html_is_self_contained(built: rp.Report, study_db: Path) -> None:

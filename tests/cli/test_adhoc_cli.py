@@ -105,7 +105,9 @@ def test_bad_db_and_experiment_options_fail_before_the_mission(
 ) -> None:
     bad = tmp_path / "bad.duckdb"
     bad.write_text("hello\n")
-    one_line_error(in_process(capsys, monkeypatch, *RUN, "--db", str(bad)), "not a readable")
+    one_line_error(
+        in_process(capsys, monkeypatch, *RUN, "--db", str(bad)), "damaged or not a DuckDB database"
+    )
     assert bad.read_text() == "hello\n"
     one_line_error(
         in_process(capsys, monkeypatch, *RUN, "--db", str(tmp_path / "no" / "r.duckdb")),

@@ -13,8 +13,8 @@ from typing import Any, TypeVar
 import yaml
 
 from mrcomm.live.launcher import free_port
-from mrcomm.net.zenoh_bus import Incoming, ZenohNode
 from mrcomm.net.zenoh_config import ZenohOptions, make_options
+from mrcomm.net.zenoh_node import Incoming, ZenohNode
 
 ROOT = Path(__file__).resolve().parents[2]
 S1 = ROOT / "data" / "scenarios" / "s1.yaml"

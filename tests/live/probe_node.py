@@ -13,8 +13,9 @@ import sys
 import time
 
 from mrcomm.messaging.messages import TOPIC_POSE, Message, PoseMsg
-from mrcomm.net.zenoh_bus import LinkRules, PositionBook, ZenohBus, ZenohNode
+from mrcomm.net.zenoh_bus import LinkRules, PositionBook, ZenohBus
 from mrcomm.net.zenoh_config import make_options
+from mrcomm.net.zenoh_node import ZenohNode
 from mrcomm.seeding import stream
 
 

@@ -18,8 +18,8 @@ from mrcomm.live.launcher import LiveTeam, TlsLayout, free_port
 from mrcomm.live.protocol import WORLD_ID
 from mrcomm.live.settings import LiveSettings
 from mrcomm.messaging.messages import TOPIC_RSSI, RssiMsg, decode
-from mrcomm.net.zenoh_bus import Incoming, ZenohNode
 from mrcomm.net.zenoh_config import ZenohOptions, make_options
+from mrcomm.net.zenoh_node import Incoming, ZenohNode
 from mrcomm.run.config import make_config
 from mrcomm.sim.mission import run_mission
 from mrcomm.world.geometry import Pose

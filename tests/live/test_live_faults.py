@@ -132,7 +132,7 @@ def test_a_rogue_peer_publishing_garbage_on_every_topic_takes_no_agent_down(
 
     from mrcomm.messaging.messages import Heartbeat, PoseMsg, TaskState, TaskStatus, encode
     from mrcomm.messaging.topics import TOPICS, lane_of
-    from mrcomm.net.zenoh_bus import ZenohNode
+    from mrcomm.net.zenoh_node import ZenohNode
 
     stop = threading.Event()
     sent = {"samples": 0}

@@ -13,8 +13,9 @@ from pathlib import Path
 import pytest
 
 from mrcomm.live.launcher import free_port
-from mrcomm.net.zenoh_bus import Lane, ZenohNode
+from mrcomm.messaging.topics import Lane
 from mrcomm.net.zenoh_config import make_options
+from mrcomm.net.zenoh_node import ZenohNode
 
 from .certs import make_ca, make_certs
 from .helpers import S1, wait_for

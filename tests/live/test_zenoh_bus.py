@@ -22,7 +22,8 @@ from mrcomm.messaging.topics import Lane, lane_of
 from mrcomm.net.delivery import DeliveryPolicy
 from mrcomm.net.inprocess import InProcessNetwork
 from mrcomm.net.network import AdHoc
-from mrcomm.net.zenoh_bus import LinkRules, PositionBook, Presence, ZenohBus
+from mrcomm.net.zenoh_bus import LinkRules, PositionBook, ZenohBus
+from mrcomm.net.zenoh_node import Presence
 from mrcomm.run.assemble import sum_counts
 from mrcomm.seeding import stream
 
@@ -266,7 +267,7 @@ def test_the_edge_refuses_what_no_agent_should_see() -> None:
     bytes that decode to nothing, an oversized payload — are counted by cause and never
     reach a handler; the team's own poses still do."""
     from mrcomm.messaging.messages import Heartbeat, encode
-    from mrcomm.net.zenoh_bus import MAX_SAMPLE_BYTES
+    from mrcomm.net.zenoh_node import MAX_SAMPLE_BYTES
 
     with nodes(mesh_options(2)) as (rogue, node):
         bus = ZenohBus(node, LinkRules(), PositionBook(), members=frozenset({"robot_1", "robot_2"}))

@@ -1,4 +1,4 @@
-"""Fitting a radio profile to RSSI readings (net/radio/fit.py, net/radio/readings.py).
+"""Fitting a radio profile to RSSI readings (net/radio/fit.py, experiment/radio_readings.py).
 
 The readings are drawn with MRComm's own radio model on S1's office map: robots
 wander the floor, and every 0.5 s each measures each peer as the ``radio`` network
@@ -16,16 +16,12 @@ import numpy as np
 import pytest
 
 from mrcomm.errors import InputError
-from mrcomm.net.radio.fit import (
-    RadioFit,
-    Readings,
-    fit_profile,
-    reciprocal_asymmetry,
-    write_profile,
-)
+from mrcomm.experiment.radio_readings import positions_at, read_csv_readings
+from mrcomm.net.radio.fit import RadioFit, fit_profile, write_profile
+from mrcomm.net.radio.fit_data import Readings
+from mrcomm.net.radio.fit_shadowing import reciprocal_asymmetry
 from mrcomm.net.radio.model import RadioNetwork
 from mrcomm.net.radio.profile import RadioProfile, load_profile
-from mrcomm.net.radio.readings import positions_at, read_csv_readings
 from mrcomm.world.mapio import load_map
 from mrcomm.world.occupancy import OccupancyGrid
 

@@ -10,7 +10,6 @@ atomically: a failure leaves no half-written report behind.
 from __future__ import annotations
 
 import datetime as dt
-import json
 import math
 import platform
 import time
@@ -35,6 +34,8 @@ from mrcomm.analysis.figures_report import (
 )
 from mrcomm.analysis.glossary import glossary_sections
 from mrcomm.analysis.inference import Correction
+from mrcomm.analysis.report_provenance import config_rows, provenance_rows
+from mrcomm.analysis.study import TABLE_NAMES, study_tables
 from mrcomm.errors import InputError
 from mrcomm.experiment.tables import RUN_MODES
 from mrcomm.fileio import atomic_write_bytes
@@ -384,30 +385,6 @@ def _package_versions() -> dict[str, str]:
     return out
 
 
-PROVENANCE_COLUMNS = ("mrcomm_version", "git_commit", "machine", "input_hashes")
-
-
-def provenance_rows(runs: pd.DataFrame) -> list[list[str]]:
-    """Who made the runs: one row per distinct (configuration label, MRComm version,
-    commit, machine, input hashes) with its number of runs."""
-    if not set(PROVENANCE_COLUMNS) <= set(runs.columns):
-        return []
-    keys = ["label", *PROVENANCE_COLUMNS]
-    frame = runs.reindex(columns=keys).fillna("").astype(str)
-    rows = []
-    for key, group in frame.groupby(keys, sort=True):
-        label, version, commit, machine, hashes = (str(k) for k in key)
-        try:
-            files = json.loads(hashes) if hashes else {}
-        except ValueError:
-            files = {}
-        listed = ", ".join(f"{role} {digest}" for role, digest in sorted(files.items()))
-        rows.append(
-            [label, str(len(group)), version, commit or "(not a checkout)", machine, listed]
-        )
-    return rows
-
-
 def _count_keys(table: pd.DataFrame) -> list[str]:
     """The count columns to show: the radio's only when some run had a radio."""
     radio = not table.empty and bool(table[list(RADIO_COUNT_KEYS)].to_numpy().sum() > 0)
@@ -483,7 +460,7 @@ def build_report(
     runs = frame_of(data, "runs")
     check_runs(runs, db_path)
     chosen = metrics_with_data(runs, metrics)
-    tables = st.study_tables(
+    tables = study_tables(
         runs,
         chosen,
         alpha,
@@ -514,13 +491,13 @@ def build_report(
         "status": status,
         "errors": _failed_runs(runs),
         "provenance": provenance_rows(runs),
-        "configs": _config_rows(frame_of(data, "configs")),
+        "configs": config_rows(frame_of(data, "configs")),
         "config_columns": [
             *(c for c in frame_of(data, "configs").columns if c != "options"),
             "parameters",
             "variants",
         ],
-        "tables": {name: _html_table(name, tables.get(name)) for name in st.TABLE_NAMES},
+        "tables": {name: _html_table(name, tables.get(name)) for name in TABLE_NAMES},
         "table_titles": TABLE_TITLES,
         "figures": figures,
         "constant": constant_metrics(runs, chosen),
@@ -548,7 +525,7 @@ def build_report(
     for old in (out_dir / "figures").glob("*"):
         if old.suffix in (".png", ".svg", ".pdf") and old.name not in written:
             old.unlink()
-    for name in st.TABLE_NAMES:
+    for name in TABLE_NAMES:
         _write(out_dir / "tables" / f"{name}.csv", tables.get(name).to_csv(index=False).encode())
         report.tables.append(name)
     _write(report.html, html.encode("utf-8"))
@@ -569,36 +546,3 @@ def _environment() -> jinja2.Environment:
         trim_blocks=True,
         lstrip_blocks=True,
     )
-
-
-def _config_rows(configs: pd.DataFrame) -> list[list[str]]:
-    """Each configuration's columns, then its variant parameters (``--set`` form) and
-    the versions of its variants, read from its stored options."""
-    rows: list[list[str]] = []
-    for record in configs.to_dict("records"):
-        try:
-            options = json.loads(str(record.get("options") or "{}"))
-        except ValueError:
-            options = {}
-        params = options.get("params") or {}
-        assignments = [
-            f"{kind}.{key}={value}"
-            for kind, section in sorted(params.items())
-            for key, value in sorted(_flatten(section).items())
-        ]
-        variants = options.get("variants") or {}
-        cells = [str(v) for k, v in record.items() if k != "options"]
-        cells.append(", ".join(assignments) or "defaults")
-        cells.append(", ".join(f"{k} {v}" for k, v in sorted(variants.items())))
-        rows.append(cells)
-    return rows
-
-
-def _flatten(section: dict[str, Any], prefix: str = "") -> dict[str, Any]:
-    out: dict[str, Any] = {}
-    for key, value in section.items():
-        if isinstance(value, dict):
-            out.update(_flatten(value, f"{prefix}{key}."))
-        else:
-            out[f"{prefix}{key}"] = value
-    return out

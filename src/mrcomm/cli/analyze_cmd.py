@@ -51,6 +51,7 @@ def analyze(
     from mrcomm.analysis import stats as st
     from mrcomm.analysis.figures_report import metrics_with_data
     from mrcomm.analysis.inference import check_correction
+    from mrcomm.analysis.study import study_tables
 
     if fmt not in FORMATS:
         raise InputError(
@@ -65,7 +66,7 @@ def analyze(
     data = rp.load_study(db, experiment, mode)  # checks --mode before loading
     runs = data.runs
     rp.check_runs(runs, db)
-    tables = st.study_tables(
+    tables = study_tables(
         runs,
         metrics_with_data(runs, metric),
         alpha,
@@ -98,7 +99,7 @@ def analyze(
 
 
 def _tables(names: list[str] | None) -> list[str]:
-    from mrcomm.analysis.stats import TABLE_NAMES
+    from mrcomm.analysis.study import TABLE_NAMES
 
     if not names:
         return list(TABLE_NAMES)

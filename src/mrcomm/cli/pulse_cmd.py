@@ -45,8 +45,8 @@ from mrcomm.cli.live_cmd import (
 from mrcomm.errors import InputError
 from mrcomm.messaging.messages import TOPIC_RSSI, Message
 from mrcomm.net.pulse import Pulse, PulseBase, ReplayPulse, iw_poller, load_peers, pulse_id
-from mrcomm.net.zenoh_bus import ZenohNode
 from mrcomm.net.zenoh_config import check_key_chunk
+from mrcomm.net.zenoh_node import ZenohNode
 from mrcomm.ports import Bus, Handler
 
 

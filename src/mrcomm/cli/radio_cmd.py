@@ -296,9 +296,13 @@ def fit_cmd(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
 ) -> None:
     """Fit a radio profile (L0, n, wall loss, shadowing) to RSSI readings."""
+    from mrcomm.experiment.radio_readings import (
+        read_csv_readings,
+        read_database_readings,
+        source_kind,
+    )
     from mrcomm.net.radio.fit import fit_profile, write_profile
     from mrcomm.net.radio.profile import DEFAULT_PROFILE, PROFILE_SUFFIXES, load_profile
-    from mrcomm.net.radio.readings import read_csv_readings, read_database_readings, source_kind
     from mrcomm.world.mapio import load_map
 
     # Everything the fit needs is checked before any work.

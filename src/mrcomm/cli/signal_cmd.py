@@ -4,7 +4,7 @@
 * ``mrcomm signal fit RESULTS.duckdb --out MODEL.json [--config LABEL] [--map MAP.yaml]``
   — the same from the RSSI that a results database's ESD runs measured on the radio
   (the calibration set: distance between the robots, RSSI, line of sight = no wall
-  between them on the map; see :mod:`mrcomm.net.radio.readings`).
+  between them on the map; see :mod:`mrcomm.experiment.radio_readings`).
 * ``mrcomm signal show [MODEL] [--threshold -42] [--json]`` — threshold crossings and
   RSSI at 1, 2, 4 and 8 m for line of sight and obstructed.
 * ``mrcomm signal plot [MODEL] [--csv CSV] --out FIG`` — a figure (PNG, SVG or PDF).
@@ -110,8 +110,8 @@ def calibration_from_database(
 ) -> tuple[Any, list[str]]:
     """The calibration set of a results database's runs that measured the radio, and
     what was done to build it (one line each)."""
+    from mrcomm.experiment.radio_readings import calibration_from_readings, read_database_readings
     from mrcomm.net.radio.profile import DEFAULT_PROFILE, load_profile
-    from mrcomm.net.radio.readings import calibration_from_readings, read_database_readings
     from mrcomm.world.mapio import load_map
 
     grid = load_map(map_path) if map_path is not None else None
@@ -162,17 +162,17 @@ def fit_cmd(
 ) -> None:
     """Fit line-of-sight and obstructed SVR models to a calibration CSV or to the RSSI
     recorded by a results database's ESD runs."""
-    from mrcomm.net.radio.readings import source_kind
+    from mrcomm.experiment.radio_readings import source_kind
     from mrcomm.net.signal.calibration import load_calibration
     from mrcomm.net.signal.pathloss import fit_log_distance
     from mrcomm.net.signal.svr import fit, save_model
 
     # Infinite or NaN hyper-parameters hang the SVR fit or write a model that loading
     # then refuses: every one must be a finite number.
-    given = {"--gamma": gamma, "--C": c, "--epsilon": epsilon, "--threshold": threshold}
-    for option, value in given.items():
-        if not math.isfinite(value):
-            raise InputError(f"must be a finite number, got {value:g}", field=option)
+    hyper = {"--gamma": gamma, "--C": c, "--epsilon": epsilon, "--threshold": threshold}
+    for name, number in hyper.items():
+        if not math.isfinite(number):
+            raise InputError(f"must be a finite number, got {number:g}", field=name)
     check_output_file(out, "--out", (".json",))
     # A results database by its suffix or content; anything else is read as a CSV,
     # whatever its suffix (as before databases were accepted).

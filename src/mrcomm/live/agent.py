@@ -54,20 +54,14 @@ from mrcomm.live.remote_base import RemoteBase
 from mrcomm.live.resync import Resync, reply_for
 from mrcomm.live.settings import LiveSettings, config_crc
 from mrcomm.messaging.messages import TOPIC_RSSI, RssiMsg, decode
+from mrcomm.messaging.topics import Lane
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import Timeline
 from mrcomm.net.link_sensors import MeasuredSensor
 from mrcomm.net.pulse import pulse_id
-from mrcomm.net.zenoh_bus import (
-    Incoming,
-    Lane,
-    LinkRules,
-    PositionBook,
-    Presence,
-    ZenohBus,
-    ZenohNode,
-)
+from mrcomm.net.zenoh_bus import LinkRules, PositionBook, ZenohBus
 from mrcomm.net.zenoh_config import check_key_chunk
+from mrcomm.net.zenoh_node import Incoming, Presence, ZenohNode
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.wiring import (
     build_link_sensor,

@@ -29,7 +29,7 @@ from collections.abc import Callable
 from mrcomm.errors import InputError
 from mrcomm.live.agent import HEARTBEAT_PERIOD, SNAPSHOT_PERIOD, AgentProcess
 from mrcomm.live.settings import LiveSettings
-from mrcomm.net.zenoh_bus import Incoming
+from mrcomm.net.zenoh_node import Incoming
 
 _EPS = 1e-6  # of a step: a time read as 2.9999999 steps is step 3
 

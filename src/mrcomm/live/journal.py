@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from mrcomm.metrics.timeline import ACTIVITY, ROLE, Timeline
-from mrcomm.net.zenoh_bus import Presence
+from mrcomm.net.zenoh_node import Presence
 
 #: Outcome codes of the message log (short: the log has a line per delivery).
 OUTCOME_CODE = {

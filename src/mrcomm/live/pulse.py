@@ -25,7 +25,7 @@ from mrcomm.live.protocol import CH_TICK, WORLD_ID, Tick, decoder_of
 from mrcomm.messaging.messages import Message, encode
 from mrcomm.messaging.topics import lane_of
 from mrcomm.net.pulse import PulseBase
-from mrcomm.net.zenoh_bus import Presence, ZenohNode
+from mrcomm.net.zenoh_node import Presence, ZenohNode
 from mrcomm.ports import Handler
 
 #: Wall seconds between checks while no tick arrives (nothing is due meanwhile).

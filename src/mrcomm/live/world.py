@@ -44,8 +44,9 @@ from mrcomm.live.protocol import (
 from mrcomm.live.pulse import PublishingEndpoint
 from mrcomm.live.settings import LiveSettings, config_crc
 from mrcomm.messaging.messages import TOPIC_RSSI, RssiMsg
+from mrcomm.messaging.topics import Lane
 from mrcomm.net.pulse import pulse_id
-from mrcomm.net.zenoh_bus import Incoming, Lane, ZenohNode
+from mrcomm.net.zenoh_node import Incoming, ZenohNode
 from mrcomm.run.bodies import RobotBodies
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.wiring import (

@@ -19,8 +19,9 @@ import math
 from typing import Any
 
 from mrcomm.messaging.messages import Message
-from mrcomm.net.zenoh_bus import LinkRules, PositionBook, ZenohBus, ZenohNode
+from mrcomm.net.zenoh_bus import LinkRules, PositionBook, ZenohBus
 from mrcomm.net.zenoh_config import make_options
+from mrcomm.net.zenoh_node import ZenohNode
 from mrcomm.run.config import RunConfig
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.wiring import build_network, build_radio_links

@@ -40,7 +40,8 @@ from numpy.typing import NDArray
 
 from mrcomm.errors import InputError, did_you_mean
 from mrcomm.net.links import cast_ray
-from mrcomm.net.radio.fit import Readings, censor
+from mrcomm.net.radio.fit import censor
+from mrcomm.net.radio.fit_data import Readings
 from mrcomm.net.radio.profile import DEFAULT_PROFILE
 from mrcomm.net.signal.calibration import MIN_READINGS as MIN_CLASS_READINGS
 from mrcomm.net.signal.calibration import Calibration

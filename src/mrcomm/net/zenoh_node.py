@@ -1,0 +1,323 @@
+"""One process's Zenoh session (live mode, DESIGN ``live``; issue 7 §1).
+
+:class:`ZenohNode` is one process's Zenoh *peer* session. It owns:
+
+* the key space ``mrcomm/<team>/<agent>/<topic>`` (each agent publishes under its own
+  id; subscribers use ``mrcomm/<team>/*/<topic>``);
+* three quality-of-service lanes: task status and AON reliable with *blocking*
+  congestion control on their own priority; other control traffic reliable and
+  blocking on another; pose and the clock *dropping* under congestion. Blocking puts
+  run on one worker thread per lane: a blocked status never stalls pose or the agent;
+* an inbox: Zenoh calls back on its own threads, so every sample is decoded there and
+  queued; the owning process drains the queue on its one agent thread (AON and the
+  agents are single-threaded); a sample larger than :data:`MAX_SAMPLE_BYTES` or that
+  does not decode is refused there and counted (:attr:`ZenohNode.refused`);
+* liveliness tokens ``mrcomm/<team>/<agent>/alive/<incarnation>`` for team discovery:
+  members appear and disappear as their sessions come and go.
+
+The team's bus on top of it is :mod:`mrcomm.net.zenoh_bus`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import queue
+import struct
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import msgspec
+
+from mrcomm.errors import InputError
+from mrcomm.messaging.topics import Lane
+from mrcomm.net.zenoh_config import ZenohOptions, build_config
+
+#: A sample larger than this (bytes) is refused before decoding: the largest message a
+#: team sends (an assignment of a few hundred tasks) is a few kB.
+MAX_SAMPLE_BYTES = 256 * 1024
+#: Why the bus edge refused a sample.
+REFUSALS = (
+    "oversized",  # larger than MAX_SAMPLE_BYTES
+    "undecodable",  # not one of the team's messages
+    "wrong_type",  # a message of another type than its topic carries
+    "forged_sender",  # its sender field names another agent than its key
+    "not_member",  # from an agent that is not in the team
+)
+_STAMP = struct.Struct("<q")  # wall-clock send time (ns) carried as a Zenoh attachment
+#: With a radio the attachment also carries the sender's mission time at publication
+#: and the radio delay of its queue (s; NaN: the queue overflowed and lost it).
+_RADIO_STAMP = struct.Struct("<qdd")
+
+#: A message's radio facts from its sender: (mission time published, delay or NaN).
+Airtime = tuple[float, float]
+
+
+@dataclass(frozen=True, slots=True)
+class Incoming:
+    """One sample taken from Zenoh, decoded on the Zenoh thread."""
+
+    channel: str  # "bus", "presence" or a live-protocol channel name
+    key: str
+    value: Any
+    sent_wall: float | None  # sender's wall clock at put (s), when it sent one
+    recv_wall: float
+    radio: Airtime | None = None  # the sender's radio queue (radio network model only)
+
+
+@dataclass(frozen=True, slots=True)
+class Presence:
+    """A liveliness token appeared (``alive``) or disappeared."""
+
+    agent: str
+    incarnation: int
+    alive: bool
+
+
+class _BlockingWorker:
+    """Runs blocking puts of one lane in order on its own thread."""
+
+    def __init__(self, name: str) -> None:
+        self._queue: queue.SimpleQueue[tuple[Any, bytes, bytes] | None] = queue.SimpleQueue()
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self._thread.start()
+
+    def submit(self, publisher: Any, data: bytes, attachment: bytes) -> None:
+        self._queue.put((publisher, data, attachment))
+
+    def _run(self) -> None:
+        import zenoh
+
+        while True:
+            item = self._queue.get()
+            if item is None:
+                return
+            publisher, data, attachment = item
+            with contextlib.suppress(zenoh.ZError):  # session closing: nobody to deliver to
+                publisher.put(data, attachment=attachment)
+
+    def stop(self, timeout: float) -> None:
+        self._queue.put(None)
+        self._thread.join(timeout)
+
+
+class ZenohNode:
+    """One process's peer session, its publishers, inbox and liveliness tokens."""
+
+    def __init__(
+        self, options: ZenohOptions, inbox: queue.SimpleQueue[Incoming] | None = None
+    ) -> None:
+        """``inbox``: share one queue between several sessions of a process (the team's
+        and the world's), so one thread waits on both in arrival order."""
+        import zenoh
+
+        self.options = options
+        self.prefix = options.prefix()
+        config = build_config(options)
+        try:
+            self.session = zenoh.open(config)
+        except zenoh.ZError as err:
+            message = _open_error(err)
+            tls = options.tls is not None and ("TLS" in message or "cert" in message)
+            raise InputError(message, field="--tls-cert" if tls else "--listen") from None
+        self._zenoh = zenoh
+        self._inbox: queue.SimpleQueue[Incoming] = (
+            inbox if inbox is not None else queue.SimpleQueue()
+        )
+        self._publishers: dict[tuple[str, Lane], Any] = {}
+        self._subscribers: list[Any] = []
+        self._tokens: dict[str, Any] = {}
+        self._workers = {
+            Lane.STATUS: _BlockingWorker("mrcomm-status"),
+            Lane.CONTROL: _BlockingWorker("mrcomm-control"),
+        }
+        self._closed = False
+        #: Samples refused at the edge, by cause (:data:`REFUSALS`).
+        self.refused: dict[str, int] = {}
+        self._refused_lock = threading.Lock()
+
+    # -- keys ------------------------------------------------------------------------
+    def key(self, agent: str, topic: str) -> str:
+        return f"{self.prefix}/{agent}/{topic}"
+
+    def sender_of(self, key: str) -> str:
+        """The agent id in ``mrcomm/<team>/<agent>/...``."""
+        return key[len(self.prefix) + 1 :].split("/", 1)[0]
+
+    # -- publishing ------------------------------------------------------------------
+    def put(self, key: str, data: bytes, lane: Lane, radio: Airtime | None = None) -> None:
+        """Publish without ever blocking the caller (blocking lanes use a worker);
+        ``radio``: the message's facts from the sender's radio queue."""
+        if self._closed:
+            return
+        publisher = self._publisher(key, lane)
+        if radio is None:
+            attachment = _STAMP.pack(time.time_ns())
+        else:
+            attachment = _RADIO_STAMP.pack(time.time_ns(), *radio)
+        if lane is Lane.BEST_EFFORT:
+            with contextlib.suppress(self._zenoh.ZError):
+                publisher.put(data, attachment=attachment)
+        else:
+            self._workers[lane].submit(publisher, data, attachment)
+
+    def prepare(self, key: str, lane: Lane) -> None:
+        """Declare the publisher of ``key`` now. Declaring can wait on a congested
+        link (without letting Zenoh's threads deliver anything meanwhile), so every
+        key a process will use is declared at start, never mid-mission."""
+        self._publisher(key, lane)
+
+    def _publisher(self, key: str, lane: Lane) -> Any:
+        publisher = self._publishers.get((key, lane))
+        if publisher is None:
+            z = self._zenoh
+            if lane is Lane.BEST_EFFORT:
+                publisher = self.session.declare_publisher(
+                    key,
+                    congestion_control=z.CongestionControl.DROP,
+                    priority=z.Priority.DATA,
+                    # Reliable on the link (so only our injected loss loses a pose on
+                    # a healthy network), but never waits: congestion drops it.
+                    reliability=z.Reliability.RELIABLE,
+                    express=True,
+                )
+            else:
+                high = lane is Lane.STATUS
+                priority = z.Priority.INTERACTIVE_HIGH if high else z.Priority.DATA_HIGH
+                publisher = self.session.declare_publisher(
+                    key,
+                    congestion_control=z.CongestionControl.BLOCK,
+                    priority=priority,
+                    reliability=z.Reliability.RELIABLE,
+                )
+            self._publishers[(key, lane)] = publisher
+        return publisher
+
+    # -- receiving -------------------------------------------------------------------
+    def listen(self, key_expr: str, channel: str, decoder: Callable[[bytes], Any]) -> None:
+        """Queue every sample on ``key_expr``, decoded by ``decoder``; samples that do
+        not decode are dropped (and never reach the agent thread)."""
+        inbox = self._inbox
+
+        def on_sample(sample: Any) -> None:
+            recv = time.time()
+            payload = sample.payload
+            if len(payload) > MAX_SAMPLE_BYTES:
+                self.refuse("oversized")
+                return
+            try:
+                value = decoder(payload.to_bytes())
+            except (msgspec.DecodeError, msgspec.ValidationError, ValueError):
+                self.refuse("undecodable")
+                return
+            sent: float | None = None
+            radio: Airtime | None = None
+            attachment = sample.attachment
+            if attachment is not None:
+                raw = attachment.to_bytes()
+                if len(raw) == _STAMP.size:
+                    sent = _STAMP.unpack(raw)[0] / 1e9
+                elif len(raw) == _RADIO_STAMP.size:
+                    stamp_ns, published, delay = _RADIO_STAMP.unpack(raw)
+                    sent, radio = stamp_ns / 1e9, (published, delay)
+            inbox.put(Incoming(channel, str(sample.key_expr), value, sent, recv, radio))
+
+        self._subscribers.append(self.session.declare_subscriber(key_expr, on_sample))
+
+    def refuse(self, cause: str) -> None:
+        """Count one sample refused at the edge (from any thread)."""
+        with self._refused_lock:
+            self.refused[cause] = self.refused.get(cause, 0) + 1
+
+    def poll(self, timeout: float | None) -> Incoming | None:
+        """Next queued sample, waiting at most ``timeout`` seconds (None: no wait)."""
+        try:
+            if timeout is None:
+                return self._inbox.get_nowait()
+            return self._inbox.get(timeout=max(timeout, 0.0))
+        except queue.Empty:
+            return None
+
+    # -- liveliness --------------------------------------------------------------------
+    def alive_key(self, agent: str, incarnation: int) -> str:
+        return f"{self.prefix}/{agent}/alive/{incarnation}"
+
+    def declare_alive(self, agent: str, incarnation: int) -> None:
+        key = self.alive_key(agent, incarnation)
+        self._tokens[key] = self.session.liveliness().declare_token(key)
+
+    @property
+    def inbox(self) -> queue.SimpleQueue[Incoming]:
+        return self._inbox
+
+    def watch_presence(self, agent: str = "*") -> None:
+        """Queue a :class:`Presence` whenever a team member (or just ``agent``) appears
+        or disappears, including those already present when the watch starts."""
+        inbox = self._inbox
+        z = self._zenoh
+
+        def on_token(sample: Any) -> None:
+            parsed = self._parse_alive(str(sample.key_expr))
+            if parsed is None:
+                return
+            alive = sample.kind == z.SampleKind.PUT
+            inbox.put(
+                Incoming(
+                    "presence",
+                    str(sample.key_expr),
+                    Presence(parsed[0], parsed[1], alive),
+                    None,
+                    time.time(),
+                )
+            )
+
+        self._subscribers.append(
+            self.session.liveliness().declare_subscriber(
+                f"{self.prefix}/{agent}/alive/*", on_token, history=True
+            )
+        )
+
+    def present(self, agent: str, timeout: float = 1.0) -> list[int]:
+        """Incarnations of ``agent`` whose tokens are alive now (a liveliness query)."""
+        found: list[int] = []
+        replies = self.session.liveliness().get(f"{self.prefix}/{agent}/alive/*", timeout=timeout)
+        for reply in replies:
+            ok = reply.ok
+            if ok is None:
+                continue
+            parsed = self._parse_alive(str(ok.key_expr))
+            if parsed is not None:
+                found.append(parsed[1])
+        return found
+
+    def _parse_alive(self, key: str) -> tuple[str, int] | None:
+        parts = key[len(self.prefix) + 1 :].split("/")
+        if len(parts) != 3 or parts[1] != "alive":
+            return None
+        try:
+            return parts[0], int(parts[2])
+        except ValueError:
+            return None
+
+    def peers(self) -> int:
+        """Number of peers this session is connected to right now."""
+        return len(list(self.session.info.peers_zid()))
+
+    def close(self) -> None:
+        """Flush the blocking lanes (briefly) and close the session."""
+        if self._closed:
+            return
+        self._closed = True
+        for worker in self._workers.values():
+            worker.stop(timeout=2.0)
+        with contextlib.suppress(self._zenoh.ZError):
+            self.session.close()
+
+
+def _open_error(err: BaseException) -> str:
+    text = str(err).strip().splitlines()
+    first = text[0] if text else type(err).__name__
+    # Zenoh appends source locations after " at "; the cause is what matters.
+    return "cannot open the Zenoh session: " + first.split(" at /", 1)[0]
