@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test lint bench system-deps clean
+.PHONY: demo test lint bench ns3-validation system-deps clean
 
 $(STAMP): pyproject.toml examples/mrcomm-repeat/pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -53,6 +53,12 @@ lint: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run_benchmarks.py
+
+# The radio model against ns-3 (BENCHMARKS.md, issue 17 §4). ns-3's Python bindings (the
+# pip package ns3 with cppyy, ~500 MB) go into the venv for this target only: not a dependency.
+ns3-validation: $(STAMP)
+	$(BIN)/pip install --quiet 'ns3==3.44.*'
+	MPLBACKEND=Agg $(BIN)/python benchmarks/ns3_validation.py --out benchmarks/results --figure docs/figures/ns3_validation.png
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache
