@@ -55,11 +55,14 @@ from mrcomm.net.zenoh_node import Airtime, Incoming, ZenohNode
 from mrcomm.ports import Handler
 
 Point = tuple[float, float]
+#: A received message's radio facts: (mission time its sender published it, its delay in
+#: the sender's queue — NaN: lost there —, its bits on the air).
+OnAir = tuple[float, float, int]
 #: Slack on due times (s): a message due at the current tick is handed over at it.
 _DUE_SLACK = 1e-9
 
 
-def _arrival(held: tuple[float, int, Any, str, str, Message, Airtime]) -> int:
+def _arrival(held: tuple[float, int, Any, str, str, Message, OnAir]) -> int:
     return held[1]
 
 
@@ -138,7 +141,7 @@ class ZenohEndpoint:
         airtime: Airtime | None = None
         if radio is not None:
             # Queued here, at the sender, as in simulation; receivers learn the delay.
-            delay = radio.transmit(self._owner, bus.now, radio.bits(message))
+            delay = radio.transmit(self._owner, bus.now, radio.bits_of(len(data)))
             airtime = (bus.now, math.nan if delay is None else delay)
         node.put(node.key(self._owner, topic), data, lane_of(topic), airtime)
 
@@ -152,27 +155,27 @@ class ZenohEndpoint:
             handler(message)
 
     def _receive(
-        self, topic: str, sender: str, message: Message, airtime: Airtime | None = None
+        self, topic: str, sender: str, message: Message, on_air: OnAir | None = None
     ) -> None:
         if sender == self._owner or topic not in self._handlers:
             return
         bus = self._bus
-        if airtime is not None and bus.rules.radio is not None:
-            due = airtime[0] + airtime[1]  # NaN (lost to the queue) is never held
+        if on_air is not None:
+            due = on_air[0] + on_air[1]  # NaN (lost to the queue) is never held
             if due > bus.now + _DUE_SLACK:
                 # Still on the air: judged when it arrives, as the in-process bus does.
-                bus._hold(due, self, topic, sender, message, airtime)
+                bus._hold(due, self, topic, sender, message, on_air)
                 return
-        self._settle(topic, sender, message, airtime)
+        self._settle(topic, sender, message, on_air)
 
-    def _settle(self, topic: str, sender: str, message: Message, airtime: Airtime | None) -> None:
+    def _settle(self, topic: str, sender: str, message: Message, on_air: OnAir | None) -> None:
         """Decide, count and record what becomes of one message here, and hand it to
         the agent when it was received."""
         bus = self._bus
-        if bus.rules.radio is None:
+        if on_air is None:
             outcome, delay = bus._decide(self, topic, sender), 0.0
         else:
-            outcome, delay = bus._decide_radio(self, topic, sender, message, airtime)
+            outcome, delay = bus._decide_radio(self, topic, sender, on_air)
         self._count(topic).count(outcome, delay)
         observer = bus.observer
         if observer is not None:
@@ -234,8 +237,8 @@ class ZenohBus:
         #: Transport latency (s) of every pose sample that reached this process.
         self.pose_latency: list[float] = []
         #: Messages still on the air (due mission time, order, endpoint, topic, sender,
-        #: message, airtime): judged by :meth:`release` once the clock reaches them.
-        self._held: list[tuple[float, int, ZenohEndpoint, str, str, Message, Airtime]] = []
+        #: message, on_air): judged by :meth:`release` once the clock reaches them.
+        self._held: list[tuple[float, int, ZenohEndpoint, str, str, Message, OnAir]] = []
         self._held_order = 0
 
     def endpoint(self, owner: str, rng: np.random.Generator) -> ZenohEndpoint:
@@ -260,8 +263,14 @@ class ZenohBus:
                 self.positions.heard[sender] = (message.x, message.y)
             if item.sent_wall is not None:
                 self.pose_latency.append(item.recv_wall - item.sent_wall)
+        on_air: OnAir | None = None
+        if self.rules.radio is not None:
+            # Once per sample, for every local endpoint: when it was sent, its delay (0
+            # without a sender's queue) and its bits on the air (from the payload's size).
+            published, delay = item.radio if item.radio is not None else (self.now, 0.0)
+            on_air = (published, delay, self.rules.radio.bits_of(item.size))
         for endpoint in self.endpoints.values():
-            endpoint._receive(topic, sender, message, item.radio)
+            endpoint._receive(topic, sender, message, on_air)
 
     def _refusal(self, topic: str, sender: str, message: Any) -> str | None:
         """Why the edge refuses this message (None: it may reach the agents)."""
@@ -285,8 +294,8 @@ class ZenohBus:
             due.append(heapq.heappop(held))
         # Those due together in the order they arrived, as the in-process bus takes its
         # outbox in publication order.
-        for _, _, endpoint, topic, sender, message, airtime in sorted(due, key=_arrival):
-            endpoint._settle(topic, sender, message, airtime)
+        for _, _, endpoint, topic, sender, message, on_air in sorted(due, key=_arrival):
+            endpoint._settle(topic, sender, message, on_air)
 
     def _hold(
         self,
@@ -295,11 +304,11 @@ class ZenohBus:
         topic: str,
         sender: str,
         message: Message,
-        airtime: Airtime,
+        on_air: OnAir,
     ) -> None:
         self._held_order += 1
         heapq.heappush(
-            self._held, (due, self._held_order, endpoint, topic, sender, message, airtime)
+            self._held, (due, self._held_order, endpoint, topic, sender, message, on_air)
         )
 
     def _want(self, topic: str) -> None:
@@ -318,8 +327,7 @@ class ZenohBus:
         receiver: ZenohEndpoint,
         topic: str,
         sender: str,
-        message: Message,
-        airtime: Airtime | None,
+        on_air: OnAir,
     ) -> tuple[str, float]:
         """The outcome of one message under the radio and its delay, as the in-process
         bus decides it: lost to the sender's queue; else the link's range from its power
@@ -328,7 +336,7 @@ class ZenohBus:
         radio = self.rules.radio
         assert radio is not None
         policy = self.rules.policy
-        delay = 0.0 if airtime is None else airtime[1]
+        _, delay, bits = on_air
         if delay != delay:  # NaN: the sender's queue overflowed
             if not policy.exempt(topic):
                 return DROPPED_QUEUE, 0.0
@@ -337,7 +345,7 @@ class ZenohBus:
             return policy.decide(topic, True, receiver._loss), delay  # not a team node
         at = self.positions.position(sender)
         to = self.positions.position(receiver.owner)
-        connected, per = radio.judge(sender, at, receiver.owner, to, radio.bits(message))
+        connected, per = radio.judge(sender, at, receiver.owner, to, bits)
         return policy.decide(topic, connected, receiver._loss, per), delay
 
     def _in_range(self, sender: str, receiver: str) -> bool:

@@ -65,6 +65,7 @@ class Incoming:
     sent_wall: float | None  # sender's wall clock at put (s), when it sent one
     recv_wall: float
     radio: Airtime | None = None  # the sender's radio queue (radio network model only)
+    size: int = 0  # bytes of the encoded message
 
 
 @dataclass(frozen=True, slots=True)
@@ -222,7 +223,9 @@ class ZenohNode:
                 elif len(raw) == _RADIO_STAMP.size:
                     stamp_ns, published, delay = _RADIO_STAMP.unpack(raw)
                     sent, radio = stamp_ns / 1e9, (published, delay)
-            inbox.put(Incoming(channel, str(sample.key_expr), value, sent, recv, radio))
+            inbox.put(
+                Incoming(channel, str(sample.key_expr), value, sent, recv, radio, len(payload))
+            )
 
         self._subscribers.append(self.session.declare_subscriber(key_expr, on_sample))
 

@@ -95,10 +95,11 @@ def build_pulse(
     if config.threshold != "esd":
         return None
     measured = {r: s for r, s in sensors.items() if isinstance(s, MeasuredSensor)}
+    if measures_radio(config):
+        return RadioPulse(network, tuple(measured), tuple(sensors), config.seed, measured)
     path = esd_trace_path(config)
-    if path is not None:
-        return TracePulse(resources.rssi_trace(path), measured, tuple(sensors))
-    return RadioPulse(network, tuple(measured), tuple(sensors), config.seed, measured)
+    assert path is not None
+    return TracePulse(resources.rssi_trace(path), measured, tuple(sensors))
 
 
 def measures_radio(config: RunConfig) -> bool:

@@ -76,7 +76,11 @@ class RadioChannel:
 
     def bits(self, message: Message) -> int:
         """Bits on the air for one message: its wire form plus the header."""
-        return (len(encode(message)) + self.profile.header_bytes) * 8
+        return self.bits_of(len(encode(message)))
+
+    def bits_of(self, wire_bytes: int) -> int:
+        """Bits on the air for a message of ``wire_bytes`` already encoded."""
+        return (wire_bytes + self.profile.header_bytes) * 8
 
     def transmit(self, sender: int, stamp: float, bits: int) -> float | None:
         """Queue one message of the sender at ``stamp``: its delay (wait + airtime), or

@@ -18,7 +18,6 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 
-from mrcomm.messaging.messages import Message
 from mrcomm.net.links import cast_ray
 from mrcomm.net.radio.channel import RadioChannel
 from mrcomm.net.radio.model import RadioNetwork
@@ -85,8 +84,9 @@ class RadioLinks:
             return False, 0.0
         return True, self.channel.error_at(self._slot[receiver], power, walls == 0, bits)
 
-    def bits(self, message: Message) -> int:
-        return self.channel.bits(message)
+    def bits_of(self, wire_bytes: int) -> int:
+        """Bits on the air for a message of ``wire_bytes`` (see :class:`RadioChannel`)."""
+        return self.channel.bits_of(wire_bytes)
 
     def transmit(self, sender: str, stamp: float, bits: int) -> float | None:
         """Queue one message of ``sender`` at mission time ``stamp``: its delay, or None
