@@ -256,8 +256,15 @@ def test_run_pulse_paces_polls_on_the_clock() -> None:
             ("--iface", "wlan0", "--peers", "p.yaml", "--world-connect", "127.0.0.1:7447"),
             "--world-connect: only a replayed --trace runs on the world's clock",
         ),
-        (("--trace", "nope.csv", "--connect", "127.0.0.1:7447"), "nope.csv: file not found"),
-        (("--trace", "t.csv", "--connect", "nowhere"), "--connect: bad endpoint 'nowhere'"),
+        (
+            ("--trace", "nope.csv", "--connect", "127.0.0.1:7447", "--insecure"),
+            "nope.csv: file not found",
+        ),
+        (
+            ("--trace", "t.csv", "--connect", "nowhere", "--insecure"),
+            "--connect: bad endpoint 'nowhere'",
+        ),
+        (("--trace", "t.csv", "--connect", "127.0.0.1:7447"), "--team-dir: no team certificates"),
     ],
 )
 def test_pulse_source_and_zenoh_errors(

@@ -123,7 +123,7 @@ def test_ids_differ_by_mode_options_and_experiment(tmp_path: Path, sim: MissionR
     # ... while options at their default are not part of the id: `collect` (which sees
     # the record's speed only) and `live` (which gives every option) agree.
     again = store_live(
-        db, as_live(sim, speed=10.0), live_options={"speed": 10.0, "protocol": "tcp", "acl": False}
+        db, as_live(sim, speed=10.0), live_options={"speed": 10.0, "protocol": "tcp", "insecure": False}
     )
     assert again.config_id == live.config_id and again.repetition == 2
     other = store_result(db, sim, experiment="bench")
@@ -159,10 +159,12 @@ def test_paths_are_absolute_so_the_working_directory_does_not_matter(
 
 
 def test_command_line_of_a_live_run() -> None:
-    options = {"scenario": "/s.yaml", "spl": 25.0, "speed": 10.0, "acl": True, "tls_dir": "/c"}
+    options = {"scenario": "/s.yaml", "spl": 25.0, "speed": 10.0, "team_dir": "/c"}
     assert command_line("live", options, 3) == (
-        "mrcomm live /s.yaml --spl 25 --speed 10 --acl --tls-dir /c --seed 3"
+        "mrcomm live /s.yaml --spl 25 --speed 10 --team-dir /c --seed 3"
     )
+    insecure = {"scenario": "/s.yaml", "insecure": True}
+    assert command_line("live", insecure, 3) == "mrcomm live /s.yaml --insecure --seed 3"
 
 
 def _fingerprint(path: Path) -> str:

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from mrcomm.live.agent import AgentProcess
-from mrcomm.live.launcher import LiveTeam, TlsLayout, free_port
+from mrcomm.live.launcher import LiveTeam, free_port
 from mrcomm.live.protocol import WORLD_ID
 from mrcomm.live.settings import LiveSettings
 from mrcomm.messaging.messages import TOPIC_RSSI, RssiMsg, decode
@@ -49,7 +49,7 @@ def iw_pulse(tmp_path: Path) -> Iterator[tuple[subprocess.Popen[str], int]]:
     args = [
         sys.executable, "-c", CODE, "pulse", "--iface", "wlan0",
         "--peers", str(FIXTURES / "peers.yaml"), "--robot", "robot_1", "--team", "t",
-        "--connect", f"tcp/127.0.0.1:{port}", "--rate", "10", "--stdout",
+        "--connect", f"tcp/127.0.0.1:{port}", "--rate", "10", "--stdout", "--insecure",
     ]  # fmt: skip
     env = {"PATH": f"{bin_dir}:/usr/bin:/bin", "PYTHONUNBUFFERED": "1"}
     process = subprocess.Popen(
@@ -141,8 +141,8 @@ def test_agent_feeds_only_its_own_pulse_readings_to_its_sensor(tmp_path: Path) -
 
 def test_launcher_starts_one_replaying_pulse_per_robot(tmp_path: Path) -> None:
     run = make_config(None, scenario=S1, **ESD)
-    zenoh = ZenohOptions(team="esd", protocol="tls")  # as `mrcomm live --tls-dir` sets it
-    team = LiveTeam(LiveSettings(run, zenoh, tmp_path), tls=TlsLayout(tmp_path, acl=True))
+    zenoh = ZenohOptions(team="esd")
+    team = LiveTeam(LiveSettings(run, zenoh, tmp_path), team_dir=tmp_path)  # TLS on every link
     team.ports = {name: 7000 + i for i, name in enumerate(team.names)}
     assert sorted(team.pulses) == ["robot_1-pulse", "robot_2-pulse", "robot_3-pulse"]
     args = team.command("robot_2-pulse")
@@ -150,8 +150,7 @@ def test_launcher_starts_one_replaying_pulse_per_robot(tmp_path: Path) -> None:
     text = " ".join(args)
     assert f"--connect tls/127.0.0.1:{team.ports['robot_2']}" in text  # its own agent
     assert f"--world-connect tls/127.0.0.1:{team.ports[WORLD_ID]}" in text  # the clock
-    assert f"--tls-cert {tmp_path / 'robot_2.pem'}" in text  # its robot's certificate
-    assert "--acl world,robot_1,robot_2,robot_3" in text
+    assert f"--team-dir {tmp_path}" in text  # it presents its robot's certificate
     # Every process gets the trace: the team's run configurations must agree.
     assert f'--set threshold.trace="{TRACE}"' in " ".join(team.command("robot_1"))
     assert f'--set threshold.trace="{TRACE}"' in " ".join(team.command(WORLD_ID))

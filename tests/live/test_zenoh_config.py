@@ -79,14 +79,46 @@ def test_tls_needs_all_three_readable_pem_files(tmp_path: Path) -> None:
         make_options(tls_ca=ca, tls_cert=cert, tls_key=key, protocol="udp")
 
 
-def test_acl_allows_only_members_on_team_keys_and_needs_tls() -> None:
-    acl = acl_json("mrcomm/red", ("robot_1", "world"))
+def test_acl_binds_each_member_to_its_own_keys_and_needs_tls() -> None:
+    acl = acl_json("mrcomm/red", {"robot_1": ("robot_1", "robot_1-pulse"), "world": ("world",)})
     assert acl["default_permission"] == "deny"
-    assert acl["rules"][0]["key_exprs"] == ["mrcomm/red/**"]
-    assert "put" in acl["rules"][0]["messages"]
-    assert acl["subjects"][0]["cert_common_names"] == ["robot_1", "world"]
+    rules = {rule["id"]: rule for rule in acl["rules"]}
+    subjects = {s["id"]: s["cert_common_names"] for s in acl["subjects"]}
+    granted = {
+        subjects[subject][0]: rules[policy["rules"][0]]
+        for policy in acl["policies"]
+        for subject in policy["subjects"]
+        if subject != "members"
+    }
+    # Publications and tokens from a member are accepted only under its own chunks.
+    assert granted["robot_1"]["key_exprs"] == [
+        "mrcomm/red/robot_1/**",
+        "mrcomm/red/robot_1-pulse/**",
+    ]
+    assert granted["robot_1"]["flows"] == ["ingress"]
+    assert set(granted["robot_1"]["messages"]) == {"put", "delete", "liveliness_token"}
+    assert granted["world"]["key_exprs"] == ["mrcomm/red/world/**"]
+    # Subscribing and querying: every member, the whole team's key space, nothing else.
+    assert subjects["members"] == ["robot_1", "world"]
+    assert rules["read"]["key_exprs"] == ["mrcomm/red/**"]
+    assert "put" not in rules["read"]["messages"]
+    assert rules["deliver"]["flows"] == ["egress"]
     with pytest.raises(InputError, match="needs TLS"):
-        make_options(acl_members=["robot_1"])
+        make_options(acl_grants={"robot_1": ("robot_1",)})
+
+
+def test_grants_follow_what_each_process_publishes() -> None:
+    from mrcomm.live.identity import grants
+    from mrcomm.world.scenario import load_scenario
+
+    from .helpers import S1
+
+    scenario = load_scenario(S1)  # the task assigner runs on robot_2
+    given = grants(("world", "robot_1", "robot_2", "robot_3", "assigner"), scenario)
+    assert given["robot_1"] == ("robot_1", "robot_1-pulse")
+    assert given["robot_2"] == ("robot_2", "robot_2-pulse", "assigner")
+    assert given["world"] == ("world", "robot_1-pulse", "robot_2-pulse", "robot_3-pulse")
+    assert given["assigner"] == ("assigner",)
 
 
 def test_config_file_errors_name_the_file(tmp_path: Path) -> None:

@@ -28,7 +28,9 @@ from mrcomm.errors import InputError, Interrupted
 from mrcomm.net.zenoh_config import ZenohOptions, make_options
 
 if TYPE_CHECKING:
+    from mrcomm.live.identity import Security
     from mrcomm.run.config import RunConfig
+    from mrcomm.world.scenario import Scenario
 
 TeamOpt = Annotated[str, typer.Option(help="Team name: the key space mrcomm/<team>/.")]
 ListenOpt = Annotated[
@@ -41,12 +43,32 @@ MulticastOpt = Annotated[
     bool, typer.Option("--multicast/--no-multicast", help="Multicast scouting for peers.")
 ]
 ProtocolOpt = Annotated[str, typer.Option(help="Transport: tcp | udp.")]
+TeamDirOpt = Annotated[
+    Path | None,
+    typer.Option(
+        "--team-dir",
+        help="Team directory (mrcomm team init): mutual TLS with this process's "
+        "certificate, and an access-control list that lets each member publish only "
+        "under its own keys.",
+    ),
+]
+InsecureOpt = Annotated[
+    bool,
+    typer.Option(
+        "--insecure",
+        help="Run without authentication or encryption: anyone on the network can read "
+        "and forge the team's messages (prints a warning).",
+    ),
+]
 TlsCaOpt = Annotated[Path | None, typer.Option(help="Team CA certificate (PEM): enables mTLS.")]
 TlsCertOpt = Annotated[Path | None, typer.Option(help="This node's certificate (PEM).")]
 TlsKeyOpt = Annotated[Path | None, typer.Option(help="This node's private key (PEM).")]
 AclOpt = Annotated[
     str | None,
-    typer.Option(help="Comma-separated certificate names allowed on the team's keys (ACL)."),
+    typer.Option(
+        help="With --tls-*: comma-separated member certificate names; each may publish "
+        "only under its own keys (ACL)."
+    ),
 ]
 ZenohConfigOpt = Annotated[Path | None, typer.Option(help="Zenoh JSON5 config file.")]
 LinkLeaseOpt = Annotated[float, typer.Option(help="Zenoh link lease, wall s.")]
@@ -63,28 +85,57 @@ def zenoh_options(
     connect: list[str] | None,
     multicast: bool,
     protocol: str,
-    tls_ca: Path | None,
-    tls_cert: Path | None,
-    tls_key: Path | None,
-    acl: str | None,
+    security: Security,
     zenoh_config: Path | None,
     link_lease: float,
 ) -> ZenohOptions:
     """The Zenoh options of a live process (world, agent, pulse) from its command line."""
-    members = [m.strip() for m in acl.split(",") if m.strip()] if acl is not None else None
+    tls = security.tls
     return make_options(
         team=team,
         listen=listen or [],
         connect=connect or [],
         multicast=multicast,
         protocol=protocol,
-        tls_ca=tls_ca,
-        tls_cert=tls_cert,
-        tls_key=tls_key,
-        acl_members=members,
+        tls_ca=tls.ca if tls is not None else None,
+        tls_cert=tls.cert if tls is not None else None,
+        tls_key=tls.key if tls is not None else None,
+        acl_grants=security.grants,
         config_file=zenoh_config,
         link_lease=link_lease,
     )
+
+
+def resolve_security(
+    identity: str,
+    team_dir: Path | None,
+    insecure: bool,
+    tls: tuple[Path | None, Path | None, Path | None],
+    acl: str | None,
+    scenario: Scenario | None,
+    zenoh_config: Path | None,
+) -> Security:
+    """The process's security from its options (one-line errors)."""
+    from mrcomm.live.identity import choose_security
+
+    return choose_security(
+        identity=identity,
+        team_dir=team_dir,
+        insecure=insecure,
+        tls_files=tls,
+        acl=acl,
+        scenario=scenario,
+        explicit_config=zenoh_config is not None,
+    )
+
+
+def warn_insecure(insecure: bool) -> None:
+    """The one warning line of ``--insecure``: printed once every input is checked,
+    just before the process joins the network."""
+    if insecure:
+        from mrcomm.live.identity import INSECURE_WARNING
+
+        typer.echo(INSECURE_WARNING, err=True)
 
 
 @with_run_options
@@ -96,6 +147,8 @@ def world(
     connect: ConnectOpt = None,
     multicast: MulticastOpt = False,
     protocol: ProtocolOpt = "tcp",
+    team_dir: TeamDirOpt = None,
+    insecure: InsecureOpt = False,
     tls_ca: TlsCaOpt = None,
     tls_cert: TlsCertOpt = None,
     tls_key: TlsKeyOpt = None,
@@ -109,16 +162,22 @@ def world(
 ) -> None:
     """Simulate every robot's base and publish the shared clock (live mode)."""
     run.check_mode("live")
+    from mrcomm.live.protocol import WORLD_ID
     from mrcomm.live.settings import LiveSettings
     from mrcomm.live.world import run_world
+    from mrcomm.world.scenario import load_scenario
 
-    zenoh = zenoh_options(
-        team, listen, connect, multicast, protocol, tls_ca, tls_cert, tls_key, acl,
-        zenoh_config, link_lease,
+    security = resolve_security(
+        WORLD_ID, team_dir, insecure, (tls_ca, tls_cert, tls_key), acl,
+        load_scenario(run.scenario), zenoh_config,
     )  # fmt: skip
+    zenoh = zenoh_options(
+        team, listen, connect, multicast, protocol, security, zenoh_config, link_lease
+    )
     settings = LiveSettings(
         run, zenoh, record_dir.expanduser(), speed=speed, start_timeout=start_timeout
     ).with_record_dir()
+    warn_insecure(insecure)
     raise typer.Exit(run_world(settings))
 
 
@@ -131,6 +190,8 @@ def agent(
     connect: ConnectOpt = None,
     multicast: MulticastOpt = False,
     protocol: ProtocolOpt = "tcp",
+    team_dir: TeamDirOpt = None,
+    insecure: InsecureOpt = False,
     tls_ca: TlsCaOpt = None,
     tls_cert: TlsCertOpt = None,
     tls_key: TlsKeyOpt = None,
@@ -165,17 +226,19 @@ def agent(
     from mrcomm.world.scenario import load_scenario
 
     check_agent_clock(clock, "--clock")
-    check_agent_id(load_scenario(run.scenario), robot)
+    scenario = load_scenario(run.scenario)
+    check_agent_id(scenario, robot)
+    security = resolve_security(
+        robot, team_dir, insecure, (tls_ca, tls_cert, tls_key), acl, scenario, zenoh_config
+    )
     zenoh = zenoh_options(
-        team, listen, connect, multicast, protocol, tls_ca, tls_cert, tls_key, acl,
-        zenoh_config, link_lease,
-    )  # fmt: skip
+        team, listen, connect, multicast, protocol, security, zenoh_config, link_lease
+    )
     world_options = None
     if world_connect:
         world_options = zenoh_options(
-            team, None, world_connect, False, protocol, tls_ca, tls_cert, tls_key, acl,
-            None, link_lease,
-        )  # fmt: skip
+            team, None, world_connect, False, protocol, security, None, link_lease
+        )
     settings = LiveSettings(
         run,
         zenoh,
@@ -185,6 +248,7 @@ def agent(
         join_timeout=join_timeout,
         agent_clock=clock,
     ).with_record_dir()
+    warn_insecure(insecure)
     raise typer.Exit(run_agent(settings, robot))
 
 
@@ -194,11 +258,15 @@ def live(
     speed: SpeedOpt = 1.0,
     team: TeamOpt = "team",
     protocol: ProtocolOpt = "tcp",
-    tls_dir: Annotated[
+    team_dir: Annotated[
         Path | None,
-        typer.Option(help="Team certificates: ca.pem, <process>.pem / .key (enables mTLS)."),
+        typer.Option(
+            "--team-dir",
+            help="Team directory (mrcomm team init) with a certificate for every "
+            "process; default: a throwaway team made for this run.",
+        ),
     ] = None,
-    acl: Annotated[bool, typer.Option("--acl", help="With --tls-dir: team-only ACL.")] = False,
+    insecure: InsecureOpt = False,
     lease: LeaseOpt = None,
     record_dir: Annotated[
         Path | None, typer.Option(help="Keep the records here (default: a temporary dir).")
@@ -219,7 +287,8 @@ def live(
     with --db, store it in a results database (mode live)."""
     run.check_mode("live")
     from mrcomm.live.collect import live_summary
-    from mrcomm.live.launcher import TlsLayout, run_live
+    from mrcomm.live.identity import check_team_members, live_members, throwaway_team
+    from mrcomm.live.launcher import run_live
     from mrcomm.live.settings import (
         LiveSettings,
         check_agent_clock,
@@ -228,34 +297,38 @@ def live(
     )
 
     check_agent_clock(agent_clock, "--agent-clock", speed)
-    if tls_dir is not None and not (tls_dir / "ca.pem").is_file():
-        raise InputError("no ca.pem in the TLS directory", file=tls_dir, field="--tls-dir")
-    if acl and tls_dir is None:
-        raise InputError("the ACL identifies members by certificate: add --tls-dir", field="--acl")
     check_db(db, experiment)  # before any process is launched
     check_positive(speed, "--speed")  # before the record directory is made
     if lease is not None:
         check_positive(lease, "--lease")
     zenoh = make_options(team=team, protocol=protocol)
+    from mrcomm.world.scenario import load_scenario
+
+    scenario = load_scenario(run.scenario)
+    members = live_members(scenario)
+    if team_dir is not None:
+        if insecure:
+            raise InputError("--insecure contradicts --team-dir", field="--insecure")
+        check_team_members(team_dir, members)
+    elif not insecure and protocol == "udp":
+        raise InputError(
+            "a live team talks TLS (over TCP) unless --insecure: drop --protocol udp",
+            field="--protocol",
+        )
     directory = (
         check_record_dir(record_dir)
         if record_dir is not None
         else Path(tempfile.mkdtemp(prefix="mrcomm-live-"))
     )
-    if tls_dir is not None:
-        zenoh = ZenohOptions(team=zenoh.team, protocol="tls")
     settings = LiveSettings(
         run, zenoh, directory, speed=speed, lease=lease, agent_clock=agent_clock
     )
-    tls = TlsLayout(tls_dir, acl=acl) if tls_dir is not None else None
-    from mrcomm.world.scenario import load_scenario
-
-    scenario = load_scenario(run.scenario)
     warn_ignored_settings(run)
+    warn_insecure(insecure)
     display = LiveDisplay(directory, run.max_time, len(scenario.tasks), len(scenario.robots))
     try:
-        with display:
-            result, report = run_live(settings, tls=tls, on_progress=display.update)
+        with display, throwaway_team(team_dir, insecure, members) as used_dir:
+            result, report = run_live(settings, team_dir=used_dir, on_progress=display.update)
     except InputError:
         # A process refused its input (its one line is the error): nothing was run, so
         # no records are worth keeping in a temporary directory.
@@ -274,9 +347,9 @@ def live(
     live_options = {
         "speed": speed,
         "lease": lease,
-        "protocol": protocol if tls_dir is None else "tcp",  # --tls-dir implies TLS
-        "tls_dir": tls_dir,
-        "acl": acl,
+        "protocol": protocol,
+        "team_dir": team_dir,
+        "insecure": insecure,
         "agent_clock": agent_clock,
     }
     stored = store_run(

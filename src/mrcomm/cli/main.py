@@ -50,6 +50,9 @@ COMMANDS: dict[str, Command] = {
         _CLI + "live_cmd", "world", "Simulate every robot's base and publish the clock (live)"
     ),
     "agent": Command(_CLI + "live_cmd", "agent", "Run one robot's agent over Zenoh"),
+    "team": Command(
+        _CLI + "team_cmd", "team_app", "Team certificates for live mode: init, add, show"
+    ),
     "collect": Command(
         _CLI + "live_cmd", "collect_cmd", "Merge the records of a live run into one result"
     ),

@@ -31,15 +31,19 @@ import typer
 from mrcomm.cli.live_cmd import (
     AclOpt,
     ConnectOpt,
+    InsecureOpt,
     LinkLeaseOpt,
     ListenOpt,
     MulticastOpt,
     ProtocolOpt,
+    TeamDirOpt,
     TeamOpt,
     TlsCaOpt,
     TlsCertOpt,
     TlsKeyOpt,
     ZenohConfigOpt,
+    resolve_security,
+    warn_insecure,
     zenoh_options,
 )
 from mrcomm.errors import InputError
@@ -135,6 +139,8 @@ def pulse(
     ] = None,
     multicast: MulticastOpt = False,
     protocol: ProtocolOpt = "tcp",
+    team_dir: TeamDirOpt = None,
+    insecure: InsecureOpt = False,
     tls_ca: TlsCaOpt = None,
     tls_cert: TlsCertOpt = None,
     tls_key: TlsKeyOpt = None,
@@ -167,14 +173,19 @@ def pulse(
             "only a replayed --trace runs on the world's clock", field="--world-connect"
         )
     owner = pulse_id(check_key_chunk(robot, "--robot"))
-    zenoh = zenoh_options(
-        team, listen, connect, multicast, protocol, tls_ca, tls_cert, tls_key, acl,
-        zenoh_config, link_lease,
-    ) if use_zenoh else None  # fmt: skip
-    world = zenoh_options(
-        team, None, world_connect, False, protocol, tls_ca, tls_cert, tls_key, acl,
-        None, link_lease,
-    ) if world_connect else None  # fmt: skip
+    zenoh = world = None
+    if use_zenoh:
+        # A pulse runs on its robot and presents the robot's certificate.
+        security = resolve_security(
+            robot, team_dir, insecure, (tls_ca, tls_cert, tls_key), acl, None, zenoh_config
+        )
+        zenoh = zenoh_options(
+            team, listen, connect, multicast, protocol, security, zenoh_config, link_lease
+        )
+        if world_connect:
+            world = zenoh_options(
+                team, None, world_connect, False, protocol, security, None, link_lease
+            )
     period = 1.0 / rate
     incarnation = time.time_ns() // 1_000_000
     bus = FanOutBus(owner)
@@ -192,6 +203,7 @@ def pulse(
     if stdout or zenoh is None:
         bus.targets.append(JsonLinesBus(owner, sys.stdout))
     # Every input has been checked: only now open the sessions.
+    warn_insecure(insecure and zenoh is not None)
     with contextlib.ExitStack() as stack:
         clock: ZenohNode | None = None
         if zenoh is not None:

@@ -50,8 +50,8 @@ LIVE_DEFAULTS: dict[str, Any] = {
     "speed": 1.0,
     "lease": None,
     "protocol": "tcp",
-    "tls_dir": None,
-    "acl": False,
+    "team_dir": None,
+    "insecure": False,
     "agent_clock": "shared",
 }
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
@@ -248,7 +248,7 @@ def _extra_options(mode: str, result: MissionResult, given: dict[str, Any]) -> d
         value = values.get(key, default)
         if value is None or value == default:
             continue
-        out[key] = str(Path(value).expanduser().resolve()) if key == "tls_dir" else value
+        out[key] = str(Path(value).expanduser().resolve()) if key == "team_dir" else value
     return out
 
 

@@ -9,12 +9,15 @@ waits for the mission to end, then collects every process's own records
 (``live.collect``). Tests and fault experiments use its handles to kill or restart a
 process mid-mission.
 
+Each child presents its certificate from the team directory given (``--team-dir``:
+mutual TLS and the per-member access-control list) or runs ``--insecure``.
 Children run the ``mrcomm`` command line itself, so what the launcher does can be done
 by hand on several machines (``mrcomm world`` / ``mrcomm agent``, see docs/LIVE.md).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import signal
 import socket
@@ -44,18 +47,6 @@ PROGRESS_PERIOD = 0.5  # wall s between progress callbacks while a mission runs
 
 
 @dataclass
-class TlsLayout:
-    """Certificates of a launched team: ``ca.pem`` and ``<process>.pem`` / ``.key``."""
-
-    directory: Path
-    acl: bool = False
-
-    def files(self, process: str) -> tuple[Path, Path, Path]:
-        d = self.directory
-        return d / "ca.pem", d / f"{process}.pem", d / f"{process}.key"
-
-
-@dataclass
 class Child:
     name: str
     port: int
@@ -71,7 +62,7 @@ class LiveTeam:
         self,
         settings: LiveSettings,
         *,
-        tls: TlsLayout | None = None,
+        team_dir: Path | None = None,
         host: str = "127.0.0.1",
         extra_args: dict[str, list[str]] | None = None,
         addresses: dict[str, str] | None = None,
@@ -80,8 +71,14 @@ class LiveTeam:
         """``addresses`` / ``wrappers`` place processes elsewhere: each listens on its
         own address (port 7447) and starts under its wrapper command (e.g.
         ``ip netns exec NS``); by default all listen on ``host``, on free ports."""
+        if team_dir is not None and settings.zenoh.protocol != "tls":
+            # A team directory means TLS on every link: the endpoints say so.
+            zenoh = dataclasses.replace(settings.zenoh, protocol="tls")
+            settings = dataclasses.replace(settings, zenoh=zenoh)
         self.settings = settings
-        self.tls = tls
+        #: The team directory every child takes its certificate from; None: the
+        #: children run ``--insecure`` (no authentication; tests and experiments).
+        self.team_dir = team_dir
         self.host = host
         self.extra_args = extra_args or {}
         self.addresses = addresses
@@ -180,11 +177,7 @@ class LiveTeam:
                 args += ["--lease", f"{s.lease:g}"]
             if s.agent_clock != "shared":
                 args += ["--clock", s.agent_clock]
-        if self.tls is not None:
-            ca, cert, key = self.tls.files(name)
-            args += ["--tls-ca", str(ca), "--tls-cert", str(cert), "--tls-key", str(key)]
-            if self.tls.acl:
-                args += ["--acl", ",".join(self.names)]
+        args += self.security_args()
         return args + self.extra_args.get(name, [])
 
     def pulse_command(self, name: str) -> list[str]:
@@ -205,12 +198,13 @@ class LiveTeam:
         ]  # fmt: skip
         if proto == "udp":
             args += ["--protocol", "udp"]
-        if self.tls is not None:
-            ca, cert, key = self.tls.files(robot)
-            args += ["--tls-ca", str(ca), "--tls-cert", str(cert), "--tls-key", str(key)]
-            if self.tls.acl:
-                args += ["--acl", ",".join(self.names)]
+        args += self.security_args()  # a pulse presents its robot's certificate
         return args + self.extra_args.get(name, [])
+
+    def security_args(self) -> list[str]:
+        if self.team_dir is None:
+            return ["--insecure"]
+        return ["--team-dir", str(self.team_dir)]
 
     def address(self, name: str) -> str:
         return self.addresses[name] if self.addresses is not None else self.host
@@ -330,12 +324,12 @@ def free_port(host: str, *, udp: bool = False) -> int:
 def run_live(
     settings: LiveSettings,
     *,
-    tls: TlsLayout | None = None,
+    team_dir: Path | None = None,
     on_progress: Callable[[], None] | None = None,
 ) -> tuple[MissionResult, dict[str, Any]]:
     """Launch, wait for the end of the mission, collect: the live ``mrcomm run``. Any
     exception (Ctrl-C too) stops every process first."""
-    with LiveTeam(settings, tls=tls) as team:
+    with LiveTeam(settings, team_dir=team_dir) as team:
         team.start()
         team.wait(on_progress=on_progress)
         return team.collect()

@@ -10,15 +10,20 @@ before any session is opened.
 
 With TLS, every node presents a certificate signed by the team's CA and requires one
 from its peers (mutual authentication), so a process without the team's certificate
-cannot even connect. The access-control list then lets only the team members (by
-certificate common name) publish on, subscribe to or declare tokens on the team's
-keys ``mrcomm/<team>/**``; everything else is denied.
+cannot even connect. The access-control list then binds identity to keys: every node
+accepts from a member (by certificate common name) publications and liveliness tokens
+only under that member's own key chunks ``mrcomm/<team>/<chunk>/**`` (its *grants*: a
+robot its id and its pulse's, the world ``world``), and lets members subscribe to and
+query the team's keys; everything else is denied. Each node enforces this on what it
+receives (ingress), so a member certificate cannot pose as another robot or the world,
+whatever its holder configures on its own node.
 """
 
 from __future__ import annotations
 
 import json
 import re
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -32,15 +37,16 @@ _ENDPOINT = re.compile(
 )
 #: Characters that would change the meaning of a Zenoh key expression.
 _KEY_CHUNK = re.compile(r"^[A-Za-z0-9_.\-]+$")
-#: Every message kind the ACL filters (Zenoh 1.x vocabulary).
-_ACL_MESSAGES = [
-    "put",
-    "delete",
+#: Message kinds that speak *as* their sender (Zenoh 1.x vocabulary): a member may send
+#: them only under its own key chunks.
+_ACL_AUTHORED = ["put", "delete", "liveliness_token"]
+#: Message kinds that ask or answer about keys (subscriptions, queries, the replies to
+#: them): any member, anywhere under the team's keys.
+_ACL_READING = [
     "declare_subscriber",
     "query",
     "declare_queryable",
     "reply",
-    "liveliness_token",
     "declare_liveliness_subscriber",
     "liveliness_query",
 ]
@@ -65,8 +71,9 @@ class ZenohOptions:
     multicast: bool = False
     protocol: str = "tcp"
     tls: TlsFiles | None = None
-    #: Certificate common names allowed on the team's keys (needs ``tls``).
-    acl_members: tuple[str, ...] | None = None
+    #: Access control (needs ``tls``): certificate common name -> the key chunks under
+    #: ``mrcomm/<team>/`` it may publish under (:func:`acl_json`).
+    acl_grants: tuple[tuple[str, tuple[str, ...]], ...] | None = None
     config_file: Path | None = None
     #: Seconds without any traffic after which a peer link is declared dead.
     link_lease: float = 10.0
@@ -118,7 +125,7 @@ def make_options(
     tls_ca: Path | None = None,
     tls_cert: Path | None = None,
     tls_key: Path | None = None,
-    acl_members: list[str] | tuple[str, ...] | None = None,
+    acl_grants: Mapping[str, Sequence[str]] | None = None,
     config_file: Path | None = None,
     link_lease: float = 10.0,
 ) -> ZenohOptions:
@@ -138,7 +145,7 @@ def make_options(
         tls = TlsFiles(tls_ca, tls_cert, tls_key)
         if protocol == "udp":
             raise InputError("TLS runs over TCP; drop --protocol udp", field="--protocol")
-    if acl_members is not None and tls is None:
+    if acl_grants is not None and tls is None:
         raise InputError(
             "an access-control list identifies members by certificate: it needs TLS",
             field="--acl",
@@ -155,7 +162,7 @@ def make_options(
         multicast=multicast,
         protocol=wire,
         tls=tls,
-        acl_members=tuple(acl_members) if acl_members is not None else None,
+        acl_grants=_check_grants(acl_grants) if acl_grants is not None else None,
         config_file=config_file,
         link_lease=link_lease,
     )
@@ -203,28 +210,68 @@ def config_json(options: ZenohOptions) -> dict[str, Any]:
             "enable_mtls": True,
             "verify_name_on_connect": True,
         }
-    if options.acl_members is not None:
-        settings["access_control"] = acl_json(options.prefix(), options.acl_members)
+    if options.acl_grants is not None:
+        settings["access_control"] = acl_json(options.prefix(), dict(options.acl_grants))
     settings.update(options.extra)
     return settings
 
 
-def acl_json(prefix: str, members: tuple[str, ...]) -> dict[str, Any]:
-    """Deny by default; allow every message kind on the team's keys to the members."""
+def _check_grants(grants: Mapping[str, Sequence[str]]) -> tuple[tuple[str, tuple[str, ...]], ...]:
+    if not grants:
+        raise InputError("the access-control list names no member", field="--acl")
+    out = []
+    for member, chunks in grants.items():
+        check_key_chunk(member, "--acl")
+        out.append((member, tuple(check_key_chunk(c, "--acl") for c in chunks)))
+    return tuple(out)
+
+
+def acl_json(prefix: str, grants: Mapping[str, Sequence[str]]) -> dict[str, Any]:
+    """Deny by default. Every member may subscribe to and query the team's keys and
+    receive anything on them (egress); what a node accepts *from* a member (ingress)
+    as a publication or a liveliness token must lie under one of its granted chunks."""
+    members = list(grants)
+    rules: list[dict[str, Any]] = [
+        {
+            "id": "read",
+            "messages": _ACL_READING,
+            "flows": ["egress", "ingress"],
+            "permission": "allow",
+            "key_exprs": [f"{prefix}/**"],
+        },
+        {
+            # What this node sends to a member: everything on the team's keys (what it
+            # may send at all is for the receivers to judge, on their ingress).
+            "id": "deliver",
+            "messages": _ACL_AUTHORED,
+            "flows": ["egress"],
+            "permission": "allow",
+            "key_exprs": [f"{prefix}/**"],
+        },
+    ]
+    subjects: list[dict[str, Any]] = [{"id": "members", "cert_common_names": members}]
+    policies: list[dict[str, Any]] = [{"rules": ["read", "deliver"], "subjects": ["members"]}]
+    for index, (member, chunks) in enumerate(grants.items()):
+        if not chunks:
+            continue
+        rule = f"own{index}"
+        rules.append(
+            {
+                "id": rule,
+                "messages": _ACL_AUTHORED,
+                "flows": ["ingress"],
+                "permission": "allow",
+                "key_exprs": [f"{prefix}/{chunk}/**" for chunk in chunks],
+            }
+        )
+        subjects.append({"id": f"member{index}", "cert_common_names": [member]})
+        policies.append({"rules": [rule], "subjects": [f"member{index}"]})
     return {
         "enabled": True,
         "default_permission": "deny",
-        "rules": [
-            {
-                "id": "team",
-                "messages": _ACL_MESSAGES,
-                "flows": ["egress", "ingress"],
-                "permission": "allow",
-                "key_exprs": [f"{prefix}/**"],
-            }
-        ],
-        "subjects": [{"id": "members", "cert_common_names": list(members)}],
-        "policies": [{"rules": ["team"], "subjects": ["members"]}],
+        "rules": rules,
+        "subjects": subjects,
+        "policies": policies,
     }
 
 
