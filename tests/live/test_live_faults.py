@@ -126,12 +126,17 @@ def test_a_rogue_peer_publishing_garbage_on_every_topic_takes_no_agent_down(
     """A process on the team's network publishes, all mission long, a message of the
     wrong type on every topic under every member's key (a heartbeat on a pose key used
     to kill every agent), statuses and poses in a member's name under its own key,
-    undecodable bytes: the bus edge refuses all of it, counted by cause, no agent dies
-    and the mission succeeds as without it."""
+    undecodable bytes, clock ticks far in the future or not a number: the bus edge and
+    the tick guard refuse all of it, counted by cause, no agent dies and the mission
+    succeeds as without it (``--insecure``: nothing is authenticated)."""
+    import math
     import threading
 
+    import msgspec
+
+    from mrcomm.live.protocol import Tick
     from mrcomm.messaging.messages import Heartbeat, PoseMsg, TaskState, TaskStatus, encode
-    from mrcomm.messaging.topics import TOPICS, lane_of
+    from mrcomm.messaging.topics import TOPICS, Lane, lane_of
     from mrcomm.net.zenoh_node import ZenohNode
 
     stop = threading.Event()
@@ -157,7 +162,12 @@ def test_a_rogue_peer_publishing_garbage_on_every_topic_takes_no_agent_down(
                 task_id="4", state=TaskState.SUCCESS,
             )  # fmt: skip
             node.put(node.key("evil", "task_status"), encode(forged), lane_of("task_status"))
-            sent["samples"] += len(TOPICS) * (len(members) + 1) + 1
+            # Clock ticks no world can have sent, far in the future: one froze every
+            # agent (later genuine ticks looked stale).
+            for time in (1e9, math.inf):
+                fake = msgspec.msgpack.encode(Tick(time=time, speed=SPEED, states=()))
+                node.put(node.key("world", "tick"), fake, Lane.BEST_EFFORT)
+            sent["samples"] += len(TOPICS) * (len(members) + 1) + 3
             stop.wait(0.05)
 
     with team(tmp_path, max_time=KILL_MISSION_LIMIT) as t:
@@ -183,6 +193,7 @@ def test_a_rogue_peer_publishing_garbage_on_every_topic_takes_no_agent_down(
         refused = report["processes"][robot]["refused"]
         assert refused.get("wrong_type", 0) > 100, (robot, refused)
         assert refused.get("undecodable", 0) > 10, (robot, refused)
+        assert refused.get("implausible_tick", 0) > 100, (robot, refused)
     # The forged SUCCESS under "evil" reached the assigner's process and was refused.
     assert report["processes"]["robot_2"]["refused"].get("forged_sender", 0) > 10
 

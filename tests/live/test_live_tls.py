@@ -201,6 +201,8 @@ def test_a_rogue_member_certificate_cannot_forge_statuses_ticks_or_presence(
     the garbage reaches any process (counted there as undecodable), and the S1 mission
     succeeds. Without the ACL the same attack is counted by the bus edge as wrong types
     and forged senders (test_live_faults.py) — or, for the ending tick, obeyed."""
+    import msgspec
+
     from mrcomm.live.identity import live_members
     from mrcomm.live.protocol import Tick
     from mrcomm.messaging.messages import PoseMsg, TaskState, TaskStatus, encode
@@ -231,7 +233,7 @@ def test_a_rogue_member_certificate_cannot_forge_statuses_ticks_or_presence(
             future = Tick(time=1e9, speed=20.0, states=())
             ending = Tick(time=1.0, speed=20.0, states=(), end=True, end_time=1.0)
             for tick in (future, ending):
-                node.put(node.key("world", "tick"), encode(tick), Lane.BEST_EFFORT)  # type: ignore[arg-type]
+                node.put(node.key("world", "tick"), msgspec.msgpack.encode(tick), Lane.BEST_EFFORT)
             node.put(node.key("robot_3", "pose"), b"\xc1 garbage", Lane.BEST_EFFORT)
             sent["samples"] += 2 * len(others) + 3
             stop.wait(0.05)

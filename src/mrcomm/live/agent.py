@@ -53,6 +53,7 @@ from mrcomm.live.recorder import AgentRecorder
 from mrcomm.live.remote_base import RemoteBase
 from mrcomm.live.resync import Resync, reply_for
 from mrcomm.live.settings import LiveSettings, config_crc
+from mrcomm.live.tick_guard import IMPLAUSIBLE_TICK, TickGuard
 from mrcomm.messaging.messages import TOPIC_RSSI, RssiMsg, decode
 from mrcomm.messaging.topics import Lane
 from mrcomm.metrics import labels as L
@@ -204,6 +205,7 @@ class AgentProcess:
         self.present: dict[str, set[int]] = {}
         self.now = 0.0
         self.tick_time = 0.0  # the latest clock tick's (the base state's) time
+        self.tick_guard = TickGuard()
         self.first_tick: float | None = None
         self.ended = False
         self._ready = False
@@ -346,6 +348,9 @@ class AgentProcess:
     def _take_tick(self, item: Incoming) -> Tick | None:
         """Take a tick's state of this robot's base; None for a stale tick."""
         tick: Tick = item.value
+        if not self.tick_guard.plausible(tick, time.monotonic()):
+            self.node.refuse(IMPLAUSIBLE_TICK)  # counted with the bus edge's refusals
+            return None
         if tick.time < self.tick_time:
             return None  # a stale tick overtaken by a newer one
         if item.sent_wall is not None:

@@ -20,8 +20,10 @@ It runs on one of two clocks:
 from __future__ import annotations
 
 import math
+import time
 
 from mrcomm.live.protocol import CH_TICK, WORLD_ID, Tick, decoder_of
+from mrcomm.live.tick_guard import IMPLAUSIBLE_TICK, TickGuard
 from mrcomm.messaging.messages import Message, encode
 from mrcomm.messaging.topics import lane_of
 from mrcomm.net.pulse import PulseBase
@@ -63,6 +65,7 @@ def run_on_shared_clock(pulse: PulseBase, clock: ZenohNode, *, count: int | None
     clock.listen(f"{clock.prefix}/{WORLD_ID}/{CH_TICK}", CH_TICK, decoder_of(Tick))
     clock.watch_presence(WORLD_ID)
     worlds: set[int] = set()
+    guard = TickGuard()
     world_seen = False
     last = -math.inf
     while True:
@@ -80,6 +83,9 @@ def run_on_shared_clock(pulse: PulseBase, clock: ZenohNode, *, count: int | None
                     return "the world has gone"
         elif item.channel == CH_TICK:
             tick: Tick = item.value
+            if not guard.plausible(tick, time.monotonic()):
+                clock.refuse(IMPLAUSIBLE_TICK)
+                continue
             if tick.end:
                 return "the mission has ended"
             if tick.time < last:
