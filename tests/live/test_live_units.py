@@ -9,6 +9,8 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
+import pytest
+
 from mrcomm.live.collect import _timeline, read_journals
 from mrcomm.live.journal import Journal, TimelineTail
 from mrcomm.live.protocol import BaseCommand, BaseState, SyncReply, SyncRequest
@@ -166,3 +168,26 @@ def test_journalled_timeline_survives_a_kill_and_merges_incarnations(tmp_path: P
     moving = [(i.start, i.end) for i in merged.intervals if i.label == "moving"]
     assert moving == [(1.0, 8.0), (10.0, 20.0)]  # the killed one closed where it stopped
     assert merged.count("task_completed") == 1
+
+
+def test_incarnations_never_repeat_even_when_the_clock_steps_back(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Time-ordered, random below the millisecond, and above every journalled one."""
+    import time as time_module
+
+    from mrcomm.live.journal import INCARNATION_RANDOM_BITS, journal_path, new_incarnation
+
+    first = new_incarnation(tmp_path, "robot_1")
+    assert first >> INCARNATION_RANDOM_BITS == pytest.approx(time_module.time() * 1000, abs=5000)
+    assert first < 2**53  # exact in any JSON reader
+    journal_path(tmp_path, "robot_1", first).write_text("")
+    journal_path(tmp_path, "robot_10", first + 10**9).write_text("")  # another process
+    # The clock steps back an hour: the restart still gets a new, larger incarnation.
+    now = time_module.time_ns()
+    monkeypatch.setattr(time_module, "time_ns", lambda: now - 3600 * 10**9)
+    again = new_incarnation(tmp_path, "robot_1")
+    assert again == first + 1
+    assert new_incarnation(tmp_path, "robot_2") < first  # its own history only
+    # Random low bits: many starts in one millisecond are not all alike.
+    assert len({new_incarnation(None, "robot_3") for _ in range(50)}) > 40

@@ -47,6 +47,7 @@ from mrcomm.cli.live_cmd import (
     zenoh_options,
 )
 from mrcomm.errors import InputError
+from mrcomm.live.journal import new_incarnation
 from mrcomm.messaging.messages import TOPIC_RSSI, Message
 from mrcomm.net.pulse import Pulse, PulseBase, ReplayPulse, iw_poller, load_peers, pulse_id
 from mrcomm.net.zenoh_config import check_key_chunk
@@ -187,7 +188,7 @@ def pulse(
                 team, None, world_connect, False, protocol, security, None, link_lease
             )
     period = 1.0 / rate
-    incarnation = time.time_ns() // 1_000_000
+    incarnation = new_incarnation(None, owner)  # a pulse keeps no journal
     bus = FanOutBus(owner)
     runner: PulseBase
     if trace is not None:

@@ -33,7 +33,13 @@ from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
 from mrcomm.agents.behaviours import behaviour_class
 from mrcomm.agents.executor import TaskExecutor
 from mrcomm.errors import InputError, did_you_mean
-from mrcomm.live.journal import Journal, TimelineTail, journal_path, track_presence
+from mrcomm.live.journal import (
+    Journal,
+    TimelineTail,
+    journal_path,
+    new_incarnation,
+    track_presence,
+)
 from mrcomm.live.protocol import (
     CH_AGENT_STATE,
     CH_BASE_CMD,
@@ -511,7 +517,7 @@ def _restore_handlers(previous: dict[int, Any]) -> None:
 
 def run_agent(settings: LiveSettings, agent: str, incarnation: int | None = None) -> int:
     """Run one agent process to the end of the mission; returns the exit status."""
-    inc = incarnation if incarnation is not None else time.time_ns() // 1_000_000
+    inc = incarnation if incarnation is not None else new_incarnation(settings.record_dir, agent)
     if settings.agent_clock == "host":
         from mrcomm.live.host_clock import HostClockAgent  # it extends AgentProcess
 

@@ -16,7 +16,9 @@ current tick. What a robot records about itself:
 
 from __future__ import annotations
 
+import glob
 import json
+import secrets
 import socket
 import time
 from pathlib import Path
@@ -37,6 +39,28 @@ OUTCOME_CODE = {
 
 def journal_path(record_dir: Path, process: str, incarnation: int) -> Path:
     return record_dir / f"{process}.{incarnation}.jsonl"
+
+
+#: Random low bits of an incarnation (below the start time's milliseconds): kept to 11
+#: so that incarnations stay below 2**53 and survive JSON readers that use doubles.
+INCARNATION_RANDOM_BITS = 11
+
+
+def new_incarnation(record_dir: Path | None, process: str) -> int:
+    """A number ``process`` never used before: its start time in milliseconds in the
+    high bits (so a process's incarnations sort in start order, as collection expects),
+    random low bits (two starts in one millisecond differ), and greater than every
+    incarnation of it journalled in ``record_dir`` — so a clock that stepped back
+    cannot make a restarted process reuse an incarnation, which AON would take for the
+    old one (and report finished what it dropped as stale)."""
+    bits = INCARNATION_RANDOM_BITS
+    value = ((time.time_ns() // 1_000_000) << bits) | secrets.randbits(bits)
+    if record_dir is not None and record_dir.is_dir():
+        for path in record_dir.glob(f"{glob.escape(process)}.*.jsonl"):
+            middle = path.name[len(process) + 1 : -len(".jsonl")]
+            if middle.isdigit():
+                value = max(value, int(middle) + 1)
+    return value
 
 
 class Journal:

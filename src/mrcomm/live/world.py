@@ -28,7 +28,7 @@ from dataclasses import asdict
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.errors import InputError
 from mrcomm.live.agent import team_processes
-from mrcomm.live.journal import Journal, journal_path, track_presence
+from mrcomm.live.journal import Journal, journal_path, new_incarnation, track_presence
 from mrcomm.live.protocol import (
     CH_AGENT_STATE,
     CH_BASE_CMD,
@@ -334,5 +334,5 @@ class WorldProcess:
 
 def run_world(settings: LiveSettings, incarnation: int | None = None) -> int:
     """Run the world process to the end of the mission; returns the exit status."""
-    inc = incarnation if incarnation is not None else time.time_ns() // 1_000_000
+    inc = incarnation if incarnation is not None else new_incarnation(settings.record_dir, WORLD_ID)
     return WorldProcess(settings, inc).run()
