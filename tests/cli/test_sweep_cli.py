@@ -143,3 +143,53 @@ def test_export_command_writes_csv(
         capsys, monkeypatch, "export", "--db", db, "--format", "xlsx", "--out", out
     )
     assert code == 2 and "choose csv or parquet" in err
+
+
+@pytest.mark.parametrize(
+    ("reps", "factors", "needle"),
+    [
+        (
+            "1000000",
+            "{spl: [0, 50], behaviour: [nb, lf]}",
+            "expands to 4,000,000 runs (4 configurations x 1,000,000 repetitions)",
+        ),
+        ("100000", "{spl: [0, 50], behaviour: [nb, lf]}", "expands to 400,000 runs"),
+        (
+            None,
+            f"{{max_time: {list(range(100, 500))}, spl: {list(range(400))}}}",
+            "the factors multiply to 160,000 configurations; at most 100,000",
+        ),
+    ],
+)
+def test_a_sweep_too_large_to_plan_is_refused_before_anything_is_built(
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    tmp_path: Path,
+    reps: str | None,
+    factors: str,
+    needle: str,
+) -> None:
+    """``--reps 1000000`` used to build every run in memory (2.3 GB after a minute), and
+    factors with many levels multiply past any memory: now counted first and refused in
+    one line, no database made."""
+    schema = tmp_path / "big.yaml"
+    scenario = ROOT / "data" / "scenarios" / "s1.yaml"
+    schema.write_text(
+        f"name: big\nscenario: {scenario}\nrepetitions: 1\nbase_seed: 1\nfactors: {factors}\n"
+    )
+    db = tmp_path / "r.duckdb"
+    args = ["sweep", schema, "--db", db, *(["--reps", reps] if reps else [])]
+    code, out, err = mrcomm_here(capsys, monkeypatch, *args)
+    assert code == 2, (out, err)
+    assert len(err.strip().splitlines()) == 1 and needle in err, err
+    assert not db.exists() and list(tmp_path.iterdir()) == [schema]
+
+
+def test_the_run_count_limit_itself() -> None:
+    from mrcomm.errors import InputError
+    from mrcomm.experiment.schema import MAX_RUNS, check_run_count
+
+    check_run_count(1000, 100, Path("x.yaml"))  # exactly the limit: accepted
+    assert MAX_RUNS == 1000 * 100
+    with pytest.raises(InputError, match="100,001 runs"):
+        check_run_count(100_001, 1, Path("x.yaml"))

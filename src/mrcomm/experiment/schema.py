@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -117,6 +118,27 @@ class Configuration:
         )
 
 
+#: Most runs one experiment (configurations x repetitions) may expand to. Every run is
+#: planned in memory and recorded in the database before the first starts; a study of
+#: more is a few experiments (each its own name, in one database).
+MAX_RUNS = 100_000
+
+
+def check_run_count(
+    configurations: int, repetitions: int, path: Path, given_reps: int | None = None
+) -> None:
+    """Refuse an experiment of more than :data:`MAX_RUNS` runs (one line, nothing built)."""
+    total = configurations * repetitions
+    if total > MAX_RUNS:
+        raise InputError(
+            f"the experiment expands to {total:,} runs ({configurations:,} configurations x "
+            f"{repetitions:,} repetitions); at most {MAX_RUNS:,} per sweep: split it or "
+            "lower the repetitions",
+            file=None if given_reps is not None else path,
+            field="--reps" if given_reps is not None else "repetitions",
+        )
+
+
 @dataclass(frozen=True)
 class Experiment:
     """A validated, expanded experiment schema."""
@@ -130,8 +152,10 @@ class Experiment:
     configurations: tuple[Configuration, ...]
 
     def runs(self, repetitions: int | None = None) -> list[RunSpec]:
-        """Every run, configuration-major, repetitions numbered from 1."""
+        """Every run, configuration-major, repetitions numbered from 1 (refused in one
+        line, before any is built, beyond :data:`MAX_RUNS`)."""
         reps = self.repetitions if repetitions is None else repetitions
+        check_run_count(len(self.configurations), reps, self.path, given_reps=repetitions)
         return [c.run(r, self.base_seed) for c in self.configurations for r in range(1, reps + 1)]
 
 
@@ -358,6 +382,16 @@ def _expand(model: ExperimentModel, path: Path, yaml_text: str) -> Experiment:
         for v in levels.get(key, []):
             _resolve_path(v, base, f"factors.{key}", path)
     names = list(levels)
+    # Counted before expanding: a few factors with many levels multiply past what any
+    # machine can hold (exclusions only lower the count, so this bounds it).
+    combos = len(scenarios) * math.prod(len(levels[n]) for n in names)
+    if combos > MAX_RUNS:
+        raise InputError(
+            f"the factors multiply to {combos:,} configurations; at most {MAX_RUNS:,} runs "
+            "per sweep",
+            file=path,
+            field="factors",
+        )
     configurations: list[Configuration] = []
     labels: dict[str, str] = {}
     for _written, scenario_path, scenario_name in scenarios:
