@@ -10,7 +10,9 @@
 
 from __future__ import annotations
 
+import os
 import signal
+import time
 from pathlib import Path
 
 import pytest
@@ -164,8 +166,8 @@ def test_a_rogue_peer_publishing_garbage_on_every_topic_takes_no_agent_down(
             node.put(node.key("evil", "task_status"), encode(forged), lane_of("task_status"))
             # Clock ticks no world can have sent, far in the future: one froze every
             # agent (later genuine ticks looked stale).
-            for time in (1e9, math.inf):
-                fake = msgspec.msgpack.encode(Tick(time=time, speed=SPEED, states=()))
+            for future in (1e9, math.inf):
+                fake = msgspec.msgpack.encode(Tick(time=future, speed=SPEED, states=()))
                 node.put(node.key("world", "tick"), fake, Lane.BEST_EFFORT)
             sent["samples"] += len(TOPICS) * (len(members) + 1) + 3
             stop.wait(0.05)
@@ -236,3 +238,69 @@ def test_killing_the_lf_leader_lets_its_followers_carry_on(tmp_path: Path) -> No
     for robot in others:
         assert result.robots[robot]["failed_tasks"] == [], (robot, result.robots[robot])
     assert result.robots[leader]["failed_tasks"]  # the dead leader's own tasks fail
+
+
+def _presence(record_dir: Path, agent: str) -> list[bool]:
+    """What the world saw of ``agent``'s liveliness, in order."""
+    return [
+        bool(line["alive"])
+        for line in journal(record_dir, "world")
+        if line.get("k") == "presence" and line.get("agent") == agent
+    ]
+
+
+def test_a_stopped_robot_rejoins_when_continued_and_finishes(tmp_path: Path) -> None:
+    """SIGSTOP of robot_3 for 30 s of wall time after its first task, then SIGCONT: its
+    mates see it go (its links' lease runs out) and come back, and it resumes and
+    finishes its remaining task; no process dies."""
+    with team(tmp_path, max_time=1500.0) as t:
+        t.start()
+        wait_for(lambda: "3" in completed(tmp_path, "robot_3"), 90, "robot_3's first task")
+        pid = t.children["robot_3"].process.pid
+        os.kill(pid, signal.SIGSTOP)
+        try:
+            wait_for(lambda: _presence(tmp_path, "robot_3")[-1:] == [False], 30, "it to go")
+            deadline = time.monotonic() + 30.0
+            wait_for(lambda: time.monotonic() >= deadline, 40, "30 s stopped")
+        finally:
+            os.kill(pid, signal.SIGCONT)
+        wait_for(lambda: _presence(tmp_path, "robot_3")[-1:] == [True], 60, "it to come back")
+        t.wait()
+        result, report = t.collect()
+    assert report["died"] == []
+    assert sorted(completed(tmp_path, "robot_3")) == ["3", "6"]
+    assert result.mission["successful"] is True, result.mission
+
+
+def test_a_stopped_lf_leader_is_left_and_rejoins_when_continued(tmp_path: Path) -> None:
+    """SIGSTOP of the LF leader for 30 s: its followers see it go and dissolve the group
+    (as for a dead leader); continued, it comes back, resumes, and every task of the
+    team is done — the stopped leader's too."""
+    with team(tmp_path, max_time=1500.0, behaviour="lf", network="wlan", threshold="slt") as t:
+        t.start()
+        wait_for(lambda: _leader(tmp_path) is not None, 90, "a leader")
+        leader = _leader(tmp_path)
+        assert leader is not None
+        pid = t.children[leader].process.pid
+        os.kill(pid, signal.SIGSTOP)
+        try:
+            wait_for(lambda: _presence(tmp_path, leader)[-1:] == [False], 30, "it to go")
+            deadline = time.monotonic() + 30.0
+            wait_for(lambda: time.monotonic() >= deadline, 40, "30 s stopped")
+        finally:
+            os.kill(pid, signal.SIGCONT)
+        wait_for(lambda: _presence(tmp_path, leader)[-1:] == [True], 60, "it to come back")
+        t.wait()
+        result, report = t.collect()
+    assert report["died"] == []
+    reasons = [
+        line["data"].get("reason", "")
+        for robot in ("robot_1", "robot_2", "robot_3")
+        if robot != leader
+        for line in journal(tmp_path, robot)
+        if line.get("k") == "ev" and line.get("label") == "roles_dissolved"
+    ]
+    assert any("leader's process has gone" in r for r in reasons), reasons
+    assert result.mission["successful"] is True, result.mission
+    for robot in ("robot_1", "robot_2", "robot_3"):
+        assert result.robots[robot]["failed_tasks"] == [], (robot, result.robots[robot])
