@@ -92,3 +92,11 @@ def test_bad_team_directories_are_named(tmp_path: Path) -> None:
         member_files(load_team(team.path), "robot_1")
     with pytest.raises(InputError, match="'robot_2' is not a member"):
         member_files(load_team(team.path), "robot_2")
+
+
+@pytest.mark.parametrize("host", ["é.local", "a b", "-x", "x" * 300, "", "robot_1", "1.2.3.4/8"])
+def test_addresses_must_be_ip_addresses_or_host_names(tmp_path: Path, host: str) -> None:
+    """Found by the CLI fuzz: a non-ASCII name reached the certificate builder."""
+    with pytest.raises(InputError, match="neither an IP address nor a host name"):
+        init_team(tmp_path / "team", ("robot_1",), addresses={"robot_1": [host]})
+    assert list(tmp_path.iterdir()) == []

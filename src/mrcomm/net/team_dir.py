@@ -23,6 +23,7 @@ from __future__ import annotations
 import datetime
 import ipaddress
 import os
+import re
 import shutil
 import tempfile
 from collections.abc import Iterable, Mapping
@@ -206,11 +207,25 @@ def _check_addresses(
             raise InputError(f"{member!r} is not among the members", field="--address")
         checked = []
         for host in hosts:
-            if not host or len(host) > 253 or any(c.isspace() or c in "/:@" for c in host):
-                raise InputError(f"bad host name or address {host!r}", field="--address")
+            if not _is_address(host):
+                raise InputError(
+                    f"{host!r} is neither an IP address nor a host name", field="--address"
+                )
             checked.append(host)
         out[member] = tuple(checked)
     return out
+
+
+_HOST_NAME = re.compile(r"^(?=.{1,253}$)([A-Za-z0-9]([A-Za-z0-9-]{0,61}[A-Za-z0-9])?\.?)+$")
+
+
+def _is_address(host: str) -> bool:
+    """An IP address or an ASCII DNS name (what a certificate's subjectAltName holds)."""
+    try:
+        ipaddress.ip_address(host)
+        return True
+    except ValueError:
+        return _HOST_NAME.match(host) is not None
 
 
 def _now() -> datetime.datetime:

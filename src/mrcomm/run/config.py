@@ -45,7 +45,8 @@ class RunConfig(BaseModel):
     spl: float = Field(0.0, ge=0.0, le=100.0, description="simulated packet loss, %")
     threshold: str = "none"
     behaviour: str = "nb"
-    seed: int = Field(1, ge=0)
+    #: Stored as a 64-bit integer (results databases, recordings): larger is refused.
+    seed: int = Field(1, ge=0, lt=2**63)
     max_time: float = Field(
         1800.0, gt=0.0, le=1e6, description="mission time limit, simulated s (at most 1e6)"
     )
