@@ -60,7 +60,14 @@ class SvrCurve:
         """The SVR's own prediction (no saturation), equal to scikit-learn's."""
         d = np.asarray(distances, dtype=np.float64)
         diff = d[..., None] - self.support_vectors
-        kernel = np.exp(-self.gamma * diff * diff)
+        exponent = -self.gamma * diff * diff
+        # Not np.exp: numpy picks its exp by the CPU's vector instructions (AVX2,
+        # AVX-512), and their results differ in the last bit, so a table built on one
+        # machine differed from another's and SSD runs with it (seen: results recorded
+        # on one machine, not reproduced on an AVX-512 one). The C library's exp is the
+        # same on every x86-64 machine with FMA; ~0.2 s per table, built once per model.
+        flat = exponent.ravel().tolist()
+        kernel = np.fromiter(map(math.exp, flat), np.float64, len(flat)).reshape(exponent.shape)
         # A row-wise sum (not a matrix product, whose rounding depends on the batch
         # size) makes the result a pure function of each distance: saturated values
         # are then exactly constant.
