@@ -45,6 +45,9 @@ COMMANDS: dict[str, Command] = {
     "export": Command(
         _CLI + "sweep_cmd", "export", "Export every results table to CSV or Parquet files"
     ),
+    "scenario": Command(
+        _CLI + "scenario_cmd", "scenario_app", "Scenarios of any size: make, tasks, show"
+    ),
     "live": Command(_CLI + "live_cmd", "live", "Run one mission live over Zenoh"),
     "world": Command(
         _CLI + "live_cmd", "world", "Simulate every robot's base and publish the clock (live)"

@@ -1,0 +1,163 @@
+"""``mrcomm scenario``: scenarios of any size.
+
+* ``mrcomm scenario make --map office|warehouse|campus|grid --size WxH --robots N
+  --tasks T --start clustered|scattered|depots --assigner base|virtual|robot_K --seed S
+  --out DIR`` — a map (ROS map_server YAML + PGM), a scenario and a task file, every
+  start and task reachable (checked by loading the result), the same files for the same
+  options;
+* ``mrcomm scenario tasks LOCATIONS --out TASKS.yaml`` — a task file from a list of
+  locations (CSV ``x,y`` or YAML ``[{x, y}, ...]``), in the order the assigner's round
+  robin hands them out;
+* ``mrcomm scenario show SCENARIO [--plot FIG]`` — what a scenario holds, and a picture
+  of its map with the starts and tasks.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from mrcomm.errors import InputError
+from mrcomm.output_paths import FIGURE_SUFFIXES, check_output_file
+
+scenario_app = typer.Typer(
+    help="Scenarios of any size: make, tasks, show.", no_args_is_help=True, rich_markup_mode=None
+)
+
+
+@scenario_app.command()
+def make(
+    out: Annotated[Path, typer.Option(help="Output directory (absent or empty).")],
+    map_kind: Annotated[
+        str, typer.Option("--map", help="office | warehouse | campus | grid.")
+    ] = "office",
+    size: Annotated[str, typer.Option(help="Map size WIDTHxHEIGHT in metres.")] = "60x40",
+    robots: Annotated[int, typer.Option(help="Team size.")] = 10,
+    tasks: Annotated[int, typer.Option(help="Number of tasks.")] = 20,
+    start: Annotated[str, typer.Option(help="clustered | scattered | depots.")] = "clustered",
+    assigner: Annotated[
+        str,
+        typer.Option(help="Task assigner: base (a base station), virtual, or robot_K."),
+    ] = "robot_1",
+    seed: Annotated[int, typer.Option(help="Random seed: same options, same files.")] = 1,
+    name: Annotated[
+        str | None, typer.Option(help="Scenario name and file stem (default: DIR's name).")
+    ] = None,
+) -> None:
+    """Generate a map, a scenario and a task file."""
+    from mrcomm.world.generate.make import Request, make_scenario, parse_size
+
+    width, height = parse_size(size)
+    request = Request(
+        map_kind, width, height, robots, tasks, start, assigner, seed, name or out.name
+    )
+    path = make_scenario(request, out)
+    typer.echo(f"scenario {path} ({robots} robots, {tasks} tasks, {map_kind} {size} m)")
+
+
+@scenario_app.command("tasks")
+def tasks_cmd(
+    locations: Annotated[Path, typer.Argument(help="CSV with x,y columns, or YAML list.")],
+    out: Annotated[Path, typer.Option(help="The task file to write (YAML).")],
+) -> None:
+    """Write a task file from a list of locations (round-robin order)."""
+    from mrcomm.fileio import atomic_write_text
+    from mrcomm.world.generate.make import tasks_from_locations
+
+    check_output_file(out, "--out", (".yaml", ".yml"))
+    points = _read_locations(locations)
+    atomic_write_text(out, tasks_from_locations(points))
+    typer.echo(f"{len(points)} tasks in {out}")
+
+
+def _read_locations(path: Path) -> list[tuple[float, float]]:
+    if not path.is_file():
+        raise InputError("file not found", file=path)
+    rows: list[tuple[object, object]] = []
+    if path.suffix.lower() == ".csv":
+        with path.open(newline="", encoding="utf-8") as handle:
+            reader = csv.DictReader(handle)
+            if reader.fieldnames is None or not {"x", "y"} <= set(reader.fieldnames):
+                raise InputError("needs a header with columns x and y", file=path)
+            rows = [(row["x"], row["y"]) for row in reader]
+    else:
+        from mrcomm.world.yamlfile import read_yaml
+
+        data = read_yaml(path)
+        if not isinstance(data, list) or not all(isinstance(p, dict) for p in data):
+            raise InputError("must be a list of {x, y} mappings", file=path)
+        rows = [(p.get("x"), p.get("y")) for p in data]
+    if not rows:
+        raise InputError("holds no location", file=path)
+    points = []
+    for i, (x, y) in enumerate(rows):
+        try:
+            fx, fy = float(x), float(y)  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            raise InputError(f"location {i + 1}: x and y must be numbers", file=path) from None
+        if not (math.isfinite(fx) and math.isfinite(fy) and abs(fx) <= 1e6 and abs(fy) <= 1e6):
+            raise InputError(f"location {i + 1}: coordinates must be finite, within 1e6 m",
+                             file=path)  # fmt: skip
+        points.append((fx, fy))
+    return points
+
+
+@scenario_app.command()
+def show(
+    scenario: Annotated[Path, typer.Argument(help="Scenario YAML.")],
+    plot: Annotated[
+        Path | None, typer.Option(help="Write the map with starts and tasks (PNG/SVG/PDF).")
+    ] = None,
+) -> None:
+    """Summarise a scenario; with --plot, draw it."""
+    from mrcomm.world.scenario import load_scenario
+
+    if plot is not None:
+        check_output_file(plot, "--plot", FIGURE_SUFFIXES)
+    sc = load_scenario(scenario)
+    xmin, xmax, ymin, ymax = sc.grid.extent
+    free = float((~sc.grid.occupied).sum()) * sc.grid.resolution**2
+    typer.echo(f"{sc.name}: {sc.description}")
+    typer.echo(
+        f"map {xmax - xmin:g} x {ymax - ymin:g} m at {sc.grid.resolution:g} m, free "
+        f"{free:,.0f} m²; {len(sc.robots)} robots, {len(sc.tasks)} tasks, assigner "
+        f"{sc.assigner.kind}{' on ' + sc.assigner.host if sc.assigner.host else ''}"
+    )
+    if plot is not None:
+        _plot(sc, plot)
+        typer.echo(f"figure {plot}")
+
+
+def _plot(sc: object, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from mrcomm.fileio import atomic_write
+    from mrcomm.world.scenario import Scenario
+
+    assert isinstance(sc, Scenario)
+    xmin, xmax, ymin, ymax = sc.grid.extent
+    side = 7.0
+    aspect = (ymax - ymin) / max(xmax - xmin, 1e-9)
+    fig, ax = plt.subplots(figsize=(side, max(2.5, side * aspect)))
+    ax.imshow(sc.grid.occupied, origin="lower", extent=(xmin, xmax, ymin, ymax), cmap="gray_r")
+    small = 6 if len(sc.robots) > 100 else 14
+    ax.scatter([r.pose.x for r in sc.robots], [r.pose.y for r in sc.robots], s=small,
+               color="tab:blue", label=f"{len(sc.robots)} starts")  # fmt: skip
+    ax.scatter([t.x for t in sc.tasks], [t.y for t in sc.tasks], s=small, marker="x",
+               color="tab:red", label=f"{len(sc.tasks)} tasks")  # fmt: skip
+    if sc.assigner.position is not None:
+        ax.scatter(*sc.assigner.position, s=60, marker="^", color="tab:green", label="base")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(sc.name)
+    ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
+    fig.tight_layout()
+    atomic_write(path, lambda tmp: fig.savefig(tmp, format=path.suffix.lstrip(".").lower()))
+    plt.close(fig)

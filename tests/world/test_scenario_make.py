@@ -1,0 +1,124 @@
+"""Generated scenarios: deterministic (same options, same bytes), every kind and start
+mode loads with every start and task reachable (the loader checks), requests that
+cannot fit are refused in one line with nothing written, and the bundled S2-S4 are
+exactly what their documented commands make."""
+
+from __future__ import annotations
+
+import hashlib
+import re
+from pathlib import Path
+
+import pytest
+
+from mrcomm.errors import InputError
+from mrcomm.world.generate.make import Request, make_scenario, parse_size
+from mrcomm.world.generate.maps import KINDS
+from mrcomm.world.generate.place import START_MODES, START_SPACING
+from mrcomm.world.scenario import load_scenario
+from tests.conftest import ROOT
+
+SMALL = {"office": (30, 20), "warehouse": (30, 24), "campus": (60, 50), "grid": (15, 12)}
+
+
+def digest(directory: Path) -> dict[str, str]:
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(directory.iterdir())}
+
+
+@pytest.mark.parametrize("kind", sorted(KINDS))
+@pytest.mark.parametrize("start", START_MODES)
+def test_every_kind_and_start_loads_with_what_was_asked(
+    tmp_path: Path, kind: str, start: str
+) -> None:
+    width, height = SMALL[kind]
+    request = Request(kind, width, height, 8, 12, start, "robot_3", 5, "gen")
+    scenario = load_scenario(make_scenario(request, tmp_path / "out"))
+    assert len(scenario.robots) == 8 and len(scenario.tasks) == 12
+    assert scenario.assigner.kind == "robot" and scenario.assigner.host == "robot_3"
+    xs = [(r.pose.x, r.pose.y) for r in scenario.robots]
+    gaps = [((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2) ** 0.5 for i, a in enumerate(xs)
+            for b in xs[i + 1 :]]  # fmt: skip
+    assert min(gaps) >= START_SPACING - 0.02  # (coordinates rounded to the centimetre)
+
+
+def test_same_options_same_bytes_and_another_seed_differs(tmp_path: Path) -> None:
+    def make(seed: int, out: str) -> dict[str, str]:
+        make_scenario(Request("office", 30, 20, 6, 10, "scattered", "base", seed, "x"),
+                      tmp_path / out)  # fmt: skip
+        return digest(tmp_path / out)
+
+    first = make(1, "a")
+    assert make(1, "b") == first
+    assert sorted(first) == ["x.yaml", "x_map.png", "x_map.yaml", "x_tasks.yaml"]
+    other = make(2, "c")
+    assert other["x_map.png"] != first["x_map.png"] and other["x.yaml"] != first["x.yaml"]
+
+
+def test_assigner_kinds(tmp_path: Path) -> None:
+    for i, (given, kind) in enumerate([("base", "base_station"), ("virtual", "virtual")]):
+        request = Request("grid", 15, 12, 3, 3, "scattered", given, 1, "g")
+        scenario = load_scenario(make_scenario(request, tmp_path / str(i)))
+        assert scenario.assigner.kind == kind
+        if kind == "base_station":
+            assert scenario.assigner.position is not None
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"robots": 500}, "500 robots do not fit on this map"),
+        ({"tasks": 5000}, "5000 tasks do not fit"),
+        ({"robots": 0}, "--robots: must be 1-"),
+        ({"kind": "castle"}, "--map: unknown map 'castle'"),
+        ({"start": "ring"}, "--start: unknown start 'ring'"),
+        ({"assigner": "robot_99"}, "robot_K with K in 1..4"),
+        ({"width": 5}, "needs sides of at least"),
+        ({"name": "a/b"}, "not a file name stem"),
+    ],
+)
+def test_impossible_requests_are_refused_and_nothing_is_written(
+    tmp_path: Path, change: dict[str, object], message: str
+) -> None:
+    fields = {"kind": "office", "width": 20.0, "height": 15.0, "robots": 4, "tasks": 6,
+              "start": "scattered", "assigner": "robot_1", "seed": 1, "name": "n"}  # fmt: skip
+    request = Request(**{**fields, **change})  # type: ignore[arg-type]
+    with pytest.raises(InputError, match=re.escape(message)):
+        make_scenario(request, tmp_path / "out")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_output_directory_with_files_is_never_overwritten(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "keep.txt").write_text("mine")
+    with pytest.raises(InputError, match="not an empty directory"):
+        make_scenario(Request("grid", 15, 12, 2, 2, "scattered", "virtual", 1, "g"), out)
+    assert [p.name for p in out.iterdir()] == ["keep.txt"]
+
+
+@pytest.mark.parametrize("text", ["60x", "x40", "nanxnan", "infx3", "-5x4", "0x10", "3000x10"])
+def test_bad_sizes(text: str) -> None:
+    with pytest.raises(InputError, match="--size"):
+        parse_size(text)
+
+
+@pytest.mark.parametrize("name", ["s2", "s3", "s4"])
+def test_the_bundled_scenarios_are_what_their_commands_make(tmp_path: Path, name: str) -> None:
+    """Each bundled scenario's header holds the command that made it: run again, it makes
+    the same bytes."""
+    bundled = ROOT / "data" / "scenarios" / name
+    header = (bundled / f"{name}.yaml").read_text().splitlines()[0]
+    command = header.removeprefix("# Generated by: mrcomm scenario make ").split()
+    options = dict(zip(command[::2], command[1::2], strict=True))
+    width, height = parse_size(options["--size"])
+    request = Request(
+        options["--map"], width, height, int(options["--robots"]), int(options["--tasks"]),
+        options["--start"], options["--assigner"], int(options["--seed"]), options["--name"],
+    )  # fmt: skip
+    make_scenario(request, tmp_path / name)
+    assert digest(tmp_path / name) == digest(bundled)
+
+
+def test_the_thousand_robot_campus_loads() -> None:
+    scenario = load_scenario(ROOT / "data" / "scenarios" / "campus1000" / "campus1000.yaml")
+    assert len(scenario.robots) == 1000 and len(scenario.tasks) == 2000
