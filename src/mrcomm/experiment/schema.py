@@ -4,7 +4,8 @@ An experiment is a scenario (or several), a full factorial over run options and 
 number of repetitions::
 
     name: ah                          # experiment name (default: the file name)
-    scenario: ../scenarios/s1.yaml    # or a list; relative to this file
+    scenario: ../scenarios/s1.yaml    # or a list; relative to this file; or a generator
+                                      # spec with team sizes (generated.py)
     repetitions: 30
     base_seed: 7                      # run seeds derive from it (see seeds.py)
     factors:                          # option -> list of levels (a scalar = one level)
@@ -41,6 +42,7 @@ import pydantic
 from pydantic import BaseModel, ConfigDict, Field
 
 from mrcomm.errors import InputError, did_you_mean
+from mrcomm.experiment.generated import generated_scenarios
 from mrcomm.experiment.seeds import make_config_id, make_run_id, run_seed
 from mrcomm.run.config import LEGACY_OPTIONS, RUN_KINDS, RunConfig, make_config
 from mrcomm.world.scenario import load_scenario
@@ -64,7 +66,9 @@ class ExperimentModel(BaseModel):
 
     name: str | None = Field(None, pattern=r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
     description: str = ""
-    scenario: str | list[str]
+    #: A scenario file, a list of them, or a generator spec (team size as a factor:
+    #: ``experiment/generated.py``).
+    scenario: str | list[str] | dict[str, Any]
     repetitions: int = Field(ge=1)
     base_seed: int = Field(0, ge=0, lt=1 << 63)
     factors: dict[str, Any] = Field(default_factory=dict)
@@ -310,6 +314,9 @@ def _resolve_path(value: Any, base: Path, field: str, path: Path) -> Path:
 
 def _scenarios(model: ExperimentModel, path: Path) -> list[tuple[str, Path, str]]:
     """(as written, resolved path, scenario name) of each scenario, loaded and checked."""
+    if isinstance(model.scenario, dict):
+        made = generated_scenarios(model.scenario, path)
+        return [(str(p.relative_to(path.parent)), p, load_scenario(p).name) for p in made]
     written = model.scenario if isinstance(model.scenario, list) else [model.scenario]
     if not written:
         raise InputError("empty factorial: no scenario given", file=path, field="scenario")
