@@ -270,6 +270,10 @@ def test_a_stopped_robot_rejoins_when_continued_and_finishes(tmp_path: Path) -> 
         result, report = t.collect()
     assert report["died"] == []
     assert sorted(completed(tmp_path, "robot_3")) == ["3", "6"]
+    # It knew it had been away (and reported its completed tasks again: a status
+    # published as it resumed, before its links were back, used to be lost).
+    away = [line for line in journal(tmp_path, "robot_3") if line.get("k") == "away"]
+    assert away and away[0]["wall_s"] > 10.0, away
     assert result.mission["successful"] is True, result.mission
 
 

@@ -59,12 +59,19 @@ def test_journals_are_followed_incrementally(tmp_path: Path) -> None:
 
 def _live(tmp_path: Path, *extra: str) -> subprocess.Popen[str]:
     env = {**os.environ, "TMPDIR": str(tmp_path)}
+
+    def default_sigint() -> None:
+        # A shell's background job ignores SIGINT, and so would the child: undo it, as
+        # a terminal's Ctrl-C reaches a foreground command.
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+
     return subprocess.Popen(
         [sys.executable, "-c", CODE, "live", str(S1), "--speed", "10", "--max-time", "600", *extra],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
         env=env,
+        preexec_fn=default_sigint,
     )
 
 

@@ -392,6 +392,14 @@ class TaskExecutor:
         self.trigger("conflict")
 
     # -- communication ---------------------------------------------------------------
+    def rejoined(self) -> None:
+        """Back after being away (live mode: its process was stopped and its links
+        dropped): statuses published around then may never have left. Report every
+        completed task again — the assigner counts a task once. Behaviours that send
+        statuses with AON need not: AON re-sends by itself."""
+        for task_id in self.completed:
+            self.send_status(task_id, TaskState.SUCCESS)
+
     def send_status(self, task_id: str, state: TaskState) -> None:
         """NB: publish once, no acknowledgement (communication-aware behaviours
         override this to send with AON)."""

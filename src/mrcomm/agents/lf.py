@@ -116,6 +116,9 @@ class LeaderFollowerExecutor(TaskExecutor):
             return
         self.aon.send(status, self._now)
 
+    def rejoined(self) -> None:
+        """AON brings the team what this robot completed while it was away."""
+
     def _on_aon_deliver(self, status: TaskStatus, msg_id: MessageId) -> None:
         self.on_team_status(status)
 

@@ -212,6 +212,8 @@ class AgentProcess:
         self.now = 0.0
         self.tick_time = 0.0  # the latest clock tick's (the base state's) time
         self.tick_guard = TickGuard()
+        self._last_tick_wall: float | None = None
+        self._report_again: list[float] = []  # wall times (monotonic) to report again
         self.first_tick: float | None = None
         self.ended = False
         self._ready = False
@@ -361,11 +363,26 @@ class AgentProcess:
             return None  # a stale tick overtaken by a newer one
         if item.sent_wall is not None:
             self.max_lag = max(self.max_lag, time.time() - item.sent_wall)
+        self._notice_away(tick.time)
         self.tick_time = tick.time
         mine = next((state for state in tick.states if state.robot == self.agent), None)
         if self.base is not None and mine is not None:
             self.base.update(mine)
         return tick
+
+    def _notice_away(self, now: float) -> None:
+        """A silence between ticks longer than the link lease means this process was
+        away (stopped, frozen): its peers dropped its links, and statuses it published
+        around then may never have left. Once its links are back (reconnection takes a
+        second or two), its executor reports again what it completed."""
+        wall = time.monotonic()
+        last, self._last_tick_wall = self._last_tick_wall, wall
+        if last is not None and wall - last > self.settings.zenoh.link_lease:
+            self.journal.write("away", time=now, wall_s=round(wall - last, 3))
+            self._report_again = [wall + 2.0, wall + 6.0]
+        if self._report_again and wall >= self._report_again[0] and self.executor is not None:
+            self._report_again.pop(0)
+            self.executor.rejoined()
 
     def _first_tick(self, now: float) -> None:
         self.first_tick = now
