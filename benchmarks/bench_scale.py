@@ -103,7 +103,7 @@ def main() -> None:
         per_step = cpu / steps * 1000
         n = SCENARIOS[name][0]
         points.append((n, per_step))
-        print(f"| {name} | {n} | {sim / wall:.1f}x | {wall:.2f} | {cpu:.2f} | "
+        print(f"| {name} | {n} | {sim / wall:.3g}x | {wall:.2f} | {cpu:.2f} | "
               f"{per_step:.2f} | {peak:.0f} |")  # fmt: skip
     if len(points) >= 2:
         print(f"cost per step ~ N^{fit_exponent(points):.2f} (log-log least squares)")
