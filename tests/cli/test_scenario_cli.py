@@ -40,6 +40,19 @@ def test_make_show_and_plot(capsys, monkeypatch, tmp_path: Path) -> None:  # typ
                                "--plot", str(figure))  # fmt: skip
     assert code == 0, err
     assert "12 robots, 24 tasks" in stdout and figure.stat().st_size > 5000
+    code, stdout, err = mrcomm(capsys, monkeypatch, "scenario", "show", str(out))
+    assert code == 0 and "12 robots, 24 tasks" in stdout, err  # the directory will do
+
+
+def test_a_directory_with_files_is_refused(capsys, monkeypatch, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "notes.txt").write_text("keep")
+    code, _, err = mrcomm(capsys, monkeypatch, "scenario", "make", "--size", "20x15",
+                          "--out", str(out))  # fmt: skip
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "--out: exists and is not an empty directory" in err
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["mine", "notes.txt"]
 
 
 @pytest.mark.parametrize(
@@ -48,6 +61,8 @@ def test_make_show_and_plot(capsys, monkeypatch, tmp_path: Path) -> None:  # typ
         (["--size", "10x"], "--size: expected WIDTHxHEIGHT"),
         (["--size", "nanxnan"], "--size"),
         (["--robots", "0"], "--robots: must be 1-"),
+        (["--robots", "many"], "Invalid value for '--robots'"),
+        (["--seed", "-1"], "--seed: must be 0 to 2**63-1"),
         (["--robots", "5000", "--size", "20x15"], "5000 robots do not fit"),
         (["--assigner", "robot_999"], "--assigner"),
         (["--map", "moon"], "--map: unknown map"),
@@ -65,8 +80,10 @@ def test_tasks_from_locations_in_round_robin_order(capsys, monkeypatch, tmp_path
     csv = tmp_path / "spots.csv"
     csv.write_text("x,y\n2.5,5.7\n43,2\n22.2,13.8\n")
     out = tmp_path / "tasks.yaml"
-    code, _, err = mrcomm(capsys, monkeypatch, "scenario", "tasks", str(csv), "--out", str(out))
+    code, stdout, err = mrcomm(capsys, monkeypatch, "scenario", "tasks", str(csv), "--out",
+                               str(out), "--robots", "2")  # fmt: skip
     assert code == 0, err
+    assert "robot_1: 1, 3\nrobot_2: 2\n" in stdout  # what the assigner's round robin does
     from mrcomm.world.scenario import load_tasks
 
     tasks = load_tasks(out)

@@ -5,11 +5,11 @@
   --out DIR`` — a map (ROS map_server YAML + PGM), a scenario and a task file, every
   start and task reachable (checked by loading the result), the same files for the same
   options;
-* ``mrcomm scenario tasks LOCATIONS --out TASKS.yaml`` — a task file from a list of
-  locations (CSV ``x,y`` or YAML ``[{x, y}, ...]``), in the order the assigner's round
-  robin hands them out;
-* ``mrcomm scenario show SCENARIO [--plot FIG]`` — what a scenario holds, and a picture
-  of its map with the starts and tasks.
+* ``mrcomm scenario tasks LOCATIONS --out TASKS.yaml [--robots N]`` — a task file from
+  a list of locations (CSV ``x,y`` or YAML ``[{x, y}, ...]``), in the order the
+  assigner's round robin hands them out (with ``--robots``, it prints who gets what);
+* ``mrcomm scenario show SCENARIO|DIR [--plot FIG]`` — what a scenario holds, and a
+  picture of its map with the starts and tasks.
 """
 
 from __future__ import annotations
@@ -63,15 +63,29 @@ def make(
 def tasks_cmd(
     locations: Annotated[Path, typer.Argument(help="CSV with x,y columns, or YAML list.")],
     out: Annotated[Path, typer.Option(help="The task file to write (YAML).")],
+    robots: Annotated[
+        int | None,
+        typer.Option(help="Print which of robot_1..robot_N the round robin gives each task."),
+    ] = None,
 ) -> None:
     """Write a task file from a list of locations (round-robin order)."""
     from mrcomm.fileio import atomic_write_text
-    from mrcomm.world.generate.make import tasks_from_locations
+    from mrcomm.world.generate.make import MAX_ROBOTS, tasks_from_locations
 
+    if robots is not None and not 1 <= robots <= MAX_ROBOTS:
+        raise InputError(f"must be 1-{MAX_ROBOTS}, got {robots}", field="--robots")
     check_output_file(out, "--out", (".yaml", ".yml"))
     points = _read_locations(locations)
     atomic_write_text(out, tasks_from_locations(points))
     typer.echo(f"{len(points)} tasks in {out}")
+    if robots is not None:
+        from mrcomm.agents.assignment import round_robin
+        from mrcomm.world.scenario import load_tasks
+
+        # The assigner's own function, on the file just written: what a run will do.
+        team = [f"robot_{i + 1}" for i in range(robots)]
+        for robot, agenda in round_robin(load_tasks(out), team).items():
+            typer.echo(f"{robot}: {', '.join(t.task_id for t in agenda) or '-'}")
 
 
 def _read_locations(path: Path) -> list[tuple[float, float]]:
@@ -108,7 +122,9 @@ def _read_locations(path: Path) -> list[tuple[float, float]]:
 
 @scenario_app.command()
 def show(
-    scenario: Annotated[Path, typer.Argument(help="Scenario YAML.")],
+    scenario: Annotated[
+        Path, typer.Argument(help="Scenario YAML, or the directory scenario make wrote.")
+    ],
     plot: Annotated[
         Path | None, typer.Option(help="Write the map with starts and tasks (PNG/SVG/PDF).")
     ] = None,
@@ -118,7 +134,7 @@ def show(
 
     if plot is not None:
         check_output_file(plot, "--plot", FIGURE_SUFFIXES)
-    sc = load_scenario(scenario)
+    sc = load_scenario(_scenario_file(scenario))
     xmin, xmax, ymin, ymax = sc.grid.extent
     free = float((~sc.grid.occupied).sum()) * sc.grid.resolution**2
     typer.echo(f"{sc.name}: {sc.description}")
@@ -130,6 +146,22 @@ def show(
     if plot is not None:
         _plot(sc, plot)
         typer.echo(f"figure {plot}")
+
+
+def _scenario_file(path: Path) -> Path:
+    """``path`` itself, or the scenario file in the directory ``scenario make`` wrote:
+    ``DIR/DIR.yaml`` or its only YAML that is neither a map nor a task file."""
+    if not path.is_dir():
+        return path
+    named = path / f"{path.name}.yaml"
+    if named.is_file():
+        return named
+    found = sorted(p for p in path.glob("*.yaml") if not p.stem.endswith(("_map", "_tasks")))
+    if len(found) != 1:
+        raise InputError(
+            f"a directory with {len(found)} scenario files: name one of them", file=path
+        )
+    return found[0]
 
 
 def _plot(sc: object, path: Path) -> None:

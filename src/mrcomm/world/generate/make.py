@@ -14,6 +14,7 @@ reachable — so the output exists whole and valid, or not at all::
 from __future__ import annotations
 
 import math
+import os
 import re
 import shutil
 import tempfile
@@ -27,7 +28,13 @@ import yaml
 from mrcomm.errors import InputError
 from mrcomm.fileio import atomic_write_text
 from mrcomm.world.generate.maps import KINDS
-from mrcomm.world.generate.place import START_MODES, drivable, place_starts, place_tasks
+from mrcomm.world.generate.place import (
+    START_MODES,
+    drivable,
+    place_starts,
+    place_tasks,
+    squared_distance,
+)
 from mrcomm.world.mapio import save_map
 from mrcomm.world.occupancy import OccupancyGrid
 from mrcomm.world.scenario import ROBOT_RADIUS, load_scenario
@@ -38,6 +45,9 @@ MAX_ROBOTS = 10_000
 MAX_TASKS = 100_000
 #: Maps up to this area (m²) are drawn at 5 cm, larger ones at 10 cm (memory, file size).
 FINE_AREA = 150.0 * 150.0
+#: Most cells a generated map may have (500 x 500 m at 10 cm): generating takes ~65
+#: bytes a cell at its peak (distance transform, regions), so this is ~1.6 GB.
+MAX_CELLS = 25_000_000
 TASK_TYPES = ("SENSOR_SWEEP", "INSPECT")
 _SIZE = re.compile(r"^\s*([0-9]+(?:\.[0-9]+)?)\s*[xX]\s*([0-9]+(?:\.[0-9]+)?)\s*$")
 
@@ -89,6 +99,13 @@ def check_request(request: Request) -> None:
         raise InputError(
             f"a {request.kind} map needs sides of at least {smallest:g} m", field="--size"
         )
+    cells = round(request.width / request.resolution) * round(request.height / request.resolution)
+    if cells > MAX_CELLS:
+        raise InputError(
+            f"{request.width:g}x{request.height:g} m is {cells:,} cells at "
+            f"{request.resolution:g} m; at most {MAX_CELLS:,} (e.g. 500x500 m)",
+            field="--size",
+        )
     if not 1 <= request.robots <= MAX_ROBOTS:
         raise InputError(f"must be 1-{MAX_ROBOTS}, got {request.robots}", field="--robots")
     if not 1 <= request.tasks <= MAX_TASKS:
@@ -129,29 +146,55 @@ def make_scenario(request: Request, out: Path) -> Path:
     parent = out.resolve().parent
     if not parent.is_dir():
         raise InputError("its parent directory does not exist", file=out, field="--out")
+    # The staging directory is made first: an unwritable --out fails now, not after
+    # seconds of drawing.
+    try:
+        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=parent))
+        os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes it private; make it usual
+    except OSError as err:
+        raise InputError(f"cannot write there: {err.strerror}", file=out, field="--out") from None
+    try:
+        # Drawn and written in a helper so the grid it held is freed before the loader
+        # reads the map again (a 300 m campus holds ~1 GB while it is drawn).
+        _generate(request, staging)
+        load_scenario(staging / f"{request.name}.yaml")  # reachability, by the loader itself
+        try:
+            if out.exists():
+                out.rmdir()
+            staging.rename(out)
+        except OSError as err:
+            raise InputError(
+                f"cannot move the scenario into place: {err.strerror}", file=out, field="--out"
+            ) from None
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    return out / f"{request.name}.yaml"
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def _generate(request: Request, directory: Path) -> None:
+    """Draw the plan, then the starts, then the tasks (this order, from one generator:
+    the same seed gives the same files) and write them into ``directory``."""
     rng = np.random.default_rng(request.seed)
     draw, _ = KINDS[request.kind]
     grid = OccupancyGrid(
         draw(request.width, request.height, request.resolution, rng), request.resolution
     )
     cells = drivable(grid, ROBOT_RADIUS)
-    starts = place_starts(cells, request.robots, request.start, rng)
+    where = f"on a {request.width:g}x{request.height:g} m {request.kind}"
+    starts = place_starts(cells, request.robots, request.start, rng, where)
     headings = rng.uniform(-math.pi, math.pi, size=len(starts))
-    tasks = place_tasks(cells, request.tasks, rng)
+    tasks = place_tasks(cells, request.tasks, rng, where)
     centre = (request.width / 2, request.height / 2)
-    nearest = int(np.argmin(np.hypot(cells[:, 0] - centre[0], cells[:, 1] - centre[1])))
+    nearest = int(np.argmin(squared_distance(cells, centre)))
     base = (_r(cells[nearest, 0]), _r(cells[nearest, 1]))
-    staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=parent))
-    try:
-        _write(request, staging, grid, starts, headings, tasks, base)
-        load_scenario(staging / f"{request.name}.yaml")  # reachability, by the loader itself
-        if out.exists():
-            out.rmdir()
-        staging.rename(out)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
-    return out / f"{request.name}.yaml"
+    _write(request, directory, grid, starts, headings, tasks, base)
 
 
 def _r(value: float) -> float:

@@ -16,7 +16,7 @@ fit.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 
 import numpy as np
 from numpy.typing import NDArray
@@ -33,6 +33,7 @@ START_SPACING = 0.9
 #: Between tasks (m).
 TASK_SPACING = 1.0
 START_MODES = ("clustered", "scattered", "depots")
+_CHUNK = 4096  # cells converted to Python floats at a time
 
 
 def drivable(grid: OccupancyGrid, radius: float) -> NDArray[np.float64]:
@@ -57,6 +58,7 @@ class Spacer:
 
     def __init__(self, spacing: float) -> None:
         self.spacing = spacing
+        self.limit = spacing * spacing
         self.cells: dict[tuple[int, int], list[Point]] = {}
         self.points: list[Point] = []
 
@@ -68,7 +70,8 @@ class Spacer:
         for dx in (-1, 0, 1):
             for dy in (-1, 0, 1):
                 for q in self.cells.get((cx + dx, cy + dy), ()):
-                    if math.hypot(p[0] - q[0], p[1] - q[1]) < self.spacing:
+                    ex, ey = p[0] - q[0], p[1] - q[1]
+                    if ex * ex + ey * ey < self.limit:  # exact on every machine (squared_distance)
                         return False
         self.cells.setdefault((cx, cy), []).append(p)
         self.points.append(p)
@@ -85,35 +88,54 @@ def _greedy(candidates: Iterable[Point], count: int, spacer: Spacer) -> int:
     return taken
 
 
-def _nearest_first(cells: NDArray[np.float64], centre: Point) -> list[Point]:
-    d = np.hypot(cells[:, 0] - centre[0], cells[:, 1] - centre[1])
-    order = np.argsort(d, kind="stable")
-    return [(float(cells[i, 0]), float(cells[i, 1])) for i in order]
+def squared_distance(cells: NDArray[np.float64], p: Point) -> NDArray[np.float64]:
+    """Squared distances from ``p`` to each cell. Not np.hypot: that calls the C
+    library, whose last bit may differ between machines and reorder near ties; products
+    and sums are exact IEEE operations everywhere, so the same seed draws the same files."""
+    dx = cells[:, 0] - p[0]
+    dy = cells[:, 1] - p[1]
+    return dx * dx + dy * dy
 
 
-def _shuffled(cells: NDArray[np.float64], rng: np.random.Generator) -> list[Point]:
-    order = rng.permutation(len(cells))
-    return [(float(cells[i, 0]), float(cells[i, 1])) for i in order]
+def _in_order(cells: NDArray[np.float64], order: NDArray[np.intp]) -> Iterator[Point]:
+    """The cells in ``order``, lazily: a list of every cell as Python tuples would take
+    ~100 bytes a cell (close to 1 GB on a 300 m campus) while placement usually stops
+    after a small fraction of them."""
+    for k in range(0, len(order), _CHUNK):
+        yield from ((x, y) for x, y in cells[order[k : k + _CHUNK]].tolist())
+
+
+def _nearest_first(cells: NDArray[np.float64], centre: Point) -> Iterator[Point]:
+    return _in_order(cells, np.argsort(squared_distance(cells, centre), kind="stable"))
+
+
+def _shuffled(cells: NDArray[np.float64], rng: np.random.Generator) -> Iterator[Point]:
+    return _in_order(cells, rng.permutation(len(cells)))
 
 
 def depot_centres(cells: NDArray[np.float64], count: int, rng: np.random.Generator) -> list[Point]:
     """``count`` points of the region far apart (farthest-point sampling)."""
     first = cells[int(rng.integers(len(cells)))]
-    centres = [first]
-    nearest = np.hypot(cells[:, 0] - first[0], cells[:, 1] - first[1])
+    centres = [(float(first[0]), float(first[1]))]
+    nearest = squared_distance(cells, centres[0])
     for _ in range(count - 1):
         far = cells[int(np.argmax(nearest))]
-        centres.append(far)
-        nearest = np.minimum(nearest, np.hypot(cells[:, 0] - far[0], cells[:, 1] - far[1]))
-    return [(float(c[0]), float(c[1])) for c in centres]
+        centres.append((float(far[0]), float(far[1])))
+        nearest = np.minimum(nearest, squared_distance(cells, centres[-1]))
+    return centres
 
 
 def place_starts(
-    cells: NDArray[np.float64], count: int, mode: str, rng: np.random.Generator
+    cells: NDArray[np.float64],
+    count: int,
+    mode: str,
+    rng: np.random.Generator,
+    where: str = "on this map",
 ) -> list[Point]:
-    """``count`` start points by ``mode`` (see the module doc)."""
+    """``count`` start points by ``mode`` (see the module doc); ``where`` names the map
+    in the error message (e.g. "on a 40x30 m warehouse")."""
     if len(cells) == 0:
-        raise InputError("the map has no region a robot can drive in", field="--map")
+        raise InputError(f"there is no region a robot can drive in {where}", field="--map")
     spacer = Spacer(START_SPACING)
     if mode == "scattered":
         taken = _greedy(_shuffled(cells, rng), count, spacer)
@@ -122,7 +144,7 @@ def place_starts(
         taken = _greedy(_nearest_first(cells, (float(centre[0]), float(centre[1]))), count, spacer)
     elif mode == "depots":
         depots = depot_centres(cells, max(2, min(8, count // 25 + 2)), rng)
-        queues = [iter(_nearest_first(cells, c)) for c in depots]
+        queues = [_nearest_first(cells, c) for c in depots]
         taken = 0
         stalled = 0
         while taken < count and stalled < len(queues):
@@ -139,21 +161,23 @@ def place_starts(
                          field="--start")  # fmt: skip
     if taken < count:
         raise InputError(
-            f"{count} robots do not fit on this map ({taken} starts {START_SPACING:g} m apart "
-            "did): give a larger --size or fewer --robots",
+            f"{count} robots do not fit {where} (at most ~{taken} starts {START_SPACING:g} m "
+            "apart): give a larger --size or fewer --robots",
             field="--robots",
         )
     return spacer.points
 
 
-def place_tasks(cells: NDArray[np.float64], count: int, rng: np.random.Generator) -> list[Point]:
+def place_tasks(
+    cells: NDArray[np.float64], count: int, rng: np.random.Generator, where: str = "on this map"
+) -> list[Point]:
     """``count`` task locations drawn uniformly over the region, spaced apart."""
     spacer = Spacer(TASK_SPACING)
     taken = _greedy(_shuffled(cells, rng), count, spacer)
     if taken < count:
         raise InputError(
-            f"{count} tasks do not fit on this map ({taken} did, {TASK_SPACING:g} m apart): "
-            "give a larger --size or fewer --tasks",
+            f"{count} tasks do not fit {where} (at most ~{taken} tasks {TASK_SPACING:g} m "
+            "apart): give a larger --size or fewer --tasks",
             field="--tasks",
         )
     return spacer.points
