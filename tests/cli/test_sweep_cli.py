@@ -15,7 +15,7 @@ import pytest
 from mrcomm.experiment.runner import execute_sweep, plan_sweep
 from mrcomm.experiment.schema import load_experiment
 from mrcomm.experiment.store import inspect_database
-from tests.conftest import ROOT
+from tests.conftest import ROOT, S1_PATH
 from tests.experiment.helpers import MINI, write_schema
 
 MRCOMM = [sys.executable, "-c", "from mrcomm.cli.main import app; app()"]
@@ -193,3 +193,76 @@ def test_the_run_count_limit_itself() -> None:
     assert MAX_RUNS == 1000 * 100
     with pytest.raises(InputError, match="100,001 runs"):
         check_run_count(100_001, 1, Path("x.yaml"))
+
+
+def _big_schema(
+    directory: Path, factors: str, scenario: str = str(S1_PATH), extra: str = ""
+) -> Path:
+    path = directory / "big.yaml"
+    path.write_text(
+        f"name: big\nscenario: {scenario}\nrepetitions: 1\nbase_seed: 1\nfactors: {factors}\n"
+        f"{extra}"
+    )
+    return path
+
+
+@pytest.mark.parametrize(
+    ("reps", "scenario", "needle"),
+    [
+        # 1,000 configurations: each would be built (a RunConfig) before --reps counted.
+        ("1000000", str(S1_PATH), "expands to 1,000,000,000 runs (1,000 configurations x"),
+        # 200 team sizes x 1,000 levels: no scenario is generated before the count.
+        (
+            None,
+            "{generate: {map: grid, size: 20x15}, robots: " + str(list(range(2, 202))) + ", "
+            "tasks: 3}",
+            "the factors multiply to 200,000 configurations",
+        ),
+    ],
+)
+def test_the_run_count_comes_before_any_scenario_or_configuration_is_built(
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    tmp_path: Path,
+    reps: str | None,
+    scenario: str,
+    needle: str,
+) -> None:
+    from mrcomm.experiment import schema as schema_module
+
+    def built(*_: object) -> None:
+        raise AssertionError("built before the run count was checked")
+
+    monkeypatch.setattr(schema_module, "_scenarios", built)
+    monkeypatch.setattr(schema_module, "_build", built)
+    schema = _big_schema(tmp_path, f"{{max_time: {list(range(100, 1100))}}}", scenario)
+    args = ["sweep", schema, "--db", tmp_path / "r.duckdb", *(["--reps", reps] if reps else [])]
+    code, out, err = mrcomm_here(capsys, monkeypatch, *args)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and needle in err, (out, err)
+    assert list(tmp_path.iterdir()) == [schema]  # no database, no generated/ directory
+
+
+def test_excluded_combinations_are_not_counted(tmp_path: Path) -> None:
+    """500 of the 1,000 combinations excluded: 500 x 200 repetitions is the limit
+    exactly (accepted), one repetition more is refused with the count."""
+    from mrcomm.errors import InputError
+
+    schema = _big_schema(
+        tmp_path,
+        f"{{spl: [0, 50], max_time: {list(range(100, 600))}}}",
+        extra="exclude: [{spl: 50}]\n",
+    )
+    assert len(load_experiment(schema, repetitions=200).configurations) == 500
+    with pytest.raises(InputError, match=r"100,500 runs \(500 configurations x 201 rep"):
+        load_experiment(schema, repetitions=201)
+
+
+def test_the_limit_is_stated_where_the_sweep_is_documented(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from mrcomm.experiment.schema import MAX_RUNS
+
+    code, out, _ = mrcomm_here(capsys, monkeypatch, "sweep", "--help")
+    assert code == 0 and f"at most {MAX_RUNS:,}" in " ".join(out.split())
+    docs = " ".join((ROOT / "docs" / "RESULTS.md").read_text().split())
+    assert f"at most {MAX_RUNS:,} runs" in docs

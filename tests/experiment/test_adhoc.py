@@ -123,7 +123,9 @@ def test_ids_differ_by_mode_options_and_experiment(tmp_path: Path, sim: MissionR
     # ... while options at their default are not part of the id: `collect` (which sees
     # the record's speed only) and `live` (which gives every option) agree.
     again = store_live(
-        db, as_live(sim, speed=10.0), live_options={"speed": 10.0, "protocol": "tcp", "insecure": False}
+        db,
+        as_live(sim, speed=10.0),
+        live_options={"speed": 10.0, "protocol": "tcp", "insecure": False},
     )
     assert again.config_id == live.config_id and again.repetition == 2
     other = store_result(db, sim, experiment="bench")

@@ -1,10 +1,14 @@
 """Fuzzing the command line itself: seeded random option values (NaN, infinity, 1e308,
 negative, empty, words, unknown options and variant parameters) and mutated input files
-given to real ``mrcomm`` commands, run in this process. Every case must end with exit
-status 0, or 2 with exactly one line on stderr (``mrcomm: error: ...``) and no
-traceback — and an exit 2 leaves nothing in the case's output directory. Runs are kept
-short (``--max-time`` of a few simulated seconds) so a case that passes validation
-costs little. Hypothesis draws the cases from a fixed seed (``derandomize``)."""
+(scenarios, maps, task files, experiment schemas, calibration sets, signal models: the
+mutations of ``test_fuzz_inputs.py``) given to real ``mrcomm`` commands — ``run``,
+``sweep``, ``signal fit|show|plot``, ``check``, ``radio show|plot``, ``team init`` and
+the results commands — run in this process. Every case must end with exit status 0, or
+2 with exactly one line on stderr (``mrcomm: error: ...``) and no traceback — and an
+exit 2 leaves nothing in the case's output directory. Runs are kept short
+(``--max-time`` of a few simulated seconds, sweeps of a few runs) so a case that passes
+validation costs little. Hypothesis draws the cases from a fixed seed (``derandomize``):
+1,050 cases, about 40 s with ``pytest -n 2`` on two cores."""
 
 from __future__ import annotations
 
@@ -18,7 +22,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tests.conftest import ROOT, S1_PATH
-from tests.fuzz.test_fuzz_inputs import _mutate, _s1_text
+from tests.fuzz.test_fuzz_inputs import BASES, EXTREMES, _mutate, _s1_text
 
 CASES = 150
 VALUES = [
@@ -207,3 +211,221 @@ def test_the_fuzzed_commands_accept_their_base_case(
     code, err = _cli(monkeypatch, capsys, ["team", "init", str(out / "t"), "--members", "r"])
     assert code == 0, err
     assert (ROOT / "data" / "scenarios" / "s1.yaml").is_file()
+
+
+#: Option values of the commands below: the command-line extremes and the YAML ones.
+ANY = list(dict.fromkeys(VALUES + EXTREMES))
+#: A sweep of 3 configurations of 2 simulated seconds, one repetition each.
+SCHEMA = f"""\
+name: fz
+scenario: {S1_PATH}
+repetitions: 1
+base_seed: 3
+factors: {{spl: [0, 50], behaviour: [nb, lf]}}
+exclude: [{{spl: 50, behaviour: nb}}]
+options: {{network: wlan, threshold: none, max_time: 2}}
+"""
+#: Each sweep option with values it accepts. Small --run-timeout values are left out:
+#: they are valid and make runs time out (exit 1, failed runs) depending on the
+#: machine's speed.
+SWEEP_OPTIONS = {
+    "--reps": ["1", "2"], "--jobs": ["1", "2"], "--run-timeout": ["100", "1e9"],
+    "--connect-timeout": ["5", "0.5"], "--set": [], "--record": [], "--db": [],
+    "--no-such-option": [],
+}  # fmt: skip
+TOO_SHORT = {"1e-320", "1", "2.5", "3"}
+
+
+def _sweep_cheaply(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Sweeps that pass validation stay cheap: runs in threads of this process (a
+    process pool would start interpreters), and at most 6 runs a sweep (the run-count
+    check itself, with a small limit: a mutated ``repetitions: 1_000`` is refused)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from mrcomm.experiment import runner, schema
+
+    monkeypatch.setattr(runner, "process_pool", lambda jobs: ThreadPoolExecutor(jobs))
+    monkeypatch.setattr(schema, "MAX_RUNS", 6)
+
+
+def test_sweep_with_random_options_and_mutated_schemas(
+    monkeypatch: pytest.MonkeyPatch, capsys: Any, tmp_path: Path
+) -> None:
+    """``mrcomm sweep`` on the schema, mutated or not, with one to three options of
+    random value; the database (and recordings) in the case's output directory."""
+    _sweep_cheaply(monkeypatch)
+
+    @_settings()
+    @given(st.data())
+    def case(data: st.DataObject) -> None:
+        out = _fresh(tmp_path / "out")
+        schema = tmp_path / "fz.yaml"
+        text = _mutate(SCHEMA, data) if data.draw(st.booleans()) else SCHEMA
+        schema.write_text(text, encoding="utf-8", errors="surrogatepass")
+        # --db first, in the output directory: a drawn --db comes later and wins.
+        args = [str(schema), "--db", str(out / "r.duckdb")]
+        for _ in range(data.draw(st.integers(0, 3))):
+            option = data.draw(st.sampled_from(sorted(SWEEP_OPTIONS)))
+            good = SWEEP_OPTIONS[option]
+            bad = [v for v in ANY if option != "--run-timeout" or v not in TOO_SHORT]
+            value = data.draw(st.sampled_from(good if good and data.draw(st.booleans()) else bad))
+            if option == "--set":
+                value = f"{data.draw(st.sampled_from(SETS))}={value}"
+            elif option in ("--db", "--record"):
+                name = data.draw(st.sampled_from(["r.duckdb", "r.db", "r.txt", "d/x", value]))
+                value = str(out / name)
+            args += [option, value]
+        code, err = _cli(monkeypatch, capsys, ["sweep", *args])
+        _check(code, err, out, args, seen)
+
+    seen: list[int] = []
+    case()
+    # Both outcomes reached: the cases explore from working commands into bad ones.
+    assert seen.count(0) >= 5 and seen.count(2) >= 5, (seen.count(0), seen.count(2))
+
+
+def test_run_on_mutated_maps_and_task_files(
+    monkeypatch: pytest.MonkeyPatch, capsys: Any, tmp_path: Path
+) -> None:
+    """``mrcomm run`` on S1 with a mutated map YAML or task file (the image intact)."""
+    tasks_file = str(S1_PATH.parent / "s1_tasks.yaml")
+    office = str(ROOT / "data" / "maps" / "office.yaml")
+
+    @_settings()
+    @given(st.data())
+    def case(data: st.DataObject) -> None:
+        out = _fresh(tmp_path / "out")
+        kind = data.draw(st.sampled_from(["map", "tasks"]))
+        mutated = tmp_path / f"{kind}.yaml"
+        mutated.write_text(_mutate(BASES[kind][0], data), encoding="utf-8", errors="surrogatepass")
+        scenario = tmp_path / "scenario.yaml"
+        scenario.write_text(
+            _s1_text().replace(office if kind == "map" else tasks_file, str(mutated))
+        )
+        args = [str(scenario), "--max-time", "3", "--plot", str(out / "m.png")]
+        code, err = _cli(monkeypatch, capsys, ["run", *args])
+        _check(code, err, out, args, seen)
+
+    seen: list[int] = []
+    case()
+    # Both outcomes reached: the cases explore from working commands into bad ones.
+    assert seen.count(0) >= 5 and seen.count(2) >= 5, (seen.count(0), seen.count(2))
+
+
+def test_signal_and_check_commands_with_random_values(
+    monkeypatch: pytest.MonkeyPatch, capsys: Any, tmp_path: Path
+) -> None:
+    """``signal fit`` on a mutated calibration set (a third of the bundled one) with a
+    random hyper-parameter, ``signal show|plot`` of a mutated model with a random
+    threshold, ``check`` of random variant and check names (only the cheap ``api``
+    check ever runs)."""
+    from mrcomm.specs import REGISTRY
+
+    variants = [s.key for s in REGISTRY.all()] + ["lf", "nb", "behaviour.", ".lf", "nope"]
+    #: Each option with values it accepts (--config and --map: not with a CSV).
+    fit_options = {
+        "--gamma": ["0.1", "1"], "--C": ["100", "10"], "--epsilon": ["0.1", "0"],
+        "--threshold": ["-42", "-60"], "--config": [], "--map": [], "--bad": [],
+    }  # fmt: skip
+
+    @_settings()
+    @given(st.data())
+    def case(data: st.DataObject) -> None:
+        out = _fresh(tmp_path / "out")
+        kind = data.draw(st.sampled_from(["fit", "show", "plot", "check"]))
+        value = data.draw(st.sampled_from(ANY))
+        # Half the files and values are left as they work: the cases explore from
+        # working commands into bad ones.
+        kept = data.draw(st.booleans())
+        if kind == "fit":
+            csv = tmp_path / "calibration.csv"
+            text = BASES["calibration"][0]
+            csv.write_text(text if kept else _mutate(text, data),
+                           encoding="utf-8", errors="surrogatepass")  # fmt: skip
+            name = data.draw(st.sampled_from(["m.json", "m.json", "m.txt", "d/m.json"]))
+            option = data.draw(st.sampled_from(sorted(fit_options)))
+            good = fit_options[option]
+            if good and data.draw(st.booleans()):
+                value = data.draw(st.sampled_from(good))
+            args = ["signal", "fit", str(csv), "--out", str(out / name), option, value]
+        elif kind in ("show", "plot"):
+            model = tmp_path / "model.json"
+            text = BASES["model"][0]
+            model.write_text(text if kept else _mutate(text, data),
+                             encoding="utf-8", errors="surrogatepass")  # fmt: skip
+            if data.draw(st.booleans()):
+                value = data.draw(st.sampled_from(["-42", "-60.5"]))
+            args = ["signal", kind, str(model), "--threshold", value]
+            if kind == "plot":
+                name = data.draw(st.sampled_from(["s.png", "s.svg", "s.txt"]))
+                args += ["--out", str(out / name)]
+            else:
+                args += data.draw(st.sampled_from([[], ["--json"]]))
+        else:
+            target = data.draw(st.sampled_from([[v] for v in variants] + [[value], ["--all"]]))
+            only = data.draw(st.sampled_from(["api", value]))
+            args = ["check", *target, "--only", only]
+        code, err = _cli(monkeypatch, capsys, args)
+        _check(code, err, out, args, seen)
+
+    seen: list[int] = []
+    case()
+    # Both outcomes reached: the cases explore from working commands into bad ones.
+    assert seen.count(0) >= 5 and seen.count(2) >= 5, (seen.count(0), seen.count(2))
+
+
+def test_the_new_fuzzed_commands_accept_their_base_case(
+    monkeypatch: pytest.MonkeyPatch, capsys: Any, tmp_path: Path
+) -> None:
+    """The starting points of the sweep, signal and check fuzzing run."""
+    _sweep_cheaply(monkeypatch)
+    schema = tmp_path / "fz.yaml"
+    schema.write_text(SCHEMA)
+    calibration = tmp_path / "calibration.csv"
+    calibration.write_text(BASES["calibration"][0])
+    model = tmp_path / "model.json"
+    model.write_text(BASES["model"][0])
+    for args in (
+        ["sweep", str(schema), "--db", str(tmp_path / "r.duckdb"), "--reps", "2"],
+        ["signal", "fit", str(calibration), "--out", str(tmp_path / "m.json")],
+        ["signal", "show", str(model), "--threshold", "-42"],
+        ["check", "behaviour.lf", "--only", "api"],
+    ):
+        code, err = _cli(monkeypatch, capsys, args)
+        assert code == 0, (args, err)
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        # scikit-learn's SVR has no iteration limit: C 1e308 never finished.
+        (["signal", "fit", "CAL", "--out", "OUT/m.json", "--C", "1e308"], "--C: must be at most"),
+        # Dask parses the timeout as text: NaN and infinity were a KeyError traceback,
+        # a negative one was reported as an unreachable scheduler.
+        (["sweep", "SCHEMA", "--db", "OUT/r.duckdb", "--connect-timeout", "nan"], "--connect-"),
+        (
+            ["sweep", "SCHEMA", "--db", "OUT/r.duckdb", "--scheduler", "tcp://127.0.0.1:9",
+             "--connect-timeout", "inf"],
+            "--connect-timeout: must be a positive number of seconds, got inf",
+        ),
+        (
+            ["sweep", "SCHEMA", "--db", "OUT/r.duckdb", "--scheduler", "tcp://127.0.0.1:9",
+             "--connect-timeout", "-1"],
+            "--connect-timeout: must be a positive number of seconds, got -1",
+        ),
+    ],
+)  # fmt: skip
+def test_what_the_fuzzing_found(
+    monkeypatch: pytest.MonkeyPatch, capsys: Any, tmp_path: Path, args: list[str], needle: str
+) -> None:
+    out = tmp_path / "out"
+    out.mkdir()
+    schema = tmp_path / "fz.yaml"
+    schema.write_text(SCHEMA)
+    calibration = tmp_path / "calibration.csv"
+    calibration.write_text(BASES["calibration"][0])
+    places = {"CAL": str(calibration), "SCHEMA": str(schema)}
+    args = [places.get(a, a.replace("OUT", str(out))) for a in args]
+    code, err = _cli(monkeypatch, capsys, args)
+    _check(code, err, out, args, [])
+    assert code == 2 and needle in err, err

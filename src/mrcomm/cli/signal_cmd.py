@@ -32,6 +32,11 @@ signal_app = typer.Typer(
 )
 
 SAMPLE_DISTANCES = (1.0, 2.0, 4.0, 8.0)
+#: Largest SVR regularisation ``--C`` a fit accepts: scikit-learn's SVR has no iteration
+#: limit and its time grows with C (the bundled calibration set: 1 s at C 1e4, 6 s at
+#: 1e6, 27 s at 1e10, never done at 1e308), while readings in dB are fitted as closely
+#: as they can be long before 1e6.
+MAX_C = 1e6
 CLASS_LABELS = {"line_of_sight": "line of sight", "obstructed": "obstructed"}
 
 ModelArg = Annotated[
@@ -141,7 +146,9 @@ def fit_cmd(
     ],
     out: Annotated[Path, typer.Option("--out", "-o", help="Model JSON to write.")],
     gamma: Annotated[float, typer.Option(help="RBF kernel gamma (1/m^2).", min=1e-9)] = 0.1,
-    c: Annotated[float, typer.Option("--C", help="SVR regularisation C.", min=1e-9)] = 100.0,
+    c: Annotated[
+        float, typer.Option("--C", help=f"SVR regularisation C (at most {MAX_C:g}).", min=1e-9)
+    ] = 100.0,
     epsilon: Annotated[float, typer.Option(help="SVR epsilon tube (dB).", min=0.0)] = 0.1,
     threshold: Annotated[float, typer.Option(help="Default warning threshold (dBm).")] = -42.0,
     config: Annotated[
@@ -173,6 +180,10 @@ def fit_cmd(
     for name, number in hyper.items():
         if not math.isfinite(number):
             raise InputError(f"must be a finite number, got {number:g}", field=name)
+    if c > MAX_C:
+        raise InputError(
+            f"must be at most {MAX_C:g} (a larger C only slows the fit), got {c:g}", field="--C"
+        )
     check_output_file(out, "--out", (".json",))
     # A results database by its suffix or content; anything else is read as a CSV,
     # whatever its suffix (as before databases were accepted).

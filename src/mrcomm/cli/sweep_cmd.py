@@ -7,6 +7,7 @@ database (read-only), scheduler; only then is the database opened for writing.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable
 from concurrent.futures import Executor
@@ -46,8 +47,14 @@ def sweep(
     schema: Annotated[
         Path, typer.Argument(help="Experiment schema YAML (e.g. data/experiments/ah.yaml).")
     ],
+    # 100,000 below is mrcomm.experiment.schema.MAX_RUNS (not imported: --help stays
+    # light; tests/cli/test_sweep_cli.py keeps the two equal).
     reps: Annotated[
-        int | None, typer.Option(help="Repetitions per configuration (default: the schema's).")
+        int | None,
+        typer.Option(
+            help="Repetitions per configuration (default: the schema's); at most 100,000 "
+            "runs (configurations x repetitions) per sweep."
+        ),
     ] = None,
     jobs: Annotated[
         int | None, typer.Option(help="Local worker processes (default: one per CPU).")
@@ -71,7 +78,9 @@ def sweep(
     """Run every configuration x repetition of an experiment (resumable).
 
     Runs already stored as ok are skipped; failed or timed-out runs are run again.
-    Results go to a DuckDB database (docs/RESULTS.md)."""
+    Results go to a DuckDB database (docs/RESULTS.md). A sweep may hold at most 100,000
+    runs (configurations x repetitions, --reps included), counted before anything is
+    built; split a larger study into several experiments in one database."""
     # Imported here: DuckDB and pandas are not needed by the other commands.
     from mrcomm.experiment.runner import (
         SweepReport,
@@ -82,7 +91,8 @@ def sweep(
     )
     from mrcomm.experiment.schema import load_experiment
 
-    experiment = load_experiment(schema, parse_assignments(sets))
+    # --reps goes in with the schema: the run count is checked before anything is built.
+    experiment = load_experiment(schema, parse_assignments(sets), repetitions=reps)
     if jobs is not None and jobs < 1:
         raise InputError(f"must be at least 1, got {jobs}", field="--jobs")
     # Each worker is a process holding a scenario and a mission (~100 MB): more than a
@@ -96,6 +106,13 @@ def sweep(
         raise InputError("give --jobs or --scheduler, not both (the cluster sets its workers)")
     if not run_timeout > 0:
         raise InputError(f"must be positive, got {run_timeout:g}", field="--run-timeout")
+    # Dask parses the timeout as text: NaN or infinity crashed it (a KeyError traceback),
+    # and a negative one was reported as an unreachable scheduler.
+    if not (math.isfinite(connect_timeout) and connect_timeout > 0):
+        raise InputError(
+            f"must be a positive number of seconds, got {connect_timeout:g}",
+            field="--connect-timeout",
+        )
     check_output_file(db, "--db", DATABASE_SUFFIXES)
     if record is not None:
         _check_record_dir(record)

@@ -23,7 +23,8 @@ Factors and options are any :class:`~mrcomm.run.config.RunConfig` field except
 ``scenario`` and ``seed``, or a variant parameter ``KIND.KEY`` (``behaviour.utility:
 [original, greedy]``); ``params`` holds fixed parameters (dotted or nested keys).
 Everything is checked here, before any database is opened:
-unknown keys (with "did you mean"), empty factors, and every value, by building the
+unknown keys (with "did you mean"), empty factors, the number of runs (at most
+:data:`MAX_RUNS`, counted before anything is built), and every value, by building the
 RunConfig of every configuration.
 """
 
@@ -131,15 +132,17 @@ MAX_RUNS = 100_000
 def check_run_count(
     configurations: int, repetitions: int, path: Path, given_reps: int | None = None
 ) -> None:
-    """Refuse an experiment of more than :data:`MAX_RUNS` runs (one line, nothing built)."""
+    """Refuse an experiment of more than :data:`MAX_RUNS` runs (one line, nothing built).
+    ``given_reps``: the repetitions came from ``--reps`` (named as the culprit)."""
     total = configurations * repetitions
     if total > MAX_RUNS:
+        option = "--reps" if given_reps is not None else "repetitions"
         raise InputError(
             f"the experiment expands to {total:,} runs ({configurations:,} configurations x "
-            f"{repetitions:,} repetitions); at most {MAX_RUNS:,} per sweep: split it or "
-            "lower the repetitions",
+            f"{repetitions:,} repetitions); at most {MAX_RUNS:,} per sweep (split it, or "
+            f"lower {option})",
             file=None if given_reps is not None else path,
-            field="--reps" if given_reps is not None else "repetitions",
+            field=option,
         )
 
 
@@ -163,10 +166,14 @@ class Experiment:
         return [c.run(r, self.base_seed) for c in self.configurations for r in range(1, reps + 1)]
 
 
-def load_experiment(path: str | Path, params: dict[str, Any] | None = None) -> Experiment:
+def load_experiment(
+    path: str | Path, params: dict[str, Any] | None = None, *, repetitions: int | None = None
+) -> Experiment:
     """Read, validate and expand an experiment schema file (InputError on bad input).
     ``params`` (``sweep --set``) adds fixed variant parameters to the file's ``params``;
-    one the file already sets, as a parameter or a factor, is an error."""
+    one the file already sets, as a parameter or a factor, is an error. ``repetitions``
+    (``sweep --reps``) replaces the file's in the run count, which is checked against
+    :data:`MAX_RUNS` before any scenario is read or configuration built."""
     path = Path(path)
     raw = read_yaml(path)
     if not isinstance(raw, dict):
@@ -187,7 +194,7 @@ def load_experiment(path: str | Path, params: dict[str, Any] | None = None) -> E
             if key in given or key in model.factors or key in model.options:
                 raise InputError(f"{key} is already set by {path}", field="--set")
         model = model.model_copy(update={"params": {**given, **extra}})
-    return _expand(model, path, path.read_text(encoding="utf-8"))
+    return _expand(model, path, path.read_text(encoding="utf-8"), repetitions)
 
 
 def _allowed_options() -> list[str]:
@@ -373,10 +380,53 @@ def _build(
         ) from None
 
 
-def _expand(model: ExperimentModel, path: Path, yaml_text: str) -> Experiment:
+def _excluded(chosen: dict[str, Any], rules: list[dict[str, Any]]) -> bool:
+    """Whether an ``exclude`` entry matches every one of its keys in ``chosen``."""
+    return any(all(chosen[k] == v for k, v in rule.items()) for rule in rules)
+
+
+def _check_size(
+    model: ExperimentModel, levels: dict[str, list[Any]], path: Path, repetitions: int | None
+) -> None:
+    """Count the runs arithmetically and refuse more than :data:`MAX_RUNS` before anything
+    is built: a few factors with many levels, or ``--reps 1000000``, would otherwise
+    expand into more than any machine can hold (and a generator spec would first make
+    every scenario)."""
+    scenarios = model.scenario
+    if isinstance(scenarios, dict):  # one per team size; the spec is validated later
+        sizes = scenarios.get("robots")
+        n_scenarios = len(sizes) if isinstance(sizes, list) else 1
+    else:
+        n_scenarios = len(scenarios) if isinstance(scenarios, list) else 1
+    names = list(levels)
+    # Exclusions only lower the count, so the product bounds it without listing any.
+    combos = max(n_scenarios, 1) * math.prod(len(levels[n]) for n in names)
+    if combos > MAX_RUNS:
+        raise InputError(
+            f"the factors multiply to {combos:,} configurations; at most {MAX_RUNS:,} runs "
+            "per sweep (split it, or drop levels)",
+            file=path,
+            field="factors",
+        )
+    if model.exclude:  # at most MAX_RUNS combinations: cheap to count exactly
+        kept = sum(
+            not _excluded(dict(zip(names, combo, strict=True)), model.exclude)
+            for combo in itertools.product(*(levels[n] for n in names))
+        )
+        combos = max(n_scenarios, 1) * kept
+    if repetitions is not None and repetitions < 1:
+        raise InputError(f"must be at least 1, got {repetitions}", field="--reps")
+    reps = model.repetitions if repetitions is None else repetitions
+    check_run_count(combos, reps, path, given_reps=repetitions)
+
+
+def _expand(
+    model: ExperimentModel, path: Path, yaml_text: str, repetitions: int | None = None
+) -> Experiment:
     name = model.name or path.stem
     levels = _levels(model, path)
     _check_exclude(model, levels, path)
+    _check_size(model, levels, path, repetitions)
     scenarios = _scenarios(model, path)
     base = path.parent
     params = _flat_params(model.params, path)
@@ -389,22 +439,12 @@ def _expand(model: ExperimentModel, path: Path, yaml_text: str) -> Experiment:
         for v in levels.get(key, []):
             _resolve_path(v, base, f"factors.{key}", path)
     names = list(levels)
-    # Counted before expanding: a few factors with many levels multiply past what any
-    # machine can hold (exclusions only lower the count, so this bounds it).
-    combos = len(scenarios) * math.prod(len(levels[n]) for n in names)
-    if combos > MAX_RUNS:
-        raise InputError(
-            f"the factors multiply to {combos:,} configurations; at most {MAX_RUNS:,} runs "
-            "per sweep",
-            file=path,
-            field="factors",
-        )
     configurations: list[Configuration] = []
     labels: dict[str, str] = {}
     for _written, scenario_path, scenario_name in scenarios:
         for combo in itertools.product(*(levels[n] for n in names)):
             chosen = dict(zip(names, combo, strict=True))
-            if any(all(chosen[k] == v for k, v in rule.items()) for rule in model.exclude):
+            if _excluded(chosen, model.exclude):
                 continue
             given = {
                 **options,
