@@ -32,6 +32,11 @@ from mrcomm.world.occupancy import OccupancyGrid
 Point = tuple[float, float]
 
 _IDLE, _FOLLOW, _REVERSE = 0, 1, 2
+#: The speed (m/s) at which any mate is assumed at most to drive when bounding which
+#: mates can matter (:attr:`SimBase.neighbour_radius`; robots' max_v is 0.5 by default).
+NEIGHBOUR_MAX_SPEED = 1.0
+#: Localisation error (m) allowed for in that bound (the simulated error is centimetres).
+NEIGHBOUR_LOCALISATION = 0.5
 
 
 class SimBase:
@@ -86,7 +91,7 @@ class SimBase:
         self._rev_deadline = 0.0
         self._rev_blocked = False
         self._waiting = False
-        self._prev_others: tuple[Point, ...] = ()  # mates' positions at the last check
+        self._prev_others: dict[int, Point] = {}  # mate -> its position at the last check
         self._prev_t = -math.inf
         self._goal_taken = False  # holding in front of a mate that stands on our goal
         # Thresholds used every step (squared where compared with squared distances).
@@ -96,6 +101,17 @@ class SimBase:
         self.replans = 0  #: re-plans after the first plan of a goal (mates, recoveries)
         self.recoveries = 0  #: stuck recoveries started
         self.bumps = 0  #: steps whose translation was refused (wall or mate in the way)
+
+    @property
+    def neighbour_radius(self) -> float:
+        """Within this distance of its true position (m) a mate can matter to this
+        robot this step: seen within the sensing range from its localised pose, in
+        contact, in the way of backing off. It adds the distance two robots close in
+        0.5 s (mates' motion is judged over at most that long) and a localisation
+        error, both at :data:`NEIGHBOUR_MAX_SPEED`."""
+        p = self.params
+        reach = max(p.sensing_range, p.reverse_distance + 2 * p.radius + 0.05)
+        return reach + 2 * 0.5 * max(p.max_v, NEIGHBOUR_MAX_SPEED) + NEIGHBOUR_LOCALISATION
 
     # ------------------------------------------------------------ Base port
     def navigate_to(self, x: float, y: float) -> None:
@@ -177,13 +193,22 @@ class SimBase:
     def recovering(self) -> bool:
         return self._mode == _REVERSE
 
-    def update(self, dt: float, now: float, others: Sequence[Point] = ()) -> None:
+    def update(
+        self,
+        dt: float,
+        now: float,
+        others: Sequence[Point] = (),
+        mates: Sequence[int] | None = None,
+    ) -> None:
         """Advance the robot by ``dt`` seconds; ``others`` are the true (x, y) of the
-        other robots (used for sensing within range and for contact)."""
+        other robots (used for sensing within range and for contact): all of them, or
+        at least those within :attr:`neighbour_radius`; ``mates`` identifies each of
+        ``others`` from step to step (default: its place in ``others``)."""
         self._now = now
         mode = self._mode
         if mode == _FOLLOW:
-            v_cmd, w_cmd = self._follow_step(now, others)
+            ids = range(len(others)) if mates is None else mates
+            v_cmd, w_cmd = self._follow_step(now, others, ids)
         elif mode == _REVERSE:
             v_cmd, w_cmd = self._reverse_step(now, others)
         else:
@@ -267,7 +292,9 @@ class SimBase:
         s2 = self._sense2
         return [(ox, oy) for ox, oy in others if (ox - ex) ** 2 + (oy - ey) ** 2 <= s2]
 
-    def _follow_step(self, now: float, others: Sequence[Point]) -> tuple[float, float]:
+    def _follow_step(
+        self, now: float, others: Sequence[Point], mates: Sequence[int]
+    ) -> tuple[float, float]:
         p = self.params
         loc = self._loc
         ex = self._x + loc.ex
@@ -289,7 +316,7 @@ class SimBase:
         hold = False
         self._goal_taken = False
         if others:
-            hold = self._check_mates(ex, ey, now, others)
+            hold = self._check_mates(ex, ey, now, others, mates)
             follower = self._follower
             assert follower is not None
         self._waiting = hold
@@ -304,14 +331,16 @@ class SimBase:
             return 0.0, 0.0
         return cmd
 
-    def _check_mates(self, ex: float, ey: float, now: float, others: Sequence[Point]) -> bool:
+    def _check_mates(
+        self, ex: float, ey: float, now: float, others: Sequence[Point], mates: Sequence[int]
+    ) -> bool:
         """Re-plan around mates blocking the path ahead; True when we must hold.
 
         A mate standing on the goal itself cannot be planned around: we hold in front
         of it, without re-planning or stuck recovery, until it leaves. A blocking mate
-        that is driving away from us (judged from its last position, which assumes the
-        simulator lists the others in a fixed order) is clearing the way by itself: we
-        may hold behind it, but we do not re-plan around it.
+        that is driving away from us (judged from its position at the last check, up to
+        0.5 s ago) is clearing the way by itself: we may hold behind it, but we do not
+        re-plan around it.
         """
         p = self.params
         follower = self._follower
@@ -319,7 +348,7 @@ class SimBase:
         s2 = self._sense2
         prev = self._prev_others
         gap = now - self._prev_t
-        known = len(prev) == len(others) and 0.0 < gap <= 0.5
+        recent = 0.0 < gap <= 0.5
         gx, gy = follower.goal
         block2 = self._block * self._block
         blocking: list[Point] = []
@@ -334,15 +363,16 @@ class SimBase:
                 if (ox - gx) ** 2 + (oy - gy) ** 2 < block2:
                     on_goal.append((ox, oy))
                     continue
-                if not known:
+                last = prev.get(mates[k]) if recent else None
+                if last is None:
                     continue  # first sighting: judge its motion on the next step
                 if d2 > 0.0:
-                    px, py = prev[k]
+                    px, py = last
                     away = ((ox - px) * (ox - ex) + (oy - py) * (oy - ey)) / (gap * math.sqrt(d2))
                     if away > 0.1:  # m/s away from us
                         continue
                 static = True
-        self._prev_others = tuple(others)
+        self._prev_others = dict(zip(mates, others, strict=True))
         self._prev_t = now
         if not blocking:
             return False

@@ -14,8 +14,12 @@ from mrcomm.net.links import LinkRecorder
 from mrcomm.robot.base import SimBase
 from mrcomm.run.assemble import RobotTruth
 from mrcomm.world.scenario import AssignerSpec
+from mrcomm.world.spatial import neighbours
 
 TRAJECTORY_PERIOD = 0.5  # simulated s between recorded trajectory samples
+#: Teams up to this size hand every body all the others (as cheap as finding the near
+#: ones); larger teams only the mates within each body's neighbour radius.
+SMALL_TEAM = 8
 
 Point = tuple[float, float]
 
@@ -27,6 +31,7 @@ class RobotBodies:
         self.bases = bases
         self.assigner = assigner
         self._next_sample = 0.0
+        self._radii = [b.neighbour_radius for b in bases.values()]
 
     def true_xy(self) -> list[Point]:
         return [b.true_xy for b in self.bases.values()]
@@ -39,9 +44,16 @@ class RobotBodies:
 
     def advance(self, dt: float, now: float, truth: list[Point]) -> None:
         """Advance every body by ``dt``; ``truth`` holds the positions before the step,
-        each body's view of the others."""
-        for i, base in enumerate(self.bases.values()):
-            base.update(dt, now, truth[:i] + truth[i + 1 :])
+        each body's view of the others. In a large team a body is given only the mates
+        within its neighbour radius (found with a grid of cells): the others cannot
+        matter to it this step, so the outcome is the same at O(N) instead of O(N²)."""
+        bases = list(self.bases.values())
+        if len(bases) <= SMALL_TEAM:
+            for i, base in enumerate(bases):
+                base.update(dt, now, truth[:i] + truth[i + 1 :])
+            return
+        for i, near in enumerate(neighbours(truth, self._radii)):
+            bases[i].update(dt, now, [truth[j] for j in near], near)
 
     def sample_due(self, now: float) -> bool:
         """Whether a trajectory sample is due at ``now`` (then the next one is booked)."""
