@@ -82,6 +82,9 @@ class InProcessNetwork:
         n = len(self.ids)
         self._connected: list[list[bool]] = [[True] * n for _ in range(n)]
         self.counts: dict[tuple[str, str], TopicCounts] = {}
+        # The same counts by topic and receiver index, for the delivery loop (created on
+        # first use, as in ``counts``: an agent never reached on a topic has no entry).
+        self._counts_by_index: dict[str, list[TopicCounts | None]] = {}
         self.observer: DeliveryObserver | None = None
         self.publish_observer: PublishObserver | None = None
         self._now = 0.0
@@ -115,10 +118,14 @@ class InProcessNetwork:
         streams = self._streams
         channel = self.channel
         exempt = self.policy.exempt
+        observer = self.observer
         for sender, topic, message, _, delay, bits in outbox:
             receivers = self._subs.get(topic)
             if not receivers:
                 continue
+            counts = self._counts_by_index.get(topic)
+            if counts is None:
+                counts = self._counts_by_index[topic] = [None] * len(self.ids)
             links = self._connected[sender]
             # Per message, not per receiver: lost to the sender's queue, and its delay.
             queued_out = delay is None and not exempt(topic)
@@ -135,11 +142,12 @@ class InProcessNetwork:
                         else 0.0
                     )
                     outcome = decide(topic, links[receiver], streams[receiver], per)
-                self._count(receiver, topic).count(outcome, delay_s)
-                if self.observer is not None:
-                    self.observer(
-                        now, topic, self.ids[sender], self.ids[receiver], message, outcome
-                    )
+                entry = counts[receiver]
+                if entry is None:
+                    entry = counts[receiver] = self._count(receiver, topic)
+                entry.count(outcome, delay_s)
+                if observer is not None:
+                    observer(now, topic, self.ids[sender], self.ids[receiver], message, outcome)
                 if outcome == RECEIVED:
                     for handler in handlers:
                         handler(message)
