@@ -16,13 +16,14 @@ import time
 from pathlib import Path
 
 import pytest
+import yaml
 
 from mrcomm.live.launcher import LiveTeam
 from mrcomm.live.settings import LiveSettings
 from mrcomm.net.zenoh_config import make_options
 from mrcomm.run.config import make_config
 
-from .helpers import S1, journal, wait_for
+from .helpers import S1, journal, s1_variant, wait_for
 
 pytestmark = pytest.mark.slow
 
@@ -38,7 +39,7 @@ def completed(record_dir: Path, robot: str) -> list[str]:
 
 
 def team(tmp_path: Path, lease: float | None = None, **run: object) -> LiveTeam:
-    config = make_config(None, scenario=S1, **run)
+    config = make_config(None, **{"scenario": S1, **run})
     return LiveTeam(LiveSettings(config, make_options(), tmp_path, speed=SPEED, lease=lease))
 
 
@@ -129,9 +130,11 @@ def test_a_rogue_peer_publishing_garbage_on_every_topic_takes_no_agent_down(
     """A process on the team's network publishes, all mission long, a message of the
     wrong type on every topic under every member's key (a heartbeat on a pose key used
     to kill every agent), statuses and poses in a member's name under its own key,
-    undecodable bytes, clock ticks far in the future or not a number: the bus edge and
-    the tick guard refuse all of it, counted by cause, no agent dies and the mission
-    succeeds as without it (``--insecure``: nothing is authenticated)."""
+    undecodable bytes, clock ticks far in the future, not a number, at another speed or
+    ending the mission beyond the world's reach: the bus edge and the tick guard refuse
+    all of it, counted by cause, no agent dies and the mission succeeds as without it
+    (``--insecure``: nothing is authenticated; a forged end tick with a believable time
+    cannot be told from the world's without the team's certificates)."""
     import math
     import threading
 
@@ -143,7 +146,7 @@ def test_a_rogue_peer_publishing_garbage_on_every_topic_takes_no_agent_down(
     from mrcomm.net.zenoh_node import ZenohNode
 
     stop = threading.Event()
-    sent = {"samples": 0}
+    sent = {"samples": 0, "ticks": 0}
 
     def attack(node: ZenohNode, members: list[str]) -> None:
         seq = 0
@@ -165,12 +168,20 @@ def test_a_rogue_peer_publishing_garbage_on_every_topic_takes_no_agent_down(
                 task_id="4", state=TaskState.SUCCESS,
             )  # fmt: skip
             node.put(node.key("evil", "task_status"), encode(forged), lane_of("task_status"))
-            # Clock ticks no world can have sent, far in the future: one froze every
-            # agent (later genuine ticks looked stale).
-            for future in (1e9, math.inf):
-                fake = msgspec.msgpack.encode(Tick(time=future, speed=SPEED, states=()))
-                node.put(node.key("world", "tick"), fake, Lane.BEST_EFFORT)
-            sent["samples"] += len(TOPICS) * (len(members) + 1) + 3
+            # Clock ticks no world can have sent: far in the future (one froze every
+            # agent: later genuine ticks looked stale), not a number, at another speed,
+            # or ending the mission at a time it cannot have reached.
+            ticks = [
+                Tick(time=1e9, speed=SPEED, states=()),
+                Tick(time=math.inf, speed=SPEED, states=()),
+                Tick(time=math.nan, speed=SPEED, states=()),
+                Tick(time=1.0, speed=SPEED * 1000, states=()),
+                Tick(time=1.0, speed=SPEED, states=(), end=True, end_time=1e9),
+            ]
+            for fake in ticks:
+                node.put(node.key("world", "tick"), msgspec.msgpack.encode(fake), Lane.BEST_EFFORT)
+            sent["samples"] += len(TOPICS) * (len(members) + 1) + 1 + len(ticks)
+            sent["ticks"] += len(ticks)
             stop.wait(0.05)
 
     with team(tmp_path, max_time=600.0, behaviour=behaviour) as t:
@@ -196,7 +207,8 @@ def test_a_rogue_peer_publishing_garbage_on_every_topic_takes_no_agent_down(
         refused = report["processes"][robot]["refused"]
         assert refused.get("wrong_type", 0) > 100, (robot, refused)
         assert refused.get("undecodable", 0) > 10, (robot, refused)
-        assert refused.get("implausible_tick", 0) > 100, (robot, refused)
+        # Every forged tick that reached it (a few may precede the rogue's links).
+        assert refused.get("implausible_tick", 0) > 0.8 * sent["ticks"], (robot, refused, sent)
     # The forged SUCCESS under "evil" reached the assigner's process and was refused.
     assert report["processes"]["robot_2"]["refused"].get("forged_sender", 0) > 10
 
@@ -250,30 +262,66 @@ def _presence(record_dir: Path, agent: str) -> list[bool]:
     ]
 
 
+#: Wall seconds a SIGSTOP test keeps its robot stopped (the issue's 30 s: three times
+#: the default link lease of 10 s, so its mates' links to it are long gone).
+STOP_WALL = 30.0
+
+
+def _mates_saw(record_dir: Path, robot: str, by: str = "robot_1") -> list[bool]:
+    """How ``by`` judged ``robot``'s standing (gone: False, back: True), in order."""
+    return [
+        bool(line["alive"])
+        for line in journal(record_dir, by)
+        if line.get("k") == "mate" and line.get("agent") == robot
+    ]
+
+
+def _s1_dependent(directory: Path) -> Path:
+    """S1 where robot_2's task 5 arrives only at 250 s and robot_3's task 6 depends on
+    it: robot_3, done with task 3, waits for task 5 — completed while robot_3 is
+    stopped, its status sent once (NB) over links that are down."""
+    tasks = yaml.safe_load((S1.parent / "s1_tasks.yaml").read_text())
+    for task in tasks:
+        if task["task_id"] == "5":
+            task["arrival_time"] = 250
+        if task["task_id"] == "6":
+            task["depends"] = ["5"]
+    directory.mkdir()
+    return s1_variant(directory, "S1-dependent", tasks)
+
+
 def test_a_stopped_robot_rejoins_when_continued_and_finishes(tmp_path: Path) -> None:
-    """SIGSTOP of robot_3 for 30 s of wall time after its first task, then SIGCONT: its
-    mates see it go (its links' lease runs out) and come back, and it resumes and
-    finishes its remaining task; no process dies."""
-    with team(tmp_path, max_time=1500.0) as t:
+    """SIGSTOP of robot_3 for 30 s of wall time once it has done task 3 and waits for
+    task 5 (robot_2's, which its task 6 depends on), then SIGCONT. Its mates treat it
+    as gone (its links' lease runs out: its token vanishes) and as back; task 5 is
+    completed meanwhile, its status lost for robot_3 (NB sends it once). Continued,
+    robot_3 knows it was away, catches up with what the team completed (it used to wait
+    for task 5 until the time limit) and finishes task 6; no process dies."""
+    scenario = _s1_dependent(tmp_path / "scenario")
+    records = tmp_path / "records"
+    with team(records, scenario=scenario, max_time=1500.0) as t:
         t.start()
-        wait_for(lambda: "3" in completed(tmp_path, "robot_3"), 90, "robot_3's first task")
+        wait_for(lambda: "3" in completed(records, "robot_3"), 90, "robot_3's first task")
         pid = t.children["robot_3"].process.pid
         os.kill(pid, signal.SIGSTOP)
+        deadline = time.monotonic() + STOP_WALL
         try:
-            wait_for(lambda: _presence(tmp_path, "robot_3")[-1:] == [False], 30, "it to go")
-            deadline = time.monotonic() + 30.0
-            wait_for(lambda: time.monotonic() >= deadline, 40, "30 s stopped")
+            wait_for(lambda: _mates_saw(records, "robot_3")[-1:] == [False], 30, "it to go")
+            wait_for(lambda: "5" in completed(records, "robot_2"), 30, "task 5 done")
+            wait_for(lambda: time.monotonic() >= deadline, STOP_WALL, "30 s stopped")
         finally:
             os.kill(pid, signal.SIGCONT)
-        wait_for(lambda: _presence(tmp_path, "robot_3")[-1:] == [True], 60, "it to come back")
+        wait_for(lambda: _mates_saw(records, "robot_3")[-1:] == [True], 60, "it to come back")
         t.wait()
         result, report = t.collect()
     assert report["died"] == []
-    assert sorted(completed(tmp_path, "robot_3")) == ["3", "6"]
-    # It knew it had been away (and reported its completed tasks again: a status
-    # published as it resumed, before its links were back, used to be lost).
-    away = [line for line in journal(tmp_path, "robot_3") if line.get("k") == "away"]
+    assert sorted(completed(records, "robot_3")) == ["3", "6"]
+    lines = journal(records, "robot_3")
+    # It knew it had been away, and learnt task 5 from the team's answers.
+    away = [line for line in lines if line.get("k") == "away"]
     assert away and away[0]["wall_s"] > 10.0, away
+    caught_up = [line for line in lines if line.get("k") == "caught_up"]
+    assert caught_up and "5" in caught_up[0]["learnt"], caught_up
     assert result.mission["successful"] is True, result.mission
 
 
@@ -288,10 +336,10 @@ def test_a_stopped_lf_leader_is_left_and_rejoins_when_continued(tmp_path: Path) 
         assert leader is not None
         pid = t.children[leader].process.pid
         os.kill(pid, signal.SIGSTOP)
+        deadline = time.monotonic() + STOP_WALL
         try:
             wait_for(lambda: _presence(tmp_path, leader)[-1:] == [False], 30, "it to go")
-            deadline = time.monotonic() + 30.0
-            wait_for(lambda: time.monotonic() >= deadline, 40, "30 s stopped")
+            wait_for(lambda: time.monotonic() >= deadline, STOP_WALL, "30 s stopped")
         finally:
             os.kill(pid, signal.SIGCONT)
         wait_for(lambda: _presence(tmp_path, leader)[-1:] == [True], 60, "it to come back")
@@ -306,6 +354,9 @@ def test_a_stopped_lf_leader_is_left_and_rejoins_when_continued(tmp_path: Path) 
         if line.get("k") == "ev" and line.get("label") == "roles_dissolved"
     ]
     assert any("leader's process has gone" in r for r in reasons), reasons
+    for mate in ("robot_1", "robot_2", "robot_3"):
+        if mate != leader:  # treated as gone while stopped, and as back
+            assert _mates_saw(tmp_path, leader, by=mate)[-2:] == [False, True], mate
     assert result.mission["successful"] is True, result.mission
     for robot in ("robot_1", "robot_2", "robot_3"):
         assert result.robots[robot]["failed_tasks"] == [], (robot, result.robots[robot])

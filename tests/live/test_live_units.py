@@ -103,15 +103,10 @@ def test_resync_skips_what_the_team_knows_this_robot_completed() -> None:
     agenda = _assignment(_task("1"), _task("4"), _task("5", n=2), _task("7"))
     # The assignment broadcast arriving meanwhile is held back (and kept).
     assert endpoint.gate(TOPIC_ASSIGNMENT, agenda) is None
-    resync.on_reply(SyncReply("robot_2", "robot_1", 8, (("9", ""),)))  # an old incarnation's
-    resync.on_reply(
-        SyncReply(
-            "robot_2",
-            "robot_1",
-            9,
-            (("1", "robot_1"), ("4", ""), ("5", "robot_2")),
-        )
-    )
+    old = SyncReply("robot_2", "robot_1", 8, (("9", ""),))  # an old incarnation's
+    assert resync.on_reply(old, 50.1) == []
+    reply = SyncReply("robot_2", "robot_1", 9, (("1", "robot_1"), ("4", ""), ("5", "robot_2")))
+    assert resync.on_reply(reply, 50.2) == []  # applied with the assignment, not before
     assert not resync.step(50.5, alive={"robot_2", "robot_3"})  # robot_3 still to answer
     assert resync.step(52.0, alive={"robot_2", "robot_3"})  # the wait is over
     topic, message = endpoint.injected[0]
@@ -122,6 +117,21 @@ def test_resync_skips_what_the_team_knows_this_robot_completed() -> None:
     assert resync.skipped == ["1", "4"]
     assert {s.task_id for s in executor.statuses} == {"1", "4", "5"}
     assert endpoint.gate is None
+
+
+def test_a_robot_back_from_away_catches_up_with_what_the_team_completed() -> None:
+    """Its state stands (no assignment is held back); the completions it lacks are
+    learnt as team statuses as the answers come, for the wait after it asked."""
+    executor, endpoint, requests = _FakeExecutor(), _FakeEndpoint(), []
+    resync = Resync(executor, endpoint, lambda: requests.append(1), wait=2.0)  # type: ignore[arg-type]
+    reply = SyncReply("robot_2", "robot_1", 9, (("2", ""), ("5", "robot_2")))
+    assert resync.on_reply(reply, 10.0) == []  # nobody asked: ignored
+    resync.catch_up(100.0)
+    assert requests == [1] and endpoint.gate is None and not resync.active
+    assert resync.on_reply(reply, 100.5) == ["5"]  # 2 it knew already
+    assert [(s.task_id, s.robot) for s in executor.statuses] == [("5", "robot_2")]
+    assert resync.on_reply(SyncReply("robot_2", "robot_1", 9, (("7", ""),)), 103.0) == []
+    assert endpoint.injected == [] and not resync.applied
 
 
 def test_reply_carries_known_tasks_and_the_assigners_agenda() -> None:

@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 from mrcomm.live.protocol import Tick
-from mrcomm.live.tick_guard import TickGuard
+from mrcomm.live.tick_guard import TickGuard, tick_limit
 
 
 def tick(time: float, speed: float = 20.0, **kw: object) -> Tick:
@@ -35,3 +35,20 @@ def test_malformed_ticks_are_refused_even_first() -> None:
     guard = TickGuard()
     assert guard.plausible(tick(0.0, speed=10.0), wall=0.0)
     assert not guard.plausible(tick(0.1, speed=1e9), wall=0.01)  # a world keeps its speed
+
+
+def test_ticks_beyond_the_mission_limit_or_at_another_speed_are_refused_even_first() -> None:
+    """Known limits need no anchor: a forged first tick far in the future, or at another
+    speed than the world's, would otherwise become the anchor and make every genuine
+    tick look stale or wrong."""
+    limit = tick_limit(max_time=600.0, dt=0.1)
+    guard = TickGuard(limit=limit, speed=20.0)
+    assert not guard.plausible(tick(1e9), wall=0.0)
+    assert not guard.plausible(tick(600.2), wall=0.0)
+    assert not guard.plausible(tick(1.0, speed=1e9), wall=0.0)
+    assert not guard.plausible(tick(1.0, end=True, end_time=1e6), wall=0.0)
+    assert guard.plausible(tick(0.0), wall=0.0)  # the world's first tick: the anchor
+    # The world's last ticks: the step reaching the limit, and its end announcement.
+    assert guard.plausible(tick(600.0 + 0.1), wall=40.0)
+    assert guard.plausible(tick(600.1, end=True, end_time=600.1, timed_out=True), wall=40.0)
+    assert not guard.plausible(tick(600.0 + 0.2), wall=40.0)

@@ -19,7 +19,9 @@ base-station or virtual assigner on its own). The process:
 
 A robot that joins late (restart after a crash) resynchronises with the team first
 (``live.resync``). Losing every peer does not stop the process: Zenoh reconnects by
-itself and the agents carry on when the clock comes back.
+itself and the agents carry on when the clock comes back; a process back from being
+stopped reopens its team session and catches up (``live.away``). Mates whose token
+vanished or that fell silent are gone for the behaviour (``live.mates``).
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
 from mrcomm.agents.behaviours import behaviour_class
 from mrcomm.agents.executor import TaskExecutor
 from mrcomm.errors import InputError, did_you_mean
+from mrcomm.live.away import AwayWatch
 from mrcomm.live.journal import (
     Journal,
     TimelineTail,
@@ -40,6 +43,7 @@ from mrcomm.live.journal import (
     new_incarnation,
     track_presence,
 )
+from mrcomm.live.mates import MateWatch
 from mrcomm.live.protocol import (
     CH_AGENT_STATE,
     CH_BASE_CMD,
@@ -59,7 +63,7 @@ from mrcomm.live.recorder import AgentRecorder
 from mrcomm.live.remote_base import RemoteBase
 from mrcomm.live.resync import Resync, reply_for
 from mrcomm.live.settings import LiveSettings, config_crc
-from mrcomm.live.tick_guard import IMPLAUSIBLE_TICK, TickGuard
+from mrcomm.live.tick_guard import IMPLAUSIBLE_TICK, TickGuard, tick_limit
 from mrcomm.messaging.messages import TOPIC_RSSI, RssiMsg, decode
 from mrcomm.messaging.topics import Lane
 from mrcomm.metrics import labels as L
@@ -211,9 +215,10 @@ class AgentProcess:
         self.present: dict[str, set[int]] = {}
         self.now = 0.0
         self.tick_time = 0.0  # the latest clock tick's (the base state's) time
-        self.tick_guard = TickGuard()
-        self._last_tick_wall: float | None = None
-        self._report_again: list[float] = []  # wall times (monotonic) to report again
+        self.tick_guard = TickGuard(limit=tick_limit(run.max_time, run.dt))
+        #: Robot mates gone: token vanished, or silent past the link lease (live.mates).
+        self.mates = MateWatch((r for r in self.robot_ids if r != agent), settings.zenoh.link_lease)
+        self.away = AwayWatch(settings.zenoh.link_lease)
         self.first_tick: float | None = None
         self.ended = False
         self._ready = False
@@ -316,7 +321,9 @@ class AgentProcess:
         elif channel == CH_SYNC_REQUEST:
             self._on_sync_request(item.value)
         elif channel == CH_SYNC_REPLY and self.resync is not None:
-            self.resync.on_reply(item.value)
+            learnt = self.resync.on_reply(item.value, self.now)
+            if learnt:
+                self.journal.write("caught_up", time=self.now, learnt=learnt)
         elif channel == _CH_PULSE:
             self._on_pulse(item.value)
 
@@ -371,18 +378,17 @@ class AgentProcess:
         return tick
 
     def _notice_away(self, now: float) -> None:
-        """A silence between ticks longer than the link lease means this process was
-        away (stopped, frozen): its peers dropped its links, and statuses it published
-        around then may never have left. Once its links are back (reconnection takes a
-        second or two), its executor reports again what it completed."""
+        """After a silence between ticks longer than the link lease (``live.away``),
+        the executor reports again what it completed and, without AON (which re-sends
+        by itself), asks the team what it completed meanwhile."""
         wall = time.monotonic()
-        last, self._last_tick_wall = self._last_tick_wall, wall
-        if last is not None and wall - last > self.settings.zenoh.link_lease:
-            self.journal.write("away", time=now, wall_s=round(wall - last, 3))
-            self._report_again = [wall + 2.0, wall + 6.0]
-        if self._report_again and wall >= self._report_again[0] and self.executor is not None:
-            self._report_again.pop(0)
+        gap = self.away.tick(wall)
+        if gap is not None:
+            self.journal.write("away", time=now, wall_s=round(gap, 3))
+        if self.away.due(wall) and self.executor is not None:
             self.executor.rejoined()
+            if self.resync is not None and not self.executor.uses_aon:
+                self.resync.catch_up(now)
 
     def _first_tick(self, now: float) -> None:
         self.first_tick = now
@@ -391,10 +397,10 @@ class AgentProcess:
             self.resync.start(now)  # joined a running mission: catch up first
 
     def _step(self, now: float) -> None:
+        self.mates.step(time.monotonic(), self.bus.samples)
+        self._judge_mates()
         if self.resync is not None and self.executor is not None:
-            alive = {
-                self._process_of(a) for a, incs in self.present.items() if incs and a in self.team
-            }
+            alive = {self._process_of(a) for a in self._alive()}
             alive.discard(self.agent)
             if self.resync.step(now, alive):
                 self.journal.write("resync", time=now, skipped=self.resync.skipped)
@@ -412,7 +418,8 @@ class AgentProcess:
             self.recorder.receipts()
         if self.executor is not None:
             self.executor.step(now)
-            absent = [a for a in self.team if a != self.agent and not self.present.get(a)]
+            alive = self._alive()
+            absent = [a for a in self.team if a != self.agent and a not in alive]
             self.recorder.left_out(now, sorted(absent))
         if self.tail is not None:
             self.tail.flush(now)
@@ -432,26 +439,43 @@ class AgentProcess:
         return host if agent == ASSIGNER_ID and host is not None else agent
 
     def _on_presence(self, presence: Presence) -> None:
-        before = bool(self.present.get(presence.agent))
         track_presence(self.present, presence, self.journal, self.now)
-        after = bool(self.present.get(presence.agent))
-        mate = presence.agent
-        is_mate = mate in self.robot_ids and mate != self.agent
-        if before != after and is_mate and self.executor is not None:
-            # Its process has gone (SIGKILL, a crash, a lost link past the lease) or is
-            # back: the behaviour decides what that means for the team.
-            self.executor.mate_presence(mate, after)
+        self._judge_mates()
+
+    def _judge_mates(self) -> None:
+        """A mate's process has gone (its token vanished: SIGKILL, a crash, a lost link
+        past the lease; or silent past the lease: hung) or is back: the behaviour decides
+        what that means for the team."""
+        for mate, alive in self.mates.changes(self.present):
+            silent = mate in self.mates.silent
+            self.journal.write("mate", time=self.now, agent=mate, alive=alive, silent=silent)
+            if self.executor is not None:
+                self.executor.mate_presence(mate, alive)
+
+    def _alive(self) -> set[str]:
+        """Team members whose token is present and whose process is not silent."""
+        silent = self.mates.silent
+        return {
+            a
+            for a, incs in self.present.items()
+            if incs and a in self.team and self._process_of(a) not in silent
+        }
 
     def _heard_from_present(self, now: float) -> None:
-        """A member whose liveliness token is present is alive for the AON lease (the
-        assigner publishes no poses; a crashed robot's token vanishes with its session),
-        so only a member that has really gone is ever left out."""
-        alive = [a for a, incs in self.present.items() if incs and a in self.team]
+        """A member whose liveliness token is present (and whose process is not silent)
+        is alive for the AON lease (the assigner publishes no poses; a crashed robot's
+        token vanishes with its session), so only a member that has really gone is ever
+        left out."""
+        alive = self._alive()
         for aon in self.recorder.aon_endpoints().values():
             for agent in alive:
                 aon.heard_from(agent, now)
 
     def _heartbeat(self) -> None:
+        stood = self.away.loop(time.monotonic())
+        if stood is not None:  # this process did not run: its team session is stale
+            reopened = self.node.reopen()
+            self.journal.write("reopened", time=self.now, wall_s=round(stood, 3), ok=reopened)
         ready = all(self.present.get(a) for a in (*self.team, WORLD_ID))
         done = self.executor.done if self.executor is not None else True
         settled = self.assigner.settled if self.assigner is not None else True

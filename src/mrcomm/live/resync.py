@@ -9,7 +9,12 @@ statuses and receives its assignment *without the tasks the team already knows i
 completed*, so it resumes its remaining agenda without redoing them. What it
 completed but never managed to tell anyone is done again — the team cannot know it.
 
-The same exchange covers a robot that missed the assignment at mission start.
+The same exchange covers a robot that missed the assignment at mission start, and
+(:meth:`Resync.catch_up`) a robot back from being away with its state intact (its
+process stopped, then continued): statuses its mates sent once while its links were
+down never reached it — a task another one depends on would wait for ever. It asks the
+same question and learns the completions it lacks as team statuses at once; its
+assignment and everything else it knows stand.
 """
 
 from __future__ import annotations
@@ -75,6 +80,7 @@ class Resync:
         self._deadline = 0.0
         self._next_request = 0.0
         self.skipped: list[str] = []
+        self._catch_up_until = -1.0  # answers to a catch-up are taken until then
 
     def start(self, now: float) -> None:
         """Ask the team; hold any assignment until the answers are in."""
@@ -86,15 +92,34 @@ class Resync:
         self.endpoint.gate = self._gate
         self._request()
 
-    def on_reply(self, reply: SyncReply) -> None:
-        if not self.active or reply.to != self.executor.robot_id:
-            return
+    def catch_up(self, now: float) -> None:
+        """Back after being away (see the module docstring): ask the team what it
+        completed; answers are learnt as they come, for the usual wait."""
+        self._catch_up_until = now + self._wait
+        self._request()
+
+    def on_reply(self, reply: SyncReply, now: float) -> list[str]:
+        """Take a team process's answer; returns the completed tasks a catch-up learnt
+        from it (a resynchronisation applies them once every answer is in)."""
+        if reply.to != self.executor.robot_id:
+            return []
         if reply.to_incarnation != self.executor.incarnation:
-            return
+            return []
+        if not self.active:
+            return self._learn(reply, now) if now <= self._catch_up_until else []
         self.replied.add(reply.sender)
         self.done |= set(reply.done)
         if reply.assignment is not None and self.assignment is None:
             self.assignment = reply.assignment
+        return []
+
+    def _learn(self, reply: SyncReply, now: float) -> list[str]:
+        known = self.executor.known_done
+        learnt = sorted({task_id for task_id, _ in reply.done if task_id not in known})
+        for task_id, robot in sorted(reply.done):
+            if task_id in learnt:
+                self.executor.on_team_status(_success(task_id, robot, now))
+        return learnt
 
     def step(self, now: float, alive: set[str]) -> bool:
         """Apply once ready; ``alive``: team processes present now. True when applied."""
@@ -123,17 +148,7 @@ class Resync:
         single = {t.task_id for t in self.assignment.tasks if t.num_robots == 1}
         mine_done = {t for t, robot in self.done if robot == me or (robot == "" and t in single)}
         for task_id, robot in sorted(self.done):
-            self.executor.on_team_status(
-                TaskStatus(
-                    sender=robot or ASSIGNER_ID,
-                    incarnation=0,
-                    seq=0,
-                    stamp=now,
-                    robot=robot,
-                    task_id=task_id,
-                    state=TaskState.SUCCESS,
-                )
-            )
+            self.executor.on_team_status(_success(task_id, robot, now))
         remaining = tuple(t for t in self.assignment.tasks if t.task_id not in mine_done)
         self.skipped = sorted(t.task_id for t in self.assignment.tasks if t.task_id in mine_done)
         filtered = Assignment(
@@ -149,3 +164,17 @@ class Resync:
         self.applied = True
         self.endpoint.gate = None
         self.endpoint.inject(TOPIC_ASSIGNMENT, filtered)
+
+
+def _success(task_id: str, robot: str, now: float) -> TaskStatus:
+    """A team status saying ``robot`` ("" = unknown) completed ``task_id``, as the
+    team's answers report it (they carry no message of their own)."""
+    return TaskStatus(
+        sender=robot or ASSIGNER_ID,
+        incarnation=0,
+        seq=0,
+        stamp=now,
+        robot=robot,
+        task_id=task_id,
+        state=TaskState.SUCCESS,
+    )

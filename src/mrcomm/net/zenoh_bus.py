@@ -236,6 +236,9 @@ class ZenohBus:
         self.now = 0.0
         #: Transport latency (s) of every pose sample that reached this process.
         self.pose_latency: list[float] = []
+        #: Samples the edge let through, per sender (before any emulated drop): what
+        #: says a sender's process is still at work (``live.mates``).
+        self.samples: dict[str, int] = {}
         #: Messages still on the air (due mission time, order, endpoint, topic, sender,
         #: message, on_air): judged by :meth:`release` once the clock reaches them.
         self._held: list[tuple[float, int, ZenohEndpoint, str, str, Message, OnAir]] = []
@@ -258,6 +261,7 @@ class ZenohBus:
         if refusal is not None:
             self.node.refuse(refusal)
             return
+        self.samples[sender] = self.samples.get(sender, 0) + 1
         if isinstance(message, PoseMsg):
             if sender not in self.positions.own:
                 self.positions.heard[sender] = (message.x, message.y)

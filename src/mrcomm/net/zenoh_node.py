@@ -13,7 +13,9 @@
   agents are single-threaded); a sample larger than :data:`MAX_SAMPLE_BYTES` or that
   does not decode is refused there and counted (:attr:`ZenohNode.refused`);
 * liveliness tokens ``mrcomm/<team>/<agent>/alive/<incarnation>`` for team discovery:
-  members appear and disappear as their sessions come and go.
+  members appear and disappear as their sessions come and go;
+* :meth:`ZenohNode.reopen`: a fresh session in place of one whose transports may be
+  stale (the process was stopped past the link lease), everything declared again.
 
 The team's bus on top of it is :mod:`mrcomm.net.zenoh_bus`.
 """
@@ -125,6 +127,10 @@ class ZenohNode:
             tls = options.tls is not None and ("TLS" in message or "cert" in message)
             raise InputError(message, field="--tls-cert" if tls else "--listen") from None
         self._zenoh = zenoh
+        #: What :meth:`reopen` declares again on a new session, in declaration order.
+        self._declared: list[Callable[[], None]] = []
+        #: Times the session was reopened.
+        self.reopened = 0
         self._inbox: queue.SimpleQueue[Incoming] = (
             inbox if inbox is not None else queue.SimpleQueue()
         )
@@ -201,6 +207,10 @@ class ZenohNode:
     def listen(self, key_expr: str, channel: str, decoder: Callable[[bytes], Any]) -> None:
         """Queue every sample on ``key_expr``, decoded by ``decoder``; samples that do
         not decode are dropped (and never reach the agent thread)."""
+        self._declared.append(lambda: self._listen(key_expr, channel, decoder))
+        self._listen(key_expr, channel, decoder)
+
+    def _listen(self, key_expr: str, channel: str, decoder: Callable[[bytes], Any]) -> None:
         inbox = self._inbox
 
         def on_sample(sample: Any) -> None:
@@ -259,6 +269,10 @@ class ZenohNode:
     def watch_presence(self, agent: str = "*") -> None:
         """Queue a :class:`Presence` whenever a team member (or just ``agent``) appears
         or disappears, including those already present when the watch starts."""
+        self._declared.append(lambda: self._watch_presence(agent))
+        self._watch_presence(agent)
+
+    def _watch_presence(self, agent: str) -> None:
         inbox = self._inbox
         z = self._zenoh
 
@@ -308,6 +322,48 @@ class ZenohNode:
     def peers(self) -> int:
         """Number of peers this session is connected to right now."""
         return len(list(self.session.info.peers_zid()))
+
+    def reopen(self, timeout: float = 10.0) -> bool:
+        """Close the session and open a new one with the same configuration (the same
+        listening endpoints: peers find it where they did), then declare again, in
+        order, every subscriber, presence watch, publisher and liveliness token.
+
+        Why: a process that was stopped past the link lease comes back with transports
+        its peers closed long ago. A peer that re-dialed meanwhile can have its new
+        link merged into such a stale transport (peers that dial each other; Zenoh
+        issue eclipse-zenoh/zenoh#2806): neither side then declares anything to the
+        other again, and the peer never sees this process's token come back. A fresh
+        session shares no state with the old one. Presence watches replay the tokens
+        present (their history); a token that vanished while the session was being
+        replaced is not reported gone. Samples queued on the blocking lanes meanwhile
+        are lost (their senders re-send what matters: AON, the away re-reports).
+        Returns False when no new session could be opened within ``timeout`` wall s
+        (the listening port still held): the process then has none."""
+        if self._closed:
+            return False
+        with contextlib.suppress(self._zenoh.ZError):
+            self.session.close()
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                self.session = self._zenoh.open(build_config(self.options))
+                break
+            except self._zenoh.ZError:  # the old listener not yet released
+                if time.monotonic() >= deadline:
+                    self._closed = True
+                    return False
+                time.sleep(0.1)  # wait for the port before trying again
+        self.reopened += 1
+        publishers = list(self._publishers)
+        self._publishers = {}
+        self._subscribers = []
+        for declare in self._declared:
+            declare()
+        for key, lane in publishers:
+            self._publisher(key, lane)
+        for key in self._tokens:
+            self._tokens[key] = self.session.liveliness().declare_token(key)
+        return True
 
     def close(self) -> None:
         """Flush the blocking lanes (briefly) and close the session."""
