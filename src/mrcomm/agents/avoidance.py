@@ -50,10 +50,17 @@ class Avoidance:
     ) -> Conflict | None:
         """The first mate in conflict with ``pose`` (outside its grace), which becomes
         the current conflict with right of way decided; None when there is none."""
+        collision = self.params.collision
+        # Beyond this along either axis no mate can be in conflict (classify would say
+        # so): skipped without a call, which matters when the team is large.
+        reach = max(collision.danger_radius, collision.event_horizon)
+        x, y = pose.x, pose.y
         for mate in mates:
+            if abs(mate.x - x) > reach or abs(mate.y - y) > reach:
+                continue
             if self._grace_until.get(mate.robot, -1.0) > now:
                 continue
-            kind = classify(pose, mate, self.params.collision)
+            kind = classify(pose, mate, collision)
             if kind is None:
                 continue
             previous = self._last_conflict.get(mate.robot)

@@ -14,7 +14,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from pydantic import BaseModel, ConfigDict
 
@@ -42,9 +42,9 @@ class CollisionParams(BaseModel):
     )
 
 
-@dataclass(frozen=True)
-class MateState:
-    """What a robot knows of a team mate from its last pose message."""
+class MateState(NamedTuple):
+    """What a robot knows of a team mate from its last pose message. (A named tuple:
+    one is made for every pose received, which in a large team is most of the work.)"""
 
     robot: str
     x: float
