@@ -15,7 +15,7 @@ from typing import Any
 
 import pytest
 
-from .golden import GOLDEN_FILE, SCENARIO, case_key, cases, run_case
+from .golden import GOLDEN_FILE, SCENARIO, case_key, cases, run_case, without_added
 
 GOLDEN: dict[str, Any] = json.loads(GOLDEN_FILE.read_text())
 HERE = Path(__file__).parent
@@ -43,7 +43,7 @@ def test_live_merged_result_is_identical_to_the_recorded_one(tmp_path: Path) -> 
         text = journal.read_text()
         journal.write_text(text.replace("/work/main/data/scenarios/s1.yaml", str(SCENARIO)))
     result, report = collect(records)
-    summary = live_summary(result, report)
+    summary = without_added(live_summary(result, report))
     summary.pop("wall_time_s", None)
     config = summary.pop("config")
     summary["label"] = config["label"]

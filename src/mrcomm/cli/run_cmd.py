@@ -118,6 +118,10 @@ _MISSION_KEYS = (
     "task_execution_time",
     "min_separation",
     "max_separation",
+    "tasks_per_minute",
+    "assigner_connected",
+    "largest_group_mean",
+    "largest_group_min",
     "timed_out",
 )
 _ROBOT_KEYS = (

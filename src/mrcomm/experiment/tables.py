@@ -9,7 +9,7 @@ from __future__ import annotations
 
 #: Bumped whenever a table or column changes meaning; a database written with another
 #: version is refused before it is touched.
-SCHEMA_VERSION = "3"
+SCHEMA_VERSION = "4"
 
 Columns = tuple[tuple[str, str], ...]
 
@@ -75,6 +75,11 @@ RUN_METRIC_COLUMNS: tuple[tuple[str, str, str], ...] = (
     ("min_separation", "DOUBLE", "min_separation"),
     ("max_separation", "DOUBLE", "max_separation"),
     ("timed_out", "BOOLEAN", "timed_out"),
+    # The team as a whole (large teams).
+    ("tasks_per_minute", "DOUBLE", "tasks_per_minute"),
+    ("assigner_connected", "DOUBLE", "assigner_connected"),
+    ("largest_group_mean", "DOUBLE", "largest_group_mean"),
+    ("largest_group_min", "DOUBLE", "largest_group_min"),
     # Leader-Follower totals: NULL for behaviours without roles.
     ("na_movement_time", "DOUBLE", "na_movement_time"),
     ("leader_movement_time", "DOUBLE", "leader_movement_time"),

@@ -147,6 +147,7 @@ def collect(record_dir: Path) -> tuple[MissionResult, dict[str, Any]]:
             counts_by_agent=_counts_by_agent(journals),
             aon=_aon_facts(journals),
             links=truth.get("links", {}),
+            connectivity=truth.get("connectivity", {}),
             trajectories=_trajectories(world, robot_ids),
             rssi_series=[
                 (float(line["t"]), str(a), str(b), float(v))

@@ -328,6 +328,7 @@ class WorldProcess:
             wall_time=self.wall_time,
             robots=truth,
             links=self.link_recorder.summaries(),
+            connectivity=self.link_recorder.connectivity(),
             link_states=self.link_recorder.state_intervals(end),
         )
 

@@ -39,6 +39,11 @@ UNITS: dict[str, str] = {
     "recoveries": COUNT,
     "end_time": SECONDS,
     "successful": "yes/no",
+    # the team as a whole
+    "tasks_per_minute": "tasks/min",
+    "assigner_connected": "fraction",
+    "largest_group_mean": "fraction",
+    "largest_group_min": "fraction",
     "timed_out": "yes/no",
     # Leader-Follower
     "na_movement_time": SECONDS,

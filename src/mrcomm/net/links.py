@@ -204,6 +204,26 @@ def cast_ray(
     return (grid.walls_between(ax, ay, bx, by) if count_walls else 1), -1.0
 
 
+#: Simulated seconds between samples of the team's largest connected group.
+GROUP_PERIOD = 0.5
+
+
+def largest_group(connected: BoolArray) -> int:
+    """The most nodes that can all reach each other, directly or through others, over
+    links connected in both directions (the largest connected component)."""
+    n = len(connected)
+    if n == 0:
+        return 0
+    mutual = connected & connected.T
+    if mutual.all():
+        return n  # the common case (WLAN, a team in range): no graph search
+    from scipy.sparse import csr_matrix  # here: importing scipy.sparse takes a while
+    from scipy.sparse.csgraph import connected_components
+
+    _, labels = connected_components(csr_matrix(mutual), directed=False)
+    return int(np.bincount(labels).max())
+
+
 #: Link states of a robot pair by code (0, connected, is not recorded as an interval).
 PAIR_STATES = {1: "warning", 2: "out of range"}
 
@@ -219,7 +239,10 @@ class LinkRecorder:
     * the RSSI of every robot pair at the pulse rate (2 Hz), where the threshold has one
       (:attr:`rssi_series`);
     * per unordered robot pair, the intervals its link spent in warning or out of range
-      (:meth:`state_intervals`; the worse of the two directions)."""
+      (:meth:`state_intervals`; the worse of the two directions);
+    * the team's largest connected group at 2 Hz: the most robots that can all reach each
+      other, directly or through other robots, over links connected both ways
+      (:meth:`connectivity`)."""
 
     def __init__(
         self,
@@ -252,6 +275,9 @@ class LinkRecorder:
         self._pair_state = np.zeros(len(self._pairs[0]), dtype=np.int8)
         self._pair_since = np.zeros(len(self._pairs[0]))
         self._closed: list[tuple[str, str, str, float, float]] = []
+        self._next_group = 0.0
+        #: (time, robots in the largest connected group) at :data:`GROUP_PERIOD`.
+        self.largest_group: list[tuple[float, int]] = []
 
     def record(self, state: LinkState, dt: float, now: float) -> list[tuple[str, str, float]]:
         """Add one step of ``dt`` s; return the RSSI samples taken now (usually none)."""
@@ -263,6 +289,9 @@ class LinkRecorder:
         np.fmax(self.max_distance, state.distance, out=self.max_distance)
         self._track_pair_states(state, now)
         n = self.robots
+        if now >= self._next_group:
+            self._next_group += GROUP_PERIOD
+            self.largest_group.append((now, largest_group(state.connected[:n, :n])))
         if n >= 2:
             d = state.distance[:n, :n]
             closest = np.where(self._off_robots, d, np.inf).min(axis=1)
@@ -317,6 +346,17 @@ class LinkRecorder:
             if end > since:
                 closed.append((a, b, PAIR_STATES[int(self._pair_state[k])], since, round(end, 6)))
         return sorted(closed, key=lambda row: (row[3], row[0], row[1]))
+
+    def connectivity(self) -> dict[str, float | None]:
+        """The largest connected group as a fraction of the team: its mean over the
+        samples (the run's time) and its minimum; None without a sample."""
+        sizes = [size for _, size in self.largest_group]
+        if not sizes or self.robots == 0:
+            return {"largest_group_mean": None, "largest_group_min": None}
+        return {
+            "largest_group_mean": round(sum(sizes) / len(sizes) / self.robots, 6),
+            "largest_group_min": round(min(sizes) / self.robots, 6),
+        }
 
     def separation(self, robot: int) -> tuple[float | None, float | None]:
         """Robot ``robot``'s closest and furthest team mate over the run, m (6

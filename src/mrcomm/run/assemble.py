@@ -14,6 +14,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robot_metrics
 from mrcomm.metrics.timeline import Timeline
@@ -78,6 +79,9 @@ class RunFacts:
     #: (robot a, robot b, state, start, end): when each pair's link warned or was out of
     #: range (:meth:`mrcomm.net.links.LinkRecorder.state_intervals`).
     link_states: list[tuple[str, str, str, float, float]] = field(default_factory=list)
+    #: The team's largest connected group (:meth:`LinkRecorder.connectivity`; empty
+    #: from a live record written before it was recorded).
+    connectivity: dict[str, float | None] = field(default_factory=dict)
     #: Configuration entries only one mode has (a live run's mode and speed).
     config_extra: dict[str, Any] = field(default_factory=dict)
 
@@ -115,6 +119,7 @@ def assemble(facts: RunFacts) -> MissionResult:
         tasks_total=len(facts.scenario.tasks),
         failed_tasks=list(dict.fromkeys(t for t, _ in failed_pairs)),
     )
+    mission.update(team_scale(facts, mission))
     mission["timed_out"] = not facts.finished
     mission["end_time"] = round(facts.end_time, 6)
     config = facts.config.model_dump(mode="json")
@@ -141,6 +146,30 @@ def assemble(facts: RunFacts) -> MissionResult:
         rssi_series=[(round(t, 3), a, b, round(v, 3)) for t, a, b, v in facts.rssi_series],
         link_states=list(facts.link_states),
     )
+
+
+def team_scale(facts: RunFacts, mission: Mapping[str, Any]) -> dict[str, float | None]:
+    """The metrics that tell how a large team did as a team: its work rate (tasks
+    completed per minute of the execution phase), how much of the time its robots could
+    reach the task assigner (the mean over robots of the fraction of the run each one's
+    link to the assigner was connected; 1 for the robot hosting it), and its largest
+    connected group (mean and minimum, as a fraction of the team)."""
+    phase = mission.get("execution_phase_time")
+    per_minute = mission["tasks_completed"] / (phase / 60.0) if phase else None
+    fractions = []
+    for rid in facts.robots:
+        link = facts.links.get(f"{rid}->{ASSIGNER_ID}")
+        if link is None:  # the robot hosting the assigner (or no assigner link recorded)
+            fractions.append(1.0 if facts.scenario.assigner.host == rid else None)
+        elif facts.end_time > 0:
+            fractions.append(1.0 - float(link["time_disconnected"]) / facts.end_time)
+    known = [f for f in fractions if f is not None]
+    return {
+        "tasks_per_minute": per_minute,
+        "assigner_connected": sum(known) / len(known) if known else None,
+        "largest_group_mean": facts.connectivity.get("largest_group_mean"),
+        "largest_group_min": facts.connectivity.get("largest_group_min"),
+    }
 
 
 def sum_counts(

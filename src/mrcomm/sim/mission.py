@@ -169,6 +169,7 @@ class Mission:
                 counts_by_agent=self.network.counts_by_agent(),
                 aon=aon,
                 links=self.link_recorder.summaries(),
+                connectivity=self.link_recorder.connectivity(),
                 trajectories=self.trajectories,
                 rssi_series=list(self.link_recorder.rssi_series),
                 link_states=self.link_recorder.state_intervals(end),
