@@ -36,6 +36,7 @@ BUILT_IN = frozenset(
         "network.ah",
         "utility.original",
         "utility.greedy",
+        "utility.path",
     }
 )
 

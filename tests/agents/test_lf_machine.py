@@ -249,6 +249,31 @@ def test_the_utility_parameter_selects_the_function() -> None:
     assert original.agent._my_utility() == pytest.approx(2 / 10.0)  # x 2 tasks left
 
 
+def test_the_path_utility_takes_the_planned_route_not_the_straight_line() -> None:
+    h = Harness(
+        LeaderFollowerExecutor,
+        link_sensor=DistanceSensor(4.0),
+        params=LeaderFollowerExecutor.Params(utility="path"),
+    )
+    h.assign([task("t", 10.0, 0.0), task("u", 12.0, 0.0)], team=TEAM)
+    h.step()
+    # In the open the route is the straight line: the original's value.
+    assert h.agent._my_utility() == pytest.approx(2 / 10.0)
+    # A wall in between: the planner drives round it (10 m up, 10 m across, 10 m down).
+    asked: list[tuple[float, float]] = []
+
+    def detour(x: float, y: float) -> tuple[tuple[float, float], ...]:
+        asked.append((x, y))
+        p = h.base.pose
+        return ((p.x, p.y), (p.x, p.y + 10.0), (x, y + 10.0), (x, y))
+
+    h.base.make_plan = detour  # type: ignore[method-assign]
+    assert h.agent._my_utility() == pytest.approx(2 / 30.0)
+    assert asked == [(10.0, 0.0)]  # the route to the closest task
+    h.base.make_plan = lambda x, y: None  # type: ignore[method-assign]
+    assert h.agent._my_utility() == 0.0  # no route: it should not lead
+
+
 def test_the_role_round_decides_by_utility_then_rank() -> None:
     from mrcomm.agents.role_round import RoleRound
 

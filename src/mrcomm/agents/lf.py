@@ -53,6 +53,7 @@ from mrcomm.messaging.messages import (
     Assignment,
     Message,
     RoleMsg,
+    TaskSpec,
     TaskState,
     TaskStatus,
     UtilityMsg,
@@ -193,14 +194,32 @@ class LeaderFollowerExecutor(TaskExecutor):
         if not self.agenda:
             return 0.0
         target = self._closest_task_distance()
-        return self._utility(UtilityInputs(target, len(self.agenda), self._just_completed))
+        inputs = UtilityInputs(
+            target, len(self.agenda), self._just_completed, route_length=self._route_length
+        )
+        return self._utility(inputs)
+
+    def _target(self) -> TaskSpec | None:
+        """The current goal, or the task of the agenda closest in a straight line."""
+        if self.goal is not None or not self.agenda:
+            return self.goal
+        pose = self.base.pose
+        return min(self.agenda, key=lambda t: math.hypot(t.x - pose.x, t.y - pose.y))
 
     def _closest_task_distance(self) -> float | None:
+        target = self._target()
+        if target is None:
+            return None
         pose = self.base.pose
-        if self.goal is not None:
-            return math.hypot(self.goal.x - pose.x, self.goal.y - pose.y)
-        distances = [math.hypot(t.x - pose.x, t.y - pose.y) for t in self.agenda]
-        return min(distances) if distances else None
+        return math.hypot(target.x - pose.x, target.y - pose.y)
+
+    def _route_length(self) -> float | None:
+        """Length of the route the base plans to the target (None: no route)."""
+        target = self._target()
+        route = None if target is None else self.base.make_plan(target.x, target.y)
+        if route is None:
+            return None
+        return sum(math.dist(a, b) for a, b in itertools.pairwise(route))
 
     def _step_assigning(self) -> None:
         elapsed = self._now - self._state_since

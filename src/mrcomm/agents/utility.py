@@ -13,9 +13,13 @@ Each function is a registered variant (kind ``utility``), selected by LF's param
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from mrcomm.specs import VariantSpec, get_spec, variant_names
+
+
+def _no_route() -> float | None:
+    return None
 
 
 @dataclass(frozen=True)
@@ -23,6 +27,9 @@ class UtilityInputs:
     goal_distance: float | None  # m to the current (or next) goal; None when none
     n_incomplete: int
     just_completed: bool
+    #: Length (m) of the route the robot's planner finds to that goal, None when there
+    #: is none; planned only when a utility asks (a plan costs far more than a distance).
+    route_length: Callable[[], float | None] = field(default=_no_route)
 
 
 UtilityFunction = Callable[[UtilityInputs], float]
@@ -53,6 +60,19 @@ def greedy_utility(inputs: UtilityInputs) -> float:
     return 1.0 / max(inputs.goal_distance, 0.1)
 
 
+def path_utility(inputs: UtilityInputs) -> float:
+    """The original's product with the planned route's length in place of the straight
+    distance: a robot close to its goal across a wall does not lead a team that must
+    drive round. A robot with no route to its goal has utility 0 (it follows)."""
+    if inputs.n_incomplete == 0 or inputs.goal_distance is None:
+        return 0.0
+    length = inputs.route_length()
+    if length is None:
+        return 0.0
+    rec_complete = 0.5 if inputs.just_completed else 1.0
+    return inputs.n_incomplete * rec_complete / max(length, 0.1)
+
+
 ORIGINAL_SPEC = VariantSpec(
     kind="utility",
     name="original",
@@ -64,4 +84,10 @@ GREEDY_SPEC = VariantSpec(
     name="greedy",
     entry=greedy_utility,
     summary="1 / distance to the current goal: the closest robot leads",
+)
+PATH_SPEC = VariantSpec(
+    kind="utility",
+    name="path",
+    entry=path_utility,
+    summary="the original's product over the planned route's length, not the straight distance",
 )
