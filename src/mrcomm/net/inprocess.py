@@ -11,6 +11,10 @@ With a radio (:class:`~mrcomm.net.radio.channel.RadioChannel`) a message also qu
 its sender and is delivered at the first step at or after its publication plus its
 delay (wait + airtime; within one step for light traffic), or is lost to the queue, and
 each receiver may lose it to packet error.
+
+With relaying on (:mod:`mrcomm.net.relay`), a robot that receives a task status or AON
+message first passes a copy on at the next delivery; copies are counted by the relay,
+not as publications.
 """
 
 from __future__ import annotations
@@ -28,11 +32,13 @@ from mrcomm.net.delivery import (
     TopicCounts,
 )
 from mrcomm.net.radio.channel import RadioChannel
+from mrcomm.net.relay import Relay
 from mrcomm.ports import Handler
 
 #: A message on its way: sender index, topic, message, due time, radio delay (None:
-#: lost to the sender's queue), bits on the air.
-_Queued = tuple[int, str, Message, float, float | None, int]
+#: lost to the sender's queue), bits on the air, links it crossed before this send (0:
+#: an original publication; relayed copies more).
+_Queued = tuple[int, str, Message, float, float | None, int, int]
 
 #: Observer of every delivery decision: (now, topic, sender, receiver, message, outcome)
 #: with outcome one of :data:`~mrcomm.net.delivery.OUTCOMES`. Used by recordings.
@@ -71,10 +77,12 @@ class InProcessNetwork:
         policy: DeliveryPolicy,
         loss_rngs: Mapping[str, np.random.Generator],
         channel: RadioChannel | None = None,
+        relay: Relay | None = None,
     ) -> None:
         self.ids: tuple[str, ...] = tuple(agent_ids)
         self.policy = policy
         self.channel = channel
+        self.relay = relay
         self._streams = [LossStream(loss_rngs[a]) for a in self.ids]
         # topic -> receiver index -> handlers
         self._subs: dict[str, dict[int, list[Handler]]] = {}
@@ -119,7 +127,9 @@ class InProcessNetwork:
         channel = self.channel
         exempt = self.policy.exempt
         observer = self.observer
-        for sender, topic, message, _, delay, bits in outbox:
+        relay = self.relay
+        copies: list[tuple[int, str, Message, int]] = []
+        for sender, topic, message, _, delay, bits, crossed in outbox:
             receivers = self._subs.get(topic)
             if not receivers:
                 continue
@@ -142,28 +152,43 @@ class InProcessNetwork:
                         else 0.0
                     )
                     outcome = decide(topic, links[receiver], streams[receiver], per)
-                entry = counts[receiver]
-                if entry is None:
-                    entry = counts[receiver] = self._count(receiver, topic)
-                entry.count(outcome, delay_s)
+                if not crossed:  # relayed copies are counted by the relay
+                    entry = counts[receiver]
+                    if entry is None:
+                        entry = counts[receiver] = self._count(receiver, topic)
+                    entry.count(outcome, delay_s)
                 if observer is not None:
                     observer(now, topic, self.ids[sender], self.ids[receiver], message, outcome)
                 if outcome == RECEIVED:
+                    if relay is not None and relay.relays(topic):
+                        hop = crossed + 1
+                        if not relay.receive(receiver, topic, message, hop, crossed > 0):
+                            continue  # a duplicate copy
+                        if relay.passes_on(receiver, hop):
+                            copies.append((receiver, topic, message, hop))
                     for handler in handlers:
                         handler(message)
+        for relayer, topic, message, crossed in copies:
+            self._enqueue(relayer, topic, message, crossed)
 
     # -- endpoint plumbing ---------------------------------------------------------
     def _publish(self, sender: int, topic: str, message: Message) -> None:
         self._count(sender, topic).sent += 1
+        if self.relay is not None and self.relay.relays(topic):
+            self.relay.published(sender, topic, message)
+        self._enqueue(sender, topic, message, 0)
+        if self.publish_observer is not None:
+            self.publish_observer(message.stamp, topic, self.ids[sender], message)
+
+    def _enqueue(self, sender: int, topic: str, message: Message, crossed: int) -> None:
+        """Put a message (or a relayed copy) on its way from ``sender``."""
         if self.channel is None:
-            self._outbox.append((sender, topic, message, 0.0, 0.0, 0))
+            self._outbox.append((sender, topic, message, 0.0, 0.0, 0, crossed))
         else:
             bits = self.channel.bits(message)
             delay = self.channel.transmit(sender, self._now, bits)
             due = self._now + (delay or 0.0)
-            self._outbox.append((sender, topic, message, due, delay, bits))
-        if self.publish_observer is not None:
-            self.publish_observer(message.stamp, topic, self.ids[sender], message)
+            self._outbox.append((sender, topic, message, due, delay, bits, crossed))
 
     def _subscribe(self, receiver: int, topic: str, handler: Handler) -> None:
         self._subs.setdefault(topic, {}).setdefault(receiver, []).append(handler)

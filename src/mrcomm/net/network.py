@@ -21,8 +21,9 @@ from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, Field
 
+from mrcomm.net.relay import RelayParams
 from mrcomm.specs import NoParams, VariantSpec
 
 #: Hard communication limit of the ad-hoc network, metres.
@@ -42,6 +43,8 @@ class NetworkModel:
     name: ClassVar[str] = ""
     #: Beyond this distance nothing is delivered (inf: no distance limit).
     reach_m: float = math.inf
+    #: The hop limit of relaying (:mod:`mrcomm.net.relay`; 0: robots do not relay).
+    relay_hops: int = 0
     #: Whether range is decided from received power, which needs the walls between
     #: nodes (:class:`~mrcomm.net.radio.model.RadioNetwork`); otherwise from distance.
     needs_walls: ClassVar[bool] = False
@@ -106,9 +109,7 @@ class Wlan(NetworkModel):
     name = "wlan"
 
 
-class AdHocParams(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
+class AdHocParams(RelayParams):
     range_m: float = Field(
         AH_RANGE_M,
         gt=0.0,
@@ -127,6 +128,7 @@ class AdHoc(NetworkModel):
         if not isinstance(params, AdHocParams):
             params = AdHocParams.model_validate({})
         self.reach_m = params.range_m
+        self.relay_hops = params.hop_limit()
 
     def connected(self, distance: NDArray[np.float64]) -> NDArray[np.bool_]:
         return ~(distance > self.reach_m)  # NaN (virtual) stays connected

@@ -82,6 +82,8 @@ class RunFacts:
     #: The team's largest connected group (:meth:`LinkRecorder.connectivity`; empty
     #: from a live record written before it was recorded).
     connectivity: dict[str, float | None] = field(default_factory=dict)
+    #: What relaying did per node (empty when the network does not relay).
+    relay: dict[str, Any] = field(default_factory=dict)
     #: Configuration entries only one mode has (a live run's mode and speed).
     config_extra: dict[str, Any] = field(default_factory=dict)
 
@@ -145,6 +147,7 @@ def assemble(facts: RunFacts) -> MissionResult:
         scenario=facts.scenario,
         rssi_series=[(round(t, 3), a, b, round(v, 3)) for t, a, b, v in facts.rssi_series],
         link_states=list(facts.link_states),
+        relay=relay_summary(facts.relay),
     )
 
 
@@ -170,6 +173,22 @@ def team_scale(facts: RunFacts, mission: Mapping[str, Any]) -> dict[str, float |
         "largest_group_mean": facts.connectivity.get("largest_group_mean"),
         "largest_group_min": facts.connectivity.get("largest_group_min"),
     }
+
+
+def relay_summary(per_node: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
+    """Relaying per node and in total: copies passed on, copies received first,
+    duplicates dropped, and the hop counts of the messages received first."""
+    if not per_node:
+        return {}
+    total: dict[str, Any] = {"passed_on": 0, "received_copies": 0, "duplicates": 0}
+    hops: dict[str, int] = {}
+    for stats in per_node.values():
+        for key in ("passed_on", "received_copies", "duplicates"):
+            total[key] += int(stats[key])
+        for hop, n in stats["hops"].items():
+            hops[hop] = hops.get(hop, 0) + int(n)
+    total["hops"] = dict(sorted(hops.items(), key=lambda item: int(item[0])))
+    return {"total": total, "nodes": dict(per_node)}
 
 
 def sum_counts(

@@ -30,8 +30,11 @@ class MissionResult:
     rssi_series: list[tuple[float, str, str, float]]
     #: (robot a, robot b, "warning" | "out of range", start s, end s) per robot pair.
     link_states: list[tuple[str, str, str, float, float]] = field(default_factory=list)
+    #: What relaying did per node (:meth:`mrcomm.net.relay.Relay.stats`; empty when off).
+    relay: dict[str, Any] = field(default_factory=dict)
 
     def summary(self) -> dict[str, Any]:
+        relay = {"relay": self.relay} if self.relay else {}
         return {
             "config": self.config,
             "mission": self.mission,
@@ -42,4 +45,5 @@ class MissionResult:
             "links": self.links,
             "sim_time_s": self.sim_time_s,
             "wall_time_s": self.wall_time_s,
+            **relay,
         }

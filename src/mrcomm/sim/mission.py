@@ -23,6 +23,7 @@ from mrcomm.metrics.timeline import Timeline
 from mrcomm.net.delivery import DeliveryPolicy
 from mrcomm.net.inprocess import InProcessNetwork
 from mrcomm.net.links import LinkState
+from mrcomm.net.relay import make_relay
 from mrcomm.run.assemble import AonAgentFacts, RunFacts, assemble
 from mrcomm.run.bodies import RobotBodies
 from mrcomm.run.config import RunConfig
@@ -54,6 +55,7 @@ class Mission:
             policy=DeliveryPolicy(config.spl),
             loss_rngs={a: stream(seed, "loss", a) for a in self.node_ids},
             channel=self.links.network.channel(self.node_ids),
+            relay=make_relay(self.node_ids, len(scenario.robots), self.links.network.relay_hops),
         )
         self.bodies = RobotBodies(make_bases(self.resources, seed), scenario.assigner)
         self.bases = self.bodies.bases
@@ -170,6 +172,7 @@ class Mission:
                 aon=aon,
                 links=self.link_recorder.summaries(),
                 connectivity=self.link_recorder.connectivity(),
+                relay=self.network.relay.stats() if self.network.relay is not None else {},
                 trajectories=self.trajectories,
                 rssi_series=list(self.link_recorder.rssi_series),
                 link_states=self.link_recorder.state_intervals(end),

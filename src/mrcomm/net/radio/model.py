@@ -18,13 +18,14 @@ from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, Field
 from scipy.special import erfc
 
 from mrcomm.net.network import NetworkModel
 from mrcomm.net.radio.channel import RadioChannel, fading_gain_db
 from mrcomm.net.radio.profile import DEFAULT_PROFILE, RadioProfile, load_profile, profile_path
 from mrcomm.net.radio.shadowing import ShadowingField
+from mrcomm.net.relay import RelayParams
 from mrcomm.net.signal.pathloss import log_distance_range, log_distance_rssi
 from mrcomm.seeding import stream
 from mrcomm.specs import VariantSpec
@@ -45,9 +46,7 @@ ESD_ADVICE_M = 8.0
 ESD_RADIO_WARNING_DBM = -70.0
 
 
-class RadioParams(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
+class RadioParams(RelayParams):
     profile: str = Field(
         DEFAULT_PROFILE,
         min_length=1,
@@ -117,6 +116,7 @@ class RadioNetwork(NetworkModel):
         self.params = params
         self.profile = profile if profile is not None else load_profile(params.profile)
         self.reach_m = reach_m(self.profile)
+        self.relay_hops = params.hop_limit()
         self.seed = seed
         self.field = ShadowingField(
             self.profile.shadowing_sigma_db,

@@ -1,0 +1,62 @@
+"""Relaying on whole missions: off by default (results unchanged), on with
+``network.relay``: copies cross several hops in a 10-robot ad-hoc team, LF's AON works
+through it, and live mode refuses it in one line."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from mrcomm.run.config import make_config
+from mrcomm.sim.mission import run_mission
+from tests.conftest import ROOT, S1_PATH
+
+S2 = ROOT / "data" / "scenarios" / "s2" / "s2.yaml"
+
+
+@pytest.mark.slow
+def test_a_ten_robot_team_relays_statuses_over_several_hops() -> None:
+    config = make_config(
+        None, scenario=S2, network="ah", behaviour="nb", spl=0, seed=2, max_time=900,
+        params={"network": {"relay": True}},
+    )  # fmt: skip
+    summary = run_mission(config).summary()
+    total = summary["relay"]["total"]
+    hops = {int(h): n for h, n in total["hops"].items()}
+    assert max(hops) >= 3 and total["received_copies"] > 0 and total["passed_on"] > 0
+    # No node's agents got a message twice through relaying: every copy that reached a
+    # node which had the message is counted as a duplicate, not delivered.
+    assert total["duplicates"] > 0
+    assert (
+        "relay"
+        not in run_mission(
+            make_config(None, scenario=S2, network="ah", behaviour="nb", seed=2, max_time=60)
+        ).summary()
+    )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("spl", [0, 25, 50])
+def test_lf_with_relaying_succeeds_on_s1(spl: int, s1_resources) -> None:  # type: ignore[no-untyped-def]
+    for seed in range(1, 6):
+        config = make_config(
+            None, scenario=S1_PATH, network="ah", threshold="slt", behaviour="lf", spl=spl,
+            seed=seed, params={"network": {"relay": True}},
+        )  # fmt: skip
+        assert run_mission(config, s1_resources).summary()["mission"]["successful"], seed
+
+
+def test_live_mode_refuses_relaying_in_one_line(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    done = subprocess.run(
+        [sys.executable, "-c", "from mrcomm.cli.main import app; app()", "live",
+         str(S1_PATH), "--network", "ah", "--set", "network.relay=true",
+         "--record-dir", str(tmp_path / "rec")],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert done.returncode == 2
+    assert done.stderr.strip() == (
+        "mrcomm: error: network.relay: relaying is simulated only (not yet in live mode)"
+    )
+    assert not (tmp_path / "rec").exists()
