@@ -108,21 +108,6 @@ def test_obstacle_on_only_route_means_no_path_and_start_disc_is_ignored() -> Non
     assert planner.plan((1.0, 1.5), (9.0, 1.5), obstacles=[(9.0, 1.5)]) is None
 
 
-def test_obstacles_leave_the_planners_fields_as_they_were() -> None:
-    """Mates are drawn into the planner's own fields for one search and erased after:
-    overlapping discs, a search that finds no path and one that fails all restore them."""
-    planner = GridPlanner(ring(), P)
-    weights, clear = planner._weights.copy(), planner._clear.copy()
-    mates = [(6.0, 5.25), (6.2, 5.3), (6.0, 0.75)]  # overlapping, and both corridors
-    assert planner.plan((0.75, 4.0), (11.25, 4.0), obstacles=mates) is None
-    assert planner.plan((0.75, 4.0), (11.25, 4.0), obstacles=mates[:2]) is not None
-    with pytest.raises(RuntimeError), planner._obstacles_placed(mates, 0.6, (0.75, 4.0)):
-        assert np.isinf(planner._weights).sum() > np.isinf(weights).sum()
-        raise RuntimeError("a failing search")
-    assert np.array_equal(planner._weights, weights)
-    assert np.array_equal(planner._clear, clear)
-
-
 def test_path_keeps_to_corridor_centre() -> None:
     # Wall cost: in the 1 m corridor the path runs along the centre line, not along
     # the edge of the inflated zone.

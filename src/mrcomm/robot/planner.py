@@ -18,8 +18,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -145,34 +144,13 @@ class GridPlanner:
             return None
         return y0 + best // (x1 - x0), x0 + best % (x1 - x0)
 
-    @contextmanager
-    def _obstacles_placed(
+    def _with_obstacles(
         self, obstacles: Sequence[Point], radius: float, start: Point
-    ) -> Iterator[tuple[NDArray[np.float32], NDArray[np.float32]]]:
-        """(weights, clearance) with discs around ``obstacles`` blocked, for the duration
-        of the block. A disc never covers the start, or the robot could not leave its
-        own cell. The discs are drawn into the planner's own fields and the cells they
-        covered restored afterwards (in reverse order, so overlapping discs restore
-        exactly): a re-plan costs the discs' area, not two copies of the whole map."""
-        weights, clear = self._weights, self._clear
-        saved: list[tuple[slice, slice, NDArray[np.float32], NDArray[np.float32]]] = []
-        try:
-            self._block_discs(weights, clear, obstacles, radius, start, saved)
-            yield weights, clear
-        finally:
-            for ys, xs, w, c in reversed(saved):
-                weights[ys, xs] = w
-                clear[ys, xs] = c
-
-    def _block_discs(
-        self,
-        weights: NDArray[np.float32],
-        clear: NDArray[np.float32],
-        obstacles: Sequence[Point],
-        radius: float,
-        start: Point,
-        saved: list[tuple[slice, slice, NDArray[np.float32], NDArray[np.float32]]],
-    ) -> None:
+    ) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+        """Copies of (weights, clearance) with discs around ``obstacles`` blocked. A disc
+        never covers the start, or the robot could not leave its own cell."""
+        weights = self._weights.copy()
+        clear = self._clear.copy()
         hc, wc = self.shape
         res = self.resolution
         for ox, oy in obstacles:
@@ -188,10 +166,9 @@ class GridPlanner:
             yy, xx = np.ogrid[y0:y1, x0:x1]
             cx, cy = self.cell_centre(0, 0)
             inside = ((cx + xx * res - ox) ** 2 + (cy + yy * res - oy) ** 2) <= r * r
-            ys, xs = slice(y0, y1), slice(x0, x1)
-            saved.append((ys, xs, weights[ys, xs].copy(), clear[ys, xs].copy()))
-            weights[ys, xs][inside] = np.inf
-            clear[ys, xs][inside] = -1.0
+            weights[y0:y1, x0:x1][inside] = np.inf
+            clear[y0:y1, x0:x1][inside] = -1.0
+        return weights, clear
 
     # ------------------------------------------------------------- planning
     def plan(
@@ -212,26 +189,14 @@ class GridPlanner:
         g_cell = self._snap(*goal, self._clear)
         if s_cell is None or g_cell is None:
             return None
-        if not obstacles:
-            return self._search(start, goal, s_cell, g_cell, self._weights, self._clear)
-        if obstacle_radius is None:
-            p = self.params
-            obstacle_radius = 2 * p.radius + p.block_margin + self.resolution
-        with self._obstacles_placed(obstacles, obstacle_radius, start) as (weights, clear):
+        weights, clear = self._weights, self._clear
+        if obstacles:
+            if obstacle_radius is None:
+                p = self.params
+                obstacle_radius = 2 * p.radius + p.block_margin + self.resolution
+            weights, clear = self._with_obstacles(obstacles, obstacle_radius, start)
             if not (weights[g_cell] < np.inf and weights[s_cell] < np.inf):
                 return None
-            return self._search(start, goal, s_cell, g_cell, weights, clear)
-
-    def _search(
-        self,
-        start: Point,
-        goal: Point,
-        s_cell: tuple[int, int],
-        g_cell: tuple[int, int],
-        weights: NDArray[np.float32],
-        clear: NDArray[np.float32],
-    ) -> PlannedPath | None:
-        """A* from ``s_cell`` to ``g_cell`` on ``weights``, simplified on ``clear``."""
         raw = pyastar2d.astar_path(weights, s_cell, g_cell, allow_diagonal=True)
         if raw is None:
             return None
