@@ -49,7 +49,9 @@ def polyline_length(points: Sequence[Point]) -> float:
 
 
 class GridPlanner:
-    """A* planner for one map and one robot size (shared by the robots of a run)."""
+    """A* planner for one map and one robot size, shared by the robots of a run and by
+    the runs a worker executes at once in threads (Dask): it never writes its fields
+    after construction (a re-plan around mates draws them into copies)."""
 
     def __init__(self, grid: OccupancyGrid, params: RobotParams) -> None:
         self.grid = grid
