@@ -68,6 +68,11 @@ def _check(code: int, err: str, out_dir: Path, args: list[str], seen: list[int])
         assert list(out_dir.iterdir()) == [], (args, list(out_dir.iterdir()))
 
 
+def _assert_both_outcomes(seen: list[int]) -> None:
+    """Both outcomes reached: the cases explore from working commands into bad ones."""
+    assert seen.count(0) >= 5 and seen.count(2) >= 5, (seen.count(0), seen.count(2))
+
+
 def _settings() -> Any:
     return settings(
         max_examples=CASES,
@@ -112,8 +117,7 @@ def test_run_options_with_random_values(
 
     seen: list[int] = []
     case()
-    # Both outcomes reached: the cases explore from working commands into bad ones.
-    assert seen.count(0) >= 5 and seen.count(2) >= 5, (seen.count(0), seen.count(2))
+    _assert_both_outcomes(seen)
 
 
 def test_run_on_mutated_scenarios(
@@ -134,8 +138,7 @@ def test_run_on_mutated_scenarios(
 
     seen: list[int] = []
     case()
-    # Both outcomes reached: the cases explore from working commands into bad ones.
-    assert seen.count(0) >= 5 and seen.count(2) >= 5, (seen.count(0), seen.count(2))
+    _assert_both_outcomes(seen)
 
 
 def test_radio_and_team_commands_with_random_values(
@@ -165,8 +168,7 @@ def test_radio_and_team_commands_with_random_values(
 
     seen: list[int] = []
     case()
-    # Both outcomes reached: the cases explore from working commands into bad ones.
-    assert seen.count(0) >= 5 and seen.count(2) >= 5, (seen.count(0), seen.count(2))
+    _assert_both_outcomes(seen)
 
 
 def test_results_commands_on_damaged_databases(
@@ -280,8 +282,7 @@ def test_sweep_with_random_options_and_mutated_schemas(
 
     seen: list[int] = []
     case()
-    # Both outcomes reached: the cases explore from working commands into bad ones.
-    assert seen.count(0) >= 5 and seen.count(2) >= 5, (seen.count(0), seen.count(2))
+    _assert_both_outcomes(seen)
 
 
 def test_run_on_mutated_maps_and_task_files(
@@ -308,8 +309,7 @@ def test_run_on_mutated_maps_and_task_files(
 
     seen: list[int] = []
     case()
-    # Both outcomes reached: the cases explore from working commands into bad ones.
-    assert seen.count(0) >= 5 and seen.count(2) >= 5, (seen.count(0), seen.count(2))
+    _assert_both_outcomes(seen)
 
 
 def test_signal_and_check_commands_with_random_values(
@@ -370,8 +370,7 @@ def test_signal_and_check_commands_with_random_values(
 
     seen: list[int] = []
     case()
-    # Both outcomes reached: the cases explore from working commands into bad ones.
-    assert seen.count(0) >= 5 and seen.count(2) >= 5, (seen.count(0), seen.count(2))
+    _assert_both_outcomes(seen)
 
 
 def test_the_new_fuzzed_commands_accept_their_base_case(

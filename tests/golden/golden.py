@@ -97,18 +97,22 @@ def run_case(case: dict[str, Any], world: Any = None) -> dict[str, Any]:
     return comparable(run_mission(config, world))
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
+def write_or_compare(results: dict[str, Any], path: Path, doc: str | None) -> None:
+    """The command line of a reference file: ``--write`` records ``results`` in
+    ``path``; without it they are compared with what it holds."""
+    parser = argparse.ArgumentParser(description=doc)
     parser.add_argument("--write", action="store_true", help="record the reference outputs")
-    args = parser.parse_args()
-    results = {case_key(c): run_case(c) for c in cases()}
-    if args.write:
-        GOLDEN_FILE.write_text(json.dumps(results, indent=1, sort_keys=True) + "\n")
-        print(f"wrote {len(results)} cases to {GOLDEN_FILE}")
+    if parser.parse_args().write:
+        path.write_text(json.dumps(results, indent=1, sort_keys=True) + "\n")
+        print(f"wrote {len(results)} cases to {path}")
     else:
-        golden = json.loads(GOLDEN_FILE.read_text())
+        golden = json.loads(path.read_text())
         bad = [k for k, v in results.items() if golden.get(k) != v]
         print(f"{len(results) - len(bad)} of {len(results)} identical; differ: {bad}")
+
+
+def main() -> None:
+    write_or_compare({case_key(c): run_case(c) for c in cases()}, GOLDEN_FILE, __doc__)
 
 
 if __name__ == "__main__":

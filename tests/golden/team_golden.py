@@ -9,13 +9,12 @@ them, on the code as it was before a restructuring.
 
 from __future__ import annotations
 
-import argparse
 import hashlib
 import json
 from pathlib import Path
 from typing import Any
 
-from .golden import ROOT, comparable
+from .golden import ROOT, comparable, write_or_compare
 
 TEAM_GOLDEN_FILE = Path(__file__).with_name("team_golden.json")
 SCENARIOS = ROOT / "data" / "scenarios"
@@ -60,17 +59,8 @@ def run_team_case(scenario: Path, options: dict[str, Any]) -> dict[str, Any]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--write", action="store_true", help="record the reference outputs")
-    args = parser.parse_args()
     results = {name: run_team_case(path, options) for name, path, options in CASES}
-    if args.write:
-        TEAM_GOLDEN_FILE.write_text(json.dumps(results, indent=1, sort_keys=True) + "\n")
-        print(f"wrote {len(results)} cases to {TEAM_GOLDEN_FILE}")
-    else:
-        golden = json.loads(TEAM_GOLDEN_FILE.read_text())
-        bad = [k for k, v in results.items() if golden.get(k) != v]
-        print(f"{len(results) - len(bad)} of {len(results)} identical; differ: {bad}")
+    write_or_compare(results, TEAM_GOLDEN_FILE, __doc__)
 
 
 if __name__ == "__main__":

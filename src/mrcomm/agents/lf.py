@@ -61,7 +61,7 @@ from mrcomm.messaging.messages import (
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ROLE
 from mrcomm.ports import NavStatus
-from mrcomm.world.geometry import Pose
+from mrcomm.world.geometry import Pose, polyline_length
 
 NA_IDLE = "na_idle"  # transitions' name of NA's idle state
 
@@ -219,7 +219,7 @@ class LeaderFollowerExecutor(TaskExecutor):
         route = None if target is None else self.base.make_plan(target.x, target.y)
         if route is None:
             return None
-        return sum(math.dist(a, b) for a, b in itertools.pairwise(route))
+        return polyline_length(route)
 
     def _step_assigning(self) -> None:
         elapsed = self._now - self._state_since
@@ -488,7 +488,7 @@ class LeaderFollowerExecutor(TaskExecutor):
             hop = (pose.x + dx * scale, pose.y + dy * scale)
             hop_route = self.base.make_plan(*hop)
             straight = math.hypot(hop[0] - pose.x, hop[1] - pose.y)
-            if hop_route is not None and _length(hop_route) <= 1.25 * straight + 0.1:
+            if hop_route is not None and polyline_length(hop_route) <= 1.25 * straight + 0.1:
                 self.timeline.event(L.DIRECT_ROUTE, self._now, leader=leader)
                 self.base.navigate_to(*hop)
                 return
@@ -562,7 +562,3 @@ class LeaderFollowerExecutor(TaskExecutor):
         self.timeline.set_state(ROLE, ROLE_OF_TOP_STATE.get(top), self._now)
         if top == "regrouping":
             self._follow_target = None
-
-
-def _length(route: tuple[tuple[float, float], ...]) -> float:
-    return sum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in itertools.pairwise(route))

@@ -399,10 +399,11 @@ class AgentProcess:
     def _step(self, now: float) -> None:
         self.mates.step(time.monotonic(), self.bus.samples)
         self._judge_mates()
+        alive = self._alive()  # nothing below changes who is present or silent
         if self.resync is not None and self.executor is not None:
-            alive = {self._process_of(a) for a in self._alive()}
-            alive.discard(self.agent)
-            if self.resync.step(now, alive):
+            processes = {self._process_of(a) for a in alive}
+            processes.discard(self.agent)
+            if self.resync.step(now, processes):
                 self.journal.write("resync", time=now, skipped=self.resync.skipped)
             elif (
                 not self.resync.active
@@ -412,13 +413,12 @@ class AgentProcess:
                 and now - self.first_tick >= ASSIGNMENT_WAIT
             ):
                 self.resync.start(now)  # missed the assignment: ask for it
-        self._heard_from_present(now)
+        self._heard_from_present(now, alive)
         if self.assigner is not None:
             self.assigner.step(now)
             self.recorder.receipts()
         if self.executor is not None:
             self.executor.step(now)
-            alive = self._alive()
             absent = [a for a in self.team if a != self.agent and a not in alive]
             self.recorder.left_out(now, sorted(absent))
         if self.tail is not None:
@@ -461,12 +461,11 @@ class AgentProcess:
             if incs and a in self.team and self._process_of(a) not in silent
         }
 
-    def _heard_from_present(self, now: float) -> None:
-        """A member whose liveliness token is present (and whose process is not silent)
-        is alive for the AON lease (the assigner publishes no poses; a crashed robot's
-        token vanishes with its session), so only a member that has really gone is ever
-        left out."""
-        alive = self._alive()
+    def _heard_from_present(self, now: float, alive: set[str]) -> None:
+        """A member whose liveliness token is present (and whose process is not silent:
+        ``alive``) is alive for the AON lease (the assigner publishes no poses; a crashed
+        robot's token vanishes with its session), so only a member that has really gone
+        is ever left out."""
         for aon in self.recorder.aon_endpoints().values():
             for agent in alive:
                 aon.heard_from(agent, now)

@@ -136,6 +136,7 @@ class InProcessNetwork:
             counts = self._counts_by_index.get(topic)
             if counts is None:
                 counts = self._counts_by_index[topic] = [None] * len(self.ids)
+            relayed = relay is not None and relay.relays(topic)
             links = self._connected[sender]
             # Per message, not per receiver: lost to the sender's queue, and its delay.
             queued_out = delay is None and not exempt(topic)
@@ -160,7 +161,8 @@ class InProcessNetwork:
                 if observer is not None:
                     observer(now, topic, self.ids[sender], self.ids[receiver], message, outcome)
                 if outcome == RECEIVED:
-                    if relay is not None and relay.relays(topic):
+                    if relayed:
+                        assert relay is not None
                         hop = crossed + 1
                         if not relay.receive(receiver, topic, message, hop, crossed > 0):
                             continue  # a duplicate copy

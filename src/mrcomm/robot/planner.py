@@ -16,7 +16,6 @@ what lets a simple path follower cut corners a little without touching walls.
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -26,6 +25,7 @@ import pyastar2d
 from numpy.typing import NDArray
 
 from mrcomm.robot.params import RobotParams
+from mrcomm.world.geometry import polyline_length
 from mrcomm.world.occupancy import OccupancyGrid
 
 Point = tuple[float, float]
@@ -42,10 +42,6 @@ class PlannedPath:
     @property
     def goal(self) -> Point:
         return self.waypoints[-1]
-
-
-def polyline_length(points: Sequence[Point]) -> float:
-    return sum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in itertools.pairwise(points))
 
 
 class GridPlanner:

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import itertools
 import math
+from collections.abc import Sequence
 from typing import NamedTuple
 
 
@@ -20,3 +22,8 @@ class Pose(NamedTuple):
 def wrap_angle(angle: float) -> float:
     """Wrap an angle to (-pi, pi]."""
     return math.atan2(math.sin(angle), math.cos(angle))
+
+
+def polyline_length(points: Sequence[tuple[float, float]]) -> float:
+    """Length of the polyline through ``points`` (m)."""
+    return sum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in itertools.pairwise(points))
