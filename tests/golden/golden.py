@@ -57,9 +57,20 @@ ADDED_MISSION_METRICS = (
 )
 
 
+#: Near collisions checked against ground truth, per robot and team (added later).
+ADDED_TRUTH_METRICS = (
+    "near_collisions_confirmed",
+    "near_collisions_false",
+    "near_collisions_missed",
+)
+
+
 def without_added(summary: dict[str, Any]) -> dict[str, Any]:
-    for key in ADDED_MISSION_METRICS:
+    for key in (*ADDED_MISSION_METRICS, *ADDED_TRUTH_METRICS):
         summary["mission"].pop(key, None)
+    for robot in summary["robots"].values():
+        for key in ADDED_TRUTH_METRICS:
+            robot.pop(key, None)
     return summary
 
 

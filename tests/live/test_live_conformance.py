@@ -80,5 +80,8 @@ def test_live_matches_simulation(name: str, tmp_path: Path) -> None:
     if options["behaviour"] == "lf":
         assert live["aon"]["total"]["pending"] == 0
         assert lv["role_assignment_time"] > 0
+    # The live world checks the judged near collisions against its ground truth too.
+    assert lv["near_collisions"] == lv["near_collisions_confirmed"] + lv["near_collisions_false"]
+    assert lv["near_collisions_missed"] >= 0
     latency = live["live"]["pose_latency_ms"]
     assert latency["n"] > 1000 and latency["p50"] < 50.0

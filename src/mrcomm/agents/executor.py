@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from typing import Any, ClassVar
 
@@ -105,6 +105,23 @@ class ExecutorParams(BaseModel):
     )
     repeat_window: float = parameter(
         5.0, "near collisions with the same mate within this window are repeats", "s", ge=0
+    )
+    # What a robot knows of its mates ages: these two say how it treats an old pose.
+    # The defaults are the original robots' (a mate's last pose is used however old).
+    mate_max_age: float | None = parameter(
+        None,
+        "collision avoidance and making way ignore a mate whose last pose is older "
+        "than this (none: a pose never expires)",
+        "s",
+        gt=0,
+        allow_inf_nan=False,
+    )
+    mate_extrapolation: float = parameter(
+        0.0,
+        "a mate's pose is moved on along its heading at its speed for its age, "
+        "at most this long (0: used where it was)",
+        "s",
+        ge=0,
     )
     nav_retry_delay: float = parameter(
         2.0, "wait after a navigation failure before choosing again", "s", ge=0
@@ -289,8 +306,14 @@ class TaskExecutor:
     def _step_waiting(self) -> None:
         self._select_next()
 
+    def known_mates(self) -> Mapping[str, MateState]:
+        """The mates as collision avoidance and making way see them now: fresh enough,
+        and moved on for their age (:meth:`TeamView.known`)."""
+        params = self.params
+        return self.team_view.known(self._now, params.mate_max_age, params.mate_extrapolation)
+
     def _step_idle(self) -> None:
-        for mate in self.mates.values():
+        for mate in self.known_mates().values():
             if self.in_way_of(mate):
                 self.step_aside(mate)
                 return
@@ -341,7 +364,7 @@ class TaskExecutor:
     def _step_avoiding(self) -> None:
         # The pose is read only when needed: a base may draw noise for each reading.
         if not self.avoidance.may_resume(
-            self._current_pose, self.mates, self._now, self._state_since
+            self._current_pose, self.known_mates(), self._now, self._state_since
         ):
             return
         target = self.navigation_target()
@@ -376,7 +399,9 @@ class TaskExecutor:
 
     def _check_collisions(self) -> None:
         pose = self.base.pose
-        conflict = self.avoidance.detect(pose, self.mates.values(), self._now, self._goal_distance)
+        conflict = self.avoidance.detect(
+            pose, self.known_mates().values(), self._now, self._goal_distance
+        )
         if conflict is None:
             return
         self.timeline.event(

@@ -1,6 +1,14 @@
 """What a robot knows of its team mates, from the poses it received: each mate's last
 pose, when it arrived (so its age can be asked), the role the mate announced and the
-leader it follows. Collision avoidance and LF read mates from here."""
+leader it follows. Collision avoidance and LF read mates from here.
+
+A pose's age is counted from the time its sender stamped it (every member shares the
+mission clock), so it includes the message's time in transit. :meth:`TeamView.known`
+is the view a robot acts on: mates whose pose is too old left out, and the others moved
+on along their last heading at their last speed for the pose's age (dead reckoning over
+a short horizon: a robot at 0.26 m/s travels 5 cm per 0.2 s pose period, the size of
+the localisation error, so a pose period or two of extrapolation corrects the lag of a
+pose without inventing turns the mate may have made)."""
 
 from __future__ import annotations
 
@@ -17,6 +25,8 @@ class TeamView:
         self.poses: dict[str, MateState] = {}
         #: When each mate's last pose arrived (the receiver's clock).
         self.heard: dict[str, float] = {}
+        #: When each mate's last pose was sent (its stamp, on the mission clock).
+        self.stamps: dict[str, float] = {}
         self.roles: dict[str, str] = {}
         #: mate -> the robot it follows ("" when none).
         self.leaders: dict[str, str] = {}
@@ -30,6 +40,7 @@ class TeamView:
             mate, message.x, message.y, message.theta, message.v, message.goal_dist
         )
         self.heard[mate] = now
+        self.stamps[mate] = message.stamp
         self.roles[mate] = message.role
         self.leaders[mate] = message.leader
 
@@ -37,6 +48,28 @@ class TeamView:
         """Seconds since ``mate``'s last pose arrived (inf if never heard)."""
         heard = self.heard.get(mate)
         return math.inf if heard is None else now - heard
+
+    def known(
+        self, now: float, max_age: float | None, extrapolation: float
+    ) -> dict[str, MateState]:
+        """Each mate as a robot should act on it at ``now``: left out when its pose is
+        older than ``max_age`` (None: never), moved on for its age (at most
+        ``extrapolation`` s) along its heading at its speed."""
+        if max_age is None and extrapolation <= 0:
+            return self.poses  # the original robots' view: every last pose, as it came
+        out: dict[str, MateState] = {}
+        for mate, state in self.poses.items():
+            age = max(0.0, now - self.stamps[mate])
+            if max_age is not None and age > max_age:
+                continue
+            ahead = min(age, extrapolation) * state.v
+            if ahead != 0.0:
+                state = state._replace(
+                    x=state.x + ahead * math.cos(state.theta),
+                    y=state.y + ahead * math.sin(state.theta),
+                )
+            out[mate] = state
+        return out
 
     def heard_within(self, seconds: float, now: float) -> bool:
         """Whether any mate's pose arrived less than ``seconds`` ago."""

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 #: Bumped whenever a table or column changes meaning; a database written with another
 #: version is refused before it is touched.
-SCHEMA_VERSION = "4"
+SCHEMA_VERSION = "5"
 
 Columns = tuple[tuple[str, str], ...]
 
@@ -69,6 +69,9 @@ RUN_METRIC_COLUMNS: tuple[tuple[str, str, str], ...] = (
     ("total_distance", "DOUBLE", "total_distance"),
     ("near_collisions", "INTEGER", "near_collisions"),
     ("near_collisions_filtered", "INTEGER", "near_collisions_filtered"),
+    ("near_collisions_confirmed", "INTEGER", "near_collisions_confirmed"),
+    ("near_collisions_false", "INTEGER", "near_collisions_false"),
+    ("near_collisions_missed", "INTEGER", "near_collisions_missed"),
     ("delay_time", "DOUBLE", "delay_time"),
     ("idle_time", "DOUBLE", "idle_time"),
     ("task_execution_time", "DOUBLE", "task_execution_time"),

@@ -33,6 +33,7 @@ from mrcomm.messaging.aon_state import AON_COUNTERS
 from mrcomm.metrics.timeline import Event, Interval, Timeline
 from mrcomm.run.assemble import AonAgentFacts, RobotTruth, RunFacts, assemble, sum_counts
 from mrcomm.run.config import make_config
+from mrcomm.run.proximity import Encounter
 from mrcomm.run.result import MissionResult
 from mrcomm.world.scenario import load_scenario
 
@@ -158,12 +159,22 @@ def collect(record_dir: Path) -> tuple[MissionResult, dict[str, Any]]:
                 (str(a), str(b), str(state), float(t0), float(t1))
                 for a, b, state, t0, t1 in truth.get("link_states", [])
             ],
+            encounters=_encounters(truth),
             config_extra={"mode": "live", "speed": start.get("speed")},
         )
     )
     report = _live_report(journals, world, by_process)
     report["record_fingerprint"] = record_fingerprint(record_dir)
     return result, report
+
+
+def _encounters(truth: dict[str, Any]) -> list[Encounter] | None:
+    """The world's record of robot pairs within the danger radius (None when the
+    behaviour has no near-collision detection, or the journal is from before it)."""
+    rows = truth.get("encounters")
+    if rows is None:
+        return None
+    return [(str(a), str(b), float(t0), float(t1), float(d)) for a, b, t0, t1, d in rows]
 
 
 # -- timelines -------------------------------------------------------------------------

@@ -48,6 +48,7 @@ from mrcomm.messaging.topics import Lane
 from mrcomm.net.pulse import pulse_id
 from mrcomm.net.zenoh_node import Incoming, ZenohNode
 from mrcomm.run.bodies import RobotBodies
+from mrcomm.run.proximity import make_proximity
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.wiring import (
     RadioPulse,
@@ -77,6 +78,7 @@ class WorldProcess:
         self.bases = self.bodies.bases
         self.node_ids = (*self.robot_ids, ASSIGNER_ID)
         self.links, self.link_recorder = make_links(self.resources, run)
+        self.proximity = make_proximity(run, self.robot_ids)
         #: ESD on the radio without hardware: the world reads every robot's pulse on the
         #: modelled radio and publishes the readings as that robot's pulse would.
         self.radio_pulse = (
@@ -293,6 +295,8 @@ class WorldProcess:
         # The RSSI of every robot pair at the pulse rate (the threshold's: ESD's trace,
         # SSD's model), as the simulation samples its ``rssi_series``.
         samples = self.link_recorder.record(links, self.settings.run.dt, self.now)
+        if self.proximity is not None:
+            self.proximity.record(links.distance, self.now)
         if samples:
             v = [[a, b, round(rssi, 3)] for a, b, rssi in samples]
             self.journal.write("rssi", t=round(self.now, 3), v=v)
@@ -330,6 +334,7 @@ class WorldProcess:
             links=self.link_recorder.summaries(),
             connectivity=self.link_recorder.connectivity(),
             link_states=self.link_recorder.state_intervals(end),
+            encounters=self.proximity.encounters(end) if self.proximity else None,
         )
 
 

@@ -14,6 +14,10 @@ from typing import Any
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ACTIVITY, ROLE, Timeline
 
+#: A robot's judged near collisions checked against ground truth (confirmed, false
+#: alarms) and the true ones it did not judge (:mod:`mrcomm.run.proximity`).
+TRUTH_COUNTS = ("near_collisions_confirmed", "near_collisions_false", "near_collisions_missed")
+
 
 @dataclass(frozen=True)
 class RobotFacts:
@@ -163,6 +167,7 @@ def mission_metrics(
         "delay_time": total("delay_time"),
         "idle_time": total("idle_time"),
         "task_execution_time": total("task_execution_time"),
+        **{k: int(total(k)) for k in TRUTH_COUNTS if rows and k in rows[0]},
         **{k: total(k) for k in LF_TOTALS if rows and k in rows[0]},
         "min_separation": min(
             (r["min_separation"] for r in rows if r["min_separation"] is not None), default=None

@@ -20,6 +20,7 @@ from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robo
 from mrcomm.metrics.timeline import Timeline
 from mrcomm.net.delivery import count_keys, has_radio_counts
 from mrcomm.run.config import RunConfig
+from mrcomm.run.proximity import Encounter, collision_zone, judged_against_truth
 from mrcomm.run.result import MissionResult
 from mrcomm.world.scenario import Scenario
 
@@ -82,6 +83,9 @@ class RunFacts:
     #: The team's largest connected group (:meth:`LinkRecorder.connectivity`; empty
     #: from a live record written before it was recorded).
     connectivity: dict[str, float | None] = field(default_factory=dict)
+    #: When robot pairs were within the danger radius of each other (ground truth,
+    #: :class:`mrcomm.run.proximity.ProximityRecorder`); None: not recorded.
+    encounters: list[Encounter] | None = None
     #: What relaying did per node (empty when the network does not relay).
     relay: dict[str, Any] = field(default_factory=dict)
     #: Configuration entries only one mode has (a live run's mode and speed).
@@ -99,6 +103,7 @@ def assemble(facts: RunFacts) -> MissionResult:
     ]
     uses_aon = facts.config.spec("behaviour").uses_aon
     robots: dict[str, dict[str, Any]] = {}
+    zone = collision_zone(facts.config)
     for rid in robot_ids:
         truth = facts.robots[rid]
         robot_facts = RobotFacts(
@@ -109,6 +114,8 @@ def assemble(facts: RunFacts) -> MissionResult:
             tasks_failed=sum(1 for _, robot in failed_pairs if robot == rid),
         )
         metrics = robot_metrics(facts.timelines[rid], robot_facts)
+        if facts.encounters is not None and zone is not None:
+            metrics.update(judged_against_truth(facts.timelines[rid], facts.encounters, zone[1]))
         if uses_aon:
             metrics.update(lf_metrics(facts.timelines[rid]))
         metrics["failed_tasks"] = [t for t, robot in failed_pairs if robot == rid]

@@ -27,6 +27,7 @@ from mrcomm.net.relay import make_relay
 from mrcomm.run.assemble import AonAgentFacts, RunFacts, assemble
 from mrcomm.run.bodies import RobotBodies
 from mrcomm.run.config import RunConfig
+from mrcomm.run.proximity import make_proximity
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.result import MissionResult
 from mrcomm.run.wiring import (
@@ -50,6 +51,7 @@ class Mission:
         self.node_ids = (*self.robot_ids, ASSIGNER_ID)
         seed = config.seed
         self.links, self.link_recorder = make_links(self.resources, config)
+        self.proximity = make_proximity(config, self.robot_ids)
         self.network = InProcessNetwork(
             self.node_ids,
             policy=DeliveryPolicy(config.spl),
@@ -124,6 +126,8 @@ class Mission:
         # Bases have not moved since `truth` was taken: it is each one's view of the others.
         self.bodies.advance(dt, now, truth)
         self.link_recorder.record(links, dt, now)
+        if self.proximity is not None:
+            self.proximity.record(links.distance, now)
         if self.bodies.sample_due(now):
             self._sample_trajectories(now)
         self.steps += 1
@@ -176,6 +180,7 @@ class Mission:
                 trajectories=self.trajectories,
                 rssi_series=list(self.link_recorder.rssi_series),
                 link_states=self.link_recorder.state_intervals(end),
+                encounters=self.proximity.encounters(end) if self.proximity else None,
             )
         )
 
