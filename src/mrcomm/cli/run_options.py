@@ -61,7 +61,7 @@ SetOpt = Annotated[
     ),
 ]
 
-SET_KINDS = ("network", "behaviour", "threshold")
+SET_KINDS = ("network", "behaviour", "threshold", "robot")
 
 
 def _run_options(
