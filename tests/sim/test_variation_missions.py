@@ -4,11 +4,13 @@ also the goldens), and bad values are one-line errors."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import pytest
 
 from mrcomm.errors import InputError
+from mrcomm.experiment.schema import load_experiment
 from mrcomm.run.config import make_config, param_assignments
 from mrcomm.sim.mission import Mission
 from tests.cli.test_run_cli import mrcomm
@@ -93,3 +95,24 @@ def test_bad_cli_value_is_one_line_exit_2(setting: str, expected: str) -> None:
     assert "Traceback" not in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1
     assert expected in done.stderr
+
+
+def test_a_study_sweeps_the_profile(tmp_path: Path) -> None:
+    schema = tmp_path / "study.yaml"
+    schema.write_text(
+        f"scenario: {S1_PATH}\nrepetitions: 1\n"
+        "factors:\n  robot.variation: [none, realistic]\n"
+        "params:\n  robot.speed_sigma: 0.1\n"
+    )
+    runs = load_experiment(schema).runs()
+    assert [r.config.params for r in runs] == [
+        {"robot": {"speed_sigma": 0.1}},
+        {"robot": {"variation": "realistic", "speed_sigma": 0.1}},
+    ]
+    assert runs[0].config_id != runs[1].config_id
+    schema.write_text(
+        f"scenario: {S1_PATH}\nrepetitions: 1\nfactors:\n  robot.variation: [none, bogus]\n"
+    )
+    with pytest.raises(InputError) as err:
+        load_experiment(schema)
+    assert err.value.field == "factors.robot.variation"

@@ -10,6 +10,9 @@ travel) to a team mate, is refused: the robot stops instead of colliding.
 
 Ground truth (``true_pose``) feeds the world, the network model and recordings; agents
 see only the localisation estimate (``pose``), the noisy odometer and ``status``.
+Under the ``realistic`` variation profile (robot/variation.py) a base has its own top
+speed, start-up delay, AMCL-like localisation error and its run's planner costs; with
+none (the default) it is the robot of earlier versions, draw for draw.
 The steady-state step is scalar Python on floats: no numpy calls, no arrays.
 """
 
@@ -302,7 +305,7 @@ class SimBase:
         c_new = clear(nx, ny)
         if c_new < p.radius and c_new < clear(x, y):
             return True
-        # A mate may move up to max_v*dt this step too (the simulator may hand us
+        # A mate may move up to its max_v*dt this step too (the simulator may hand us
         # positions from before its move): keep that much extra distance.
         contact = 2 * p.radius + self._mate_v * dt
         contact2 = contact * contact
