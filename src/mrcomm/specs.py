@@ -102,26 +102,39 @@ class VariantSpec:
     def make_params(self, values: Mapping[str, Any], where: str | None = None) -> BaseModel:
         """Validate ``values`` (nested dicts for nested models) into the parameter model;
         a bad key or value is a one-line :class:`InputError` naming ``kind.key``."""
-        model = self.params_model()
-        try:
-            return model(**dict(values))
-        except ValidationError as err:
-            first = err.errors()[0]
-            loc = ".".join(str(p) for p in first["loc"])
-            field = f"{self.kind}.{loc}" if loc else self.kind
-            if first["type"] == "extra_forbidden":
-                known = parameter_names(model)
-                message = (
-                    f"unknown parameter of {self.kind} {self.name!r}"
-                    f"{did_you_mean(loc, known)}; "
-                    f"it has {', '.join(known) if known else 'no parameters'}"
-                )
-            else:
-                got = first.get("input")
-                message = first["msg"].removeprefix("Value error, ")
-                if not isinstance(got, Mapping):
-                    message += f", got {got!r}"
-            raise InputError(message, file=where, field=field) from None
+        return validate_params(
+            self.params_model(), values, self.kind, f"{self.kind} {self.name!r}", where
+        )
+
+
+def validate_params(
+    model: type[BaseModel],
+    values: Mapping[str, Any],
+    section: str,
+    owner: str,
+    where: str | None = None,
+) -> BaseModel:
+    """Validate ``values`` into ``model``; a bad key or value is a one-line
+    :class:`InputError` naming ``section.key`` (``owner`` names whose parameters they
+    are in the message about an unknown key)."""
+    try:
+        return model(**dict(values))
+    except ValidationError as err:
+        first = err.errors()[0]
+        loc = ".".join(str(p) for p in first["loc"])
+        field = f"{section}.{loc}" if loc else section
+        if first["type"] == "extra_forbidden":
+            known = parameter_names(model)
+            message = (
+                f"unknown parameter of {owner}{did_you_mean(loc, known)}; "
+                f"it has {', '.join(known) if known else 'no parameters'}"
+            )
+        else:
+            got = first.get("input")
+            message = first["msg"].removeprefix("Value error, ")
+            if not isinstance(got, Mapping):
+                message += f", got {got!r}"
+        raise InputError(message, file=where, field=field) from None
 
 
 def _resolve(target: Any, key: str) -> Any:

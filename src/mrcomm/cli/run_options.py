@@ -7,7 +7,8 @@ here, and one function that turns them into a validated
 ``--set KIND.KEY=VALUE`` sets a parameter of the chosen variant of that kind
 (``behaviour.utility=greedy``, ``threshold.warning_dbm=-41``, ``network.range_m=10``,
 ``behaviour.collision.danger_radius=1.2``); the value is read as YAML (numbers, true /
-false, null, strings). ``mrcomm variants`` lists every parameter.
+false, null, strings). ``mrcomm variants`` lists every parameter. ``robot.KEY`` sets the
+robots' run-to-run variation (``robot.variation=realistic``; docs/ROBOT.md).
 """
 
 from __future__ import annotations
@@ -57,11 +58,12 @@ SetOpt = Annotated[
         "--set",
         metavar="KIND.KEY=VALUE",
         help="Set a variant parameter, e.g. behaviour.utility=greedy (repeatable; "
-        "`mrcomm variants` lists them).",
+        "`mrcomm variants` lists them), or the robots' run-to-run variation, e.g. "
+        "robot.variation=realistic (docs/ROBOT.md).",
     ),
 ]
 
-SET_KINDS = ("network", "behaviour", "threshold")
+SET_KINDS = ("network", "behaviour", "threshold", "robot")
 
 
 def _run_options(

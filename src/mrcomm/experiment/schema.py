@@ -45,7 +45,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from mrcomm.errors import InputError, did_you_mean
 from mrcomm.experiment.generated import generated_scenarios
 from mrcomm.experiment.seeds import make_config_id, make_run_id, run_seed
-from mrcomm.run.config import LEGACY_OPTIONS, RUN_KINDS, RunConfig, make_config
+from mrcomm.run.config import LEGACY_OPTIONS, PARAM_SECTIONS, RunConfig, make_config
 from mrcomm.world.scenario import load_scenario
 from mrcomm.world.yamlfile import read_yaml, validation_error
 
@@ -199,12 +199,12 @@ def load_experiment(
 
 def _allowed_options() -> list[str]:
     fields = [name for name in RunConfig.model_fields if name not in _NOT_OPTIONS]
-    return [*fields, *LEGACY_OPTIONS, *(f"{kind}.KEY" for kind in RUN_KINDS)]
+    return [*fields, *LEGACY_OPTIONS, *(f"{kind}.KEY" for kind in PARAM_SECTIONS)]
 
 
 def _is_parameter(key: str) -> bool:
     kind, dot, rest = key.partition(".")
-    return bool(dot and rest) and kind in RUN_KINDS
+    return bool(dot and rest) and kind in PARAM_SECTIONS
 
 
 def _flat_params(params: dict[str, Any], path: Path) -> dict[str, Any]:
@@ -224,8 +224,8 @@ def _flat_params(params: dict[str, Any], path: Path) -> dict[str, Any]:
         if not _is_parameter(key):
             kind = key.partition(".")[0]
             raise InputError(
-                f"unknown parameter section '{kind}'{did_you_mean(kind, RUN_KINDS)}; "
-                f"sections: {', '.join(RUN_KINDS)}",
+                f"unknown parameter section '{kind}'{did_you_mean(kind, PARAM_SECTIONS)}; "
+                f"sections: {', '.join(PARAM_SECTIONS)}",
                 file=path,
                 field=f"params.{key}",
             )
@@ -370,7 +370,7 @@ def _build(
             raise InputError(err.message, file=path, field=f"params.{field}") from None
         if field and field in values and field != "scenario":
             raise InputError(err.message, file=path, field=f"options.{field}") from None
-        if _is_parameter(field) or field in RUN_KINDS:
+        if _is_parameter(field) or field in PARAM_SECTIONS:
             raise InputError(err.message, file=path, field=field) from None
         combo = ", ".join(f"{k}: {values[k]}" for k in levels)
         raise InputError(

@@ -73,7 +73,8 @@ class WorldProcess:
         scenario = self.resources.scenario
         self.robot_ids = tuple(r.id for r in scenario.robots)
         self.bodies = RobotBodies(
-            make_bases(self.resources, run.seed), self.resources.scenario.assigner
+            make_bases(self.resources, run.seed, run.robot_variation()),
+            self.resources.scenario.assigner,
         )
         self.bases = self.bodies.bases
         self.node_ids = (*self.robot_ids, ASSIGNER_ID)

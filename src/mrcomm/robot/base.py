@@ -10,11 +10,15 @@ travel) to a team mate, is refused: the robot stops instead of colliding.
 
 Ground truth (``true_pose``) feeds the world, the network model and recordings; agents
 see only the localisation estimate (``pose``), the noisy odometer and ``status``.
+Under the ``realistic`` variation profile (robot/variation.py) a base has its own top
+speed, start-up delay, AMCL-like localisation error and its run's planner costs; with
+none (the default) it is the robot of earlier versions, draw for draw.
 The steady-state step is scalar Python on floats: no numpy calls, no arrays.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 
@@ -23,9 +27,10 @@ import numpy as np
 from mrcomm.ports import NavStatus
 from mrcomm.robot.follower import PathFollower
 from mrcomm.robot.kinematics import integrate, limit_velocity, wrap
-from mrcomm.robot.noise import LocalisationError, NormalStream, Odometry
+from mrcomm.robot.noise import AmclError, LocalisationError, NormalStream, Odometry
 from mrcomm.robot.params import RobotParams
 from mrcomm.robot.planner import GridPlanner, PlannedPath
+from mrcomm.robot.variation import RobotVariation
 from mrcomm.world.geometry import Pose
 from mrcomm.world.occupancy import OccupancyGrid
 
@@ -50,12 +55,26 @@ class SimBase:
         start: Pose,
         params: RobotParams,
         rng: np.random.Generator,
+        variation: RobotVariation | None = None,
     ) -> None:
+        """``variation``: this robot's share of the run's variation (robot/variation.py;
+        None: the deterministic robot of earlier versions, unchanged)."""
         if planner.grid is not grid:
             raise ValueError("planner was built for a different grid")
         self.robot_id = robot_id
         self.grid = grid
         self.planner = planner
+        # A mate may be as fast as the fastest robot the profile allows (contact check).
+        self._mate_v = params.max_v
+        self._ready_at = -math.inf  # no start-up delay
+        self._speed_factor = 1.0
+        self._weights = None if variation is None else variation.weights
+        if variation is not None:
+            factor = self._speed_factor = variation.draws.speed_factor
+            self._mate_v = params.max_v * max(1.0, variation.params.speed_max)
+            self._ready_at = variation.draws.start_delay
+            # This robot's own limits: the follower and the kinematics both read max_v.
+            params = dataclasses.replace(params, max_v=params.max_v * factor)
         self.params = params
         self._x, self._y, self._th = float(start.x), float(start.y), wrap(float(start.theta))
         self._v = 0.0
@@ -67,12 +86,28 @@ class SimBase:
             params.odom_distance_noise,
             params.odom_heading_noise,
         )
-        self._loc = LocalisationError(
-            normals,
-            params.loc_position_noise,
-            params.loc_heading_noise,
-            params.loc_noise_time_constant,
-        )
+        self._loc: LocalisationError
+        if variation is None:
+            self._loc = LocalisationError(
+                normals,
+                params.loc_position_noise,
+                params.loc_heading_noise,
+                params.loc_noise_time_constant,
+            )
+        else:
+            v = variation.params
+            self._loc = AmclError(
+                normals,
+                v.loc_position_sigma,
+                v.loc_heading_sigma,
+                v.loc_time_constant,
+                variation.loc_rng,
+                drift_sigma=v.heading_drift_sigma,
+                drift_tau=v.heading_drift_time_constant,
+                jump_rate=v.jump_rate,
+                jump_sigma=v.jump_sigma,
+                jump_heading_sigma=v.jump_heading_sigma,
+            )
         self._status = NavStatus.IDLE
         self._mode = _IDLE
         self._goal: Point | None = None  # as requested
@@ -193,6 +228,21 @@ class SimBase:
     def recovering(self) -> bool:
         return self._mode == _REVERSE
 
+    @property
+    def start_delay(self) -> float:
+        """Simulated s before this robot first moves (0 without variation)."""
+        return max(self._ready_at, 0.0)
+
+    @property
+    def speed_factor(self) -> float:
+        """This robot's top speed over the nominal one (1 without variation)."""
+        return self._speed_factor
+
+    @property
+    def localisation_jumps(self) -> int:
+        """Re-localisation jumps so far (always 0 without variation)."""
+        return getattr(self._loc, "jumps", 0)
+
     def update(
         self,
         dt: float,
@@ -205,6 +255,8 @@ class SimBase:
         at least those within :attr:`neighbour_radius`; ``mates`` identifies each of
         ``others`` from step to step (default: its place in ``others``)."""
         self._now = now
+        if now < self._ready_at:
+            return  # still starting up (variation's start delay): a goal waits
         mode = self._mode
         if mode == _FOLLOW:
             ids = range(len(others)) if mates is None else mates
@@ -253,9 +305,9 @@ class SimBase:
         c_new = clear(nx, ny)
         if c_new < p.radius and c_new < clear(x, y):
             return True
-        # A mate may move up to max_v*dt this step too (the simulator may hand us
+        # A mate may move up to its max_v*dt this step too (the simulator may hand us
         # positions from before its move): keep that much extra distance.
-        contact = 2 * p.radius + p.max_v * dt
+        contact = 2 * p.radius + self._mate_v * dt
         contact2 = contact * contact
         for ox, oy in others:
             d2 = (nx - ox) ** 2 + (ny - oy) ** 2
@@ -267,14 +319,16 @@ class SimBase:
     def make_plan(self, x: float, y: float) -> tuple[Point, ...] | None:
         """Base port: the route to (x, y) from the localised pose, without moving."""
         loc = self._loc
-        path = self.planner.plan((self._x + loc.ex, self._y + loc.ey), (float(x), float(y)))
+        path = self.planner.plan(
+            (self._x + loc.ex, self._y + loc.ey), (float(x), float(y)), weights=self._weights
+        )
         return None if path is None else path.waypoints
 
     def _plan(self, obstacles: Sequence[Point]) -> PlannedPath | None:
         assert self._goal is not None
         loc = self._loc
         start = (self._x + loc.ex, self._y + loc.ey)
-        return self.planner.plan(start, self._goal, obstacles)
+        return self.planner.plan(start, self._goal, obstacles, weights=self._weights)
 
     def _follow(self, path: PlannedPath) -> None:
         self._target = path.goal

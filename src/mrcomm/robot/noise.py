@@ -1,5 +1,7 @@
 """Sensor noise of a simulated robot: noisy wheel odometry and a small, slowly varying
-localisation error (what AMCL leaves after correcting the odometry drift).
+localisation error (what AMCL leaves after correcting the odometry drift) — and, for
+the ``realistic`` variation profile (robot/variation.py), that error with AMCL's heading
+drift and occasional re-localisation jumps (:class:`AmclError`).
 
 Every draw comes from the numpy Generator handed in. Normals are drawn in blocks and
 handed out one by one as Python floats, so the per-step cost is a list index, not a
@@ -106,3 +108,90 @@ class LocalisationError:
         self.ex = a * self.ex + b * self._sp * n.next()
         self.ey = a * self.ey + b * self._sp * n.next()
         self.eth = a * self.eth + b * self._sh * n.next()
+
+
+class AmclError(LocalisationError):
+    """:class:`LocalisationError` plus what AMCL adds on a real robot: a slow heading
+    drift (a second Gauss-Markov process with a long time constant) and re-localisation
+    jumps (a Poisson process in driving time; a jump offsets the error at once, and the
+    Gauss-Markov decay then fades it, as the estimate re-converges).
+
+    The base error draws from the robot's shared noise stream exactly as
+    :class:`LocalisationError` does; drift and jumps draw from their own generator, so
+    the odometry noise sees the same sequence whatever the drift and jump settings.
+    """
+
+    __slots__ = (
+        "_da",
+        "_db",
+        "_ddt",
+        "_drift_sigma",
+        "_drift_tau",
+        "_extra",
+        "_gm_th",
+        "_jump_h",
+        "_jump_rate",
+        "_jump_xy",
+        "_next_jump",
+        "_rng",
+        "drift",
+        "driven",
+        "jumps",
+    )
+
+    def __init__(
+        self,
+        normals: NormalStream,
+        sigma_pos: float,
+        sigma_heading: float,
+        tau: float,
+        rng: np.random.Generator,
+        *,
+        drift_sigma: float,
+        drift_tau: float,
+        jump_rate: float,
+        jump_sigma: float,
+        jump_heading_sigma: float,
+    ) -> None:
+        super().__init__(normals, sigma_pos, sigma_heading, tau)
+        self._rng = rng
+        self._extra = NormalStream(rng)
+        self._drift_sigma = drift_sigma
+        self._drift_tau = drift_tau
+        self._ddt = -1.0
+        self._da = self._db = 0.0
+        self._jump_rate = jump_rate
+        self._jump_xy = jump_sigma
+        self._jump_h = jump_heading_sigma
+        self._gm_th = self.eth  # the fast heading component; eth = it + drift
+        self.drift = drift_sigma * self._extra.next()
+        self.eth = self._gm_th + self.drift
+        self.driven = 0.0  #: s of driving so far (the clock of the jump process)
+        self.jumps = 0  #: re-localisation jumps so far
+        self._next_jump = self._wait()
+
+    def _wait(self) -> float:
+        """Driving time of the next jump (exponential gaps: a Poisson process)."""
+        if self._jump_rate <= 0.0:
+            return math.inf
+        return self.driven + float(self._rng.exponential(1.0 / self._jump_rate))
+
+    def step(self, dt: float) -> None:
+        # The fast part is the base class's process on (ex, ey, _gm_th).
+        self.eth = self._gm_th
+        super().step(dt)
+        self._gm_th = self.eth
+        if dt != self._ddt:
+            self._ddt = dt
+            self._da = math.exp(-dt / self._drift_tau)
+            self._db = math.sqrt(1.0 - self._da * self._da)
+        self.drift = self._da * self.drift + self._db * self._drift_sigma * self._extra.next()
+        self.driven += dt
+        while self.driven >= self._next_jump:
+            x = self._extra
+            self.ex += self._jump_xy * x.next()
+            self.ey += self._jump_xy * x.next()
+            self._gm_th += self._jump_h * x.next()
+            self.jumps += 1
+            self._next_jump = self._wait()
+        self.eth = self._gm_th + self.drift

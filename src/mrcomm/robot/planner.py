@@ -82,6 +82,18 @@ class GridPlanner:
         weights[clear <= self.inflation] = np.inf
         return weights
 
+    def tie_break_weights(self, rng: np.random.Generator, amount: float) -> NDArray[np.float32]:
+        """A run's own copy of the cell costs, each multiplied by ``1 + amount * u`` with
+        ``u`` uniform in [0, 1) (the ``realistic`` profile's tie-break noise): equally
+        long routes then differ in cost, and which one A* takes depends on the run's
+        seed. Costs stay >= 1 (A*'s heuristic stays admissible) and blocked cells stay
+        blocked. Never written into the planner: it is shared by runs in threads."""
+        noise = rng.random(self.shape, dtype=np.float32)
+        weights: NDArray[np.float32] = self._weights * (
+            np.float32(1.0) + np.float32(amount) * noise
+        )
+        return weights
+
     @property
     def blocked(self) -> NDArray[np.bool_]:
         """Planning-grid cells the robot's centre may not occupy (copy)."""
@@ -143,11 +155,16 @@ class GridPlanner:
         return y0 + best // (x1 - x0), x0 + best % (x1 - x0)
 
     def _with_obstacles(
-        self, obstacles: Sequence[Point], radius: float, start: Point
+        self,
+        obstacles: Sequence[Point],
+        radius: float,
+        start: Point,
+        base: NDArray[np.float32],
     ) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
-        """Copies of (weights, clearance) with discs around ``obstacles`` blocked. A disc
-        never covers the start, or the robot could not leave its own cell."""
-        weights = self._weights.copy()
+        """Copies of (``base`` weights, clearance) with discs around ``obstacles``
+        blocked. A disc never covers the start, or the robot could not leave its own
+        cell."""
+        weights = base.copy()
         clear = self._clear.copy()
         hc, wc = self.shape
         res = self.resolution
@@ -175,6 +192,7 @@ class GridPlanner:
         goal: Point,
         obstacles: Sequence[Point] = (),
         obstacle_radius: float | None = None,
+        weights: NDArray[np.float32] | None = None,
     ) -> PlannedPath | None:
         """Shortest safe path from ``start`` to ``goal``, or None when there is none.
 
@@ -182,17 +200,21 @@ class GridPlanner:
         a disc of ``obstacle_radius`` (default: two footprints plus the block margin and
         one planning cell). Start and goal inside the inflated zone are snapped to the
         nearest free cell first (on the static map: a mate on the goal means no path).
+        ``weights``: the run's own cell costs (:meth:`tie_break_weights`) instead of the
+        planner's; passed in, never stored, because the planner is shared.
         """
         s_cell = self._snap(*start, self._clear)
         g_cell = self._snap(*goal, self._clear)
         if s_cell is None or g_cell is None:
             return None
-        weights, clear = self._weights, self._clear
+        clear = self._clear
+        if weights is None:
+            weights = self._weights
         if obstacles:
             if obstacle_radius is None:
                 p = self.params
                 obstacle_radius = 2 * p.radius + p.block_margin + self.resolution
-            weights, clear = self._with_obstacles(obstacles, obstacle_radius, start)
+            weights, clear = self._with_obstacles(obstacles, obstacle_radius, start, weights)
             if not (weights[g_cell] < np.inf and weights[s_cell] < np.inf):
                 return None
         raw = pyastar2d.astar_path(weights, s_cell, g_cell, allow_diagonal=True)

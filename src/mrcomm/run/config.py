@@ -18,10 +18,14 @@ from typing import Any
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from mrcomm.errors import InputError, did_you_mean
-from mrcomm.specs import Kind, VariantSpec, get_spec, variant_names
+from mrcomm.robot.variation import VariationParams
+from mrcomm.specs import Kind, VariantSpec, get_spec, validate_params, variant_names
 
 #: The kinds a run chooses one variant of, in the order of its label.
 RUN_KINDS: tuple[Kind, ...] = ("network", "behaviour", "threshold")
+#: Sections of ``params``: one per variant kind, and ``robot`` (the robots' run-to-run
+#: variation, :class:`~mrcomm.robot.variation.VariationParams`; not a variant).
+PARAM_SECTIONS: tuple[str, ...] = (*RUN_KINDS, "robot")
 
 #: Options of earlier versions that are now a variant's parameter: option ->
 #: (kind, variant, parameter). Still accepted (old journals, schemas, scripts).
@@ -57,16 +61,21 @@ class RunConfig(BaseModel):
 
     @model_validator(mode="after")
     def _combinations(self) -> RunConfig:
-        unknown = set(self.params) - set(RUN_KINDS)
+        unknown = set(self.params) - set(PARAM_SECTIONS)
         if unknown:
             kind = sorted(unknown)[0]
             raise InputError(
-                f"unknown parameter section {kind!r}{did_you_mean(kind, RUN_KINDS)}; "
-                f"sections: {', '.join(RUN_KINDS)}",
+                f"unknown parameter section {kind!r}{did_you_mean(kind, PARAM_SECTIONS)}; "
+                f"sections: {', '.join(PARAM_SECTIONS)}",
                 field=f"params.{kind}",
             )
         # Spec look-ups raise InputError with a "did you mean" hint; so do parameters.
-        normalised = {kind: self._check_params(kind) for kind in RUN_KINDS}
+        normalised: dict[str, dict[str, Any]] = {
+            kind: self._check_params(kind) for kind in RUN_KINDS
+        }
+        # Only non-defaults are kept: a run of the default profile has no robot section,
+        # so its configuration (and its id) is what it was before the section existed.
+        normalised["robot"] = self.robot_variation().model_dump(mode="json", exclude_defaults=True)
         object.__setattr__(self, "params", {k: v for k, v in normalised.items() if v})
         checked: tuple[Kind, ...] = ("threshold", "behaviour")
         for kind in checked:
@@ -111,6 +120,12 @@ class RunConfig(BaseModel):
     def variant_params(self, kind: Kind) -> Any:
         """The chosen variant's validated parameters (its parameter model)."""
         return self.spec(kind).make_params(self.params.get(kind, {}))
+
+    def robot_variation(self) -> VariationParams:
+        """The robots' run-to-run variation (``robot.*``; default profile ``none``)."""
+        model = validate_params(VariationParams, self.params.get("robot", {}), "robot", "robot")
+        assert isinstance(model, VariationParams)
+        return model
 
     def variants(self) -> dict[str, str]:
         """kind -> ``name-vN`` of every chosen variant (recorded with each run)."""

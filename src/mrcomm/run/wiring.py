@@ -21,6 +21,7 @@ from mrcomm.net.signal.trace import RssiTrace
 from mrcomm.net.thresholds import Threshold
 from mrcomm.ports import Base, Bus, LinkSensor
 from mrcomm.robot.base import SimBase
+from mrcomm.robot.variation import VariationParams, robot_variations
 from mrcomm.run.config import RunConfig
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.seeding import stream
@@ -200,9 +201,15 @@ class TracePulse:
                     sensor.update(peer, float(value), now)
 
 
-def make_bases(resources: ScenarioResources, seed: int) -> dict[str, SimBase]:
-    """Every robot's base at its start pose, each with its own seeded noise stream."""
+def make_bases(
+    resources: ScenarioResources, seed: int, variation: VariationParams | None = None
+) -> dict[str, SimBase]:
+    """Every robot's base at its start pose, each with its own seeded noise stream and
+    its share of the run's variation (``config.robot_variation()``; None or profile
+    ``none``: the robots of earlier versions)."""
     scenario = resources.scenario
+    ids = [r.id for r in scenario.robots]
+    varied = robot_variations(variation or VariationParams(), seed, ids, resources.planner)
     return {
         r.id: SimBase(
             r.id,
@@ -211,6 +218,7 @@ def make_bases(resources: ScenarioResources, seed: int) -> dict[str, SimBase]:
             r.pose,
             resources.robot_params,
             stream(seed, "robot", r.id),
+            varied[r.id],
         )
         for r in scenario.robots
     }

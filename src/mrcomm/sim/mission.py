@@ -59,7 +59,9 @@ class Mission:
             channel=self.links.network.channel(self.node_ids),
             relay=make_relay(self.node_ids, len(scenario.robots), self.links.network.relay_hops),
         )
-        self.bodies = RobotBodies(make_bases(self.resources, seed), scenario.assigner)
+        self.bodies = RobotBodies(
+            make_bases(self.resources, seed, config.robot_variation()), scenario.assigner
+        )
         self.bases = self.bodies.bases
         self.timelines = {rid: Timeline(rid) for rid in self.robot_ids}
         ranks = stream(seed, "tie-break").permutation(len(self.robot_ids))
