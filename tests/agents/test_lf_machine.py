@@ -8,10 +8,11 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
+import msgspec
 import pytest
 
 from mrcomm.agents.lf import LeaderFollowerExecutor
-from mrcomm.agents.lf_machine import LF_STATES, LF_TRANSITIONS
+from mrcomm.agents.lf_machine import LF_STATES, LF_TRANSITIONS, LfParams
 from mrcomm.messaging.messages import (
     TOPIC_ROLE,
     TOPIC_TASK_STATUS,
@@ -291,3 +292,49 @@ def test_the_role_round_decides_by_utility_then_rank() -> None:
     assert rnd.has_every_role() and rnd.confirmed_at == {}
     rnd.hear_role("robot_3", L.ROLE_FOLLOWER, "robot_1", now=2.6)
     assert rnd.confirmed_at == {"robot_3": 2.6} and rnd.scores["robot_3"] == 0.0
+
+
+# -- a hold that ends on geometry ----------------------------------------------------------
+
+
+def _hold_then_lose_the_followers_poses(hold_prediction: float) -> tuple[Harness, float]:
+    """robot_1 leads; its follower robot_2 is heard once 5 m behind (warning at 4 m),
+    driving towards it at 0.3 m/s, and then never again. Returns the harness and the
+    time the pose was sent."""
+    h = Harness(
+        LeaderFollowerExecutor,
+        link_sensor=DistanceSensor(4.0),
+        params=LfParams(hold_prediction=hold_prediction),
+    )
+    lead(h)
+    sent = h.now
+    message = pose_of("robot_2", -5.0, 0.0, 0.0, v=0.3, role=L.ROLE_FOLLOWER, leader="robot_1")
+    h.hear(msgspec.structs.replace(message, stamp=sent))
+    assert h.step(times=2) == "leader_holding"
+    return h, sent
+
+
+def test_a_holding_leader_resumes_when_its_follower_should_be_back_inside() -> None:
+    h, sent = _hold_then_lose_the_followers_poses(hold_prediction=10.0)
+    while h.agent.state == "leader_holding" and h.now < sent + 20:
+        h.step()
+    # From 5 m at 0.3 m/s the follower is inside 4 m after 3.33 s; followers are judged
+    # at the pose rate (0.2 s).
+    assert h.agent.state == "leader_navigating"
+    assert 3.3 <= h.now - sent <= 3.8
+
+
+def test_without_prediction_the_hold_waits_for_a_pose() -> None:
+    h, _ = _hold_then_lose_the_followers_poses(hold_prediction=0.0)
+    assert h.step(times=200) == "leader_holding"  # 20 s: still where its last pose put it
+
+
+def test_the_prediction_stops_at_the_follow_distance_and_not_for_a_stopped_follower() -> None:
+    h, sent = _hold_then_lose_the_followers_poses(hold_prediction=100.0)
+    h.agent.set_time(sent + 60.0)  # long enough to have driven far past the leader
+    pose = h.base.pose
+    moving = h.agent.mates["robot_2"]
+    x, y = h.agent._predicted_follower(moving, pose)
+    assert math.hypot(x - pose.x, y - pose.y) == pytest.approx(h.agent.lf.follow_distance)
+    stopped = moving._replace(v=0.0)
+    assert h.agent._predicted_follower(stopped, pose) == (moving.x, moving.y)

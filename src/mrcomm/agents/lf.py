@@ -16,10 +16,14 @@ A hierarchical state machine: ``na`` is NB plus a network trigger; ``leader`` an
   so no exchange waits on another; a timeout decides with what was collected.
 * Leader: drives to its closest task and holds while any of *its* followers' links is
   in warning (leader disconnect time); its followers are the mates whose poses say
-  they follow it (or that named it leader this round and have not spoken since). On
-  completion it reports with AON and dissolves the roles.
-* Follower: drives to the leader's last known position, refreshing the goal as leader
-  poses arrive (more often when far), and waits there (follower waiting time). It
+  they follow it (or that named it leader this round and have not spoken since). With
+  ``hold_prediction`` it judges each follower where it should be by now (its last pose
+  moved towards the leader at its speed for the pose's age), so a hold ends when the
+  follower is back inside, not when a pose saying so gets through. On completion it
+  reports with AON and dissolves the roles.
+* Follower: drives to the leader's last known position (moved on for its age with
+  ``mate_extrapolation``), refreshing the goal as leader poses arrive (more often when
+  far), and waits there (follower waiting time). It
   returns to NA when the leader's completion reaches it.
 * Task statuses go with AON (acknowledged all-or-nothing), to every robot and the
   assigner.
@@ -34,6 +38,7 @@ from typing import Any
 from transitions.extensions import HierarchicalMachine
 
 from mrcomm.agents import agenda
+from mrcomm.agents.collision import MateState
 from mrcomm.agents.executor import TaskExecutor
 from mrcomm.agents.lf_machine import (
     ACTIVITY_OF_FULL_STATE,
@@ -353,9 +358,31 @@ class LeaderFollowerExecutor(TaskExecutor):
                 continue
             if not self._follows_me(mate):
                 continue
-            if self.link_sensor.warning(mate, pose, known.x, known.y, self._now):
+            x, y = self._predicted_follower(known, pose)
+            if self.link_sensor.warning(mate, pose, x, y, self._now):
                 return True
         return False
+
+    def _predicted_follower(self, known: MateState, pose: Pose) -> tuple[float, float]:
+        """Where a follower should be now (``hold_prediction``): a follower drives to its
+        leader, so its last pose is moved straight towards this robot at the speed it
+        had, for the pose's age (at most ``hold_prediction`` s), stopping at the follow
+        distance. The hold then ends on geometry — the follower back inside the warning
+        threshold — and not on the arrival of the one pose that says so, which under
+        loss may take seconds. A follower that had stopped is predicted where it stood.
+        Judged against straight-line travel: a follower that must go round a wall is
+        predicted closer than it is, and the leader may move on early by up to the
+        horizon's travel (0.26 m/s x horizon)."""
+        horizon = self.lf.hold_prediction
+        if horizon <= 0:
+            return known.x, known.y
+        age = max(0.0, self._now - self.team_view.stamps.get(known.robot, self._now))
+        dx, dy = pose.x - known.x, pose.y - known.y
+        gap = math.hypot(dx, dy)
+        travel = min(abs(known.v) * min(age, horizon), max(0.0, gap - self.lf.follow_distance))
+        if travel <= 0.0:
+            return known.x, known.y
+        return known.x + dx * travel / gap, known.y + dy * travel / gap
 
     def _follows_me(self, mate: str) -> bool:
         """Whether this leader waits for ``mate``: its latest pose says it follows this
@@ -405,7 +432,10 @@ class LeaderFollowerExecutor(TaskExecutor):
         return super().navigation_target()
 
     def _leader_position(self) -> tuple[float, float] | None:
-        known = self.mates.get(self.leader or "")
+        """The leader's last known position, moved on for its age along its heading
+        (``mate_extrapolation``; however old: a follower keeps following)."""
+        leader = self.leader or ""
+        known = self.team_view.known(self._now, None, self.params.mate_extrapolation).get(leader)
         return (known.x, known.y) if known is not None else None
 
     def _in_leaders_way(self) -> bool:

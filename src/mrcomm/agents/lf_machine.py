@@ -115,6 +115,14 @@ class LfParams(ExecutorParams):
     lost_timeout: float = parameter(
         60.0, "a follower silent this long no longer holds its leader", "s", gt=0
     )
+    hold_prediction: float = parameter(
+        0.0,
+        "a holding leader judges a follower where it should be now: its last pose moved "
+        "towards the leader at its last speed for the pose's age, at most this long "
+        "(0: where its last pose put it)",
+        "s",
+        ge=0,
+    )
     route_check_step: float = parameter(
         0.5, "spacing of the route points a follower checks against the threshold", "m", gt=0
     )

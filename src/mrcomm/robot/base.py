@@ -190,6 +190,16 @@ class SimBase:
         return self._v
 
     # ----------------------------------------------------- simulator side
+    def carry(self, x: float, y: float) -> None:
+        """Pick the robot up and set it down at rest at (x, y) — a kidnapped robot, as
+        tests of regrouping need. Its localisation follows at once (as after an AMCL
+        re-localisation); its odometer does not count the trip; a goal it was driving
+        to is planned again from there."""
+        self._x, self._y = float(x), float(y)
+        self._v = self._w = 0.0
+        if self._goal is not None and self._status is NavStatus.ACTIVE:
+            self.navigate_to(*self._goal)
+
     @property
     def true_pose(self) -> Pose:
         return Pose(self._x, self._y, self._th)
