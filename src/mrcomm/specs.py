@@ -69,6 +69,9 @@ class VariantSpec:
     topics: tuple[str, ...] = ()
     #: Metrics it adds to a run's results.
     metrics: tuple[str, ...] = ()
+    #: Behaviours: the function (or ``"module:function"``) computing the metrics it adds
+    #: from one robot's timeline (None: none).
+    robot_metrics: Any = None
     #: Behaviours: whether task statuses travel with AON.
     uses_aon: bool = False
     #: Behaviours: whether it acts on the threshold's warnings (False: the threshold
@@ -92,6 +95,10 @@ class VariantSpec:
     def load(self) -> Any:
         """The implementation (imported on first use when given as a string)."""
         return _resolve(self.entry, self.key)
+
+    def robot_metrics_function(self) -> Any:
+        """The function computing its per-robot metrics (None: it adds none)."""
+        return None if self.robot_metrics is None else _resolve(self.robot_metrics, self.key)
 
     def params_model(self) -> type[BaseModel]:
         model = _resolve(self.params, self.key)

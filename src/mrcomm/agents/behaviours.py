@@ -33,6 +33,7 @@ LF_SPEC = VariantSpec(
     summary="LF, leader-follower: robots whose link warns elect a leader by utility; "
     "followers keep within the threshold; statuses go with AON",
     topics=("pose", "task_status", "utility", "role", "aon"),
+    robot_metrics="mrcomm.metrics.compute:lf_metrics",
     metrics=(
         "na_movement_time",
         "leader_movement_time",
@@ -46,6 +47,18 @@ LF_SPEC = VariantSpec(
         "roles_assigned",
         "times_leader",
     ),
+    uses_aon=True,
+)
+LF_WAIT_SPEC = VariantSpec(
+    kind="behaviour",
+    name="lf-wait",
+    entry="mrcomm.agents.lf_wait:LfWaitExecutor",
+    params="mrcomm.agents.lf_wait:LfWaitParams",
+    summary="LF whose followers do their own tasks near the group: a follower asks its "
+    "leader to wait (its poses say 'detouring'), completes the task and rejoins",
+    topics=("pose", "task_status", "utility", "role", "aon"),
+    robot_metrics="mrcomm.metrics.compute:lf_wait_metrics",
+    metrics=(*LF_SPEC.metrics, "detours", "detour_tasks", "leader_detour_wait_time"),
     uses_aon=True,
 )
 

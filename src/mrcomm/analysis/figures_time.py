@@ -83,7 +83,11 @@ def _col(frame: pd.DataFrame, name: str) -> np.ndarray:
 
 def time_components(runs: pd.DataFrame) -> pd.DataFrame:
     """Per run (team totals, s): the stacked-bar components of :data:`TIME_COMPONENTS`."""
-    is_lf = (runs["behaviour"].astype(str).str.lower() == "lf").to_numpy()
+    # Runs with LF's roles (lf, lf-wait, plugins built on LF) have NA movement recorded.
+    if "na_movement_time" in runs:
+        is_lf = runs["na_movement_time"].notna().to_numpy()
+    else:
+        is_lf = np.zeros(len(runs), dtype=bool)
     total = _col(runs, "total_movement_time")
     na, lead, fol = (
         _col(runs, "na_movement_time"),

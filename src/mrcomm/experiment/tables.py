@@ -91,6 +91,9 @@ RUN_METRIC_COLUMNS: tuple[tuple[str, str, str], ...] = (
     ("follower_waiting_time", "DOUBLE", "follower_waiting_time"),
     ("role_assignment_time", "DOUBLE", "role_assignment_time"),
     ("switching_time", "DOUBLE", "switching_time"),
+    # lf-wait: NULL for other behaviours.
+    ("detour_tasks", "INTEGER", "detour_tasks"),
+    ("leader_detour_wait_time", "DOUBLE", "leader_detour_wait_time"),
 )
 
 #: AON totals of ``runs`` (NULL when statuses go without AON): (column, type, key).

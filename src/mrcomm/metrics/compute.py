@@ -111,6 +111,20 @@ def lf_metrics(timeline: Timeline) -> dict[str, Any]:
     }
 
 
+def lf_wait_metrics(timeline: Timeline) -> dict[str, Any]:
+    """lf-wait's metrics of one robot: LF's, and its detours."""
+    return {
+        **lf_metrics(timeline),
+        "detours": timeline.count(L.DETOUR),
+        "detour_tasks": sum(
+            1
+            for e in timeline.events
+            if e.label == L.DETOUR_ENDED and e.data.get("how") == "completed"
+        ),
+        "leader_detour_wait_time": timeline.total(L.LEADER_DETOUR_WAIT),
+    }
+
+
 LF_TOTALS = (
     "na_movement_time",
     "leader_movement_time",
@@ -119,6 +133,9 @@ LF_TOTALS = (
     "follower_waiting_time",
     "role_assignment_time",
     "switching_time",
+    # lf-wait
+    "leader_detour_wait_time",
+    "detour_tasks",
 )
 
 

@@ -36,4 +36,9 @@ ROLE_REGROUPING = "regrouping"
 DISCONNECT_DETECTED = "disconnect_detected"
 ROLE_ASSIGNED = "role_assigned"
 ROLES_DISSOLVED = "roles_dissolved"
+# lf-wait: a follower doing a task of its own near the group, and its leader waiting.
+ROLE_DETOURING = "detouring"  # the role its poses carry meanwhile (a request to wait)
+LEADER_DETOUR_WAIT = "leader_detour_wait"  # activity: leader waiting for such a follower
+DETOUR = "detour"
+DETOUR_ENDED = "detour_ended"
 DIRECT_ROUTE = "direct_route"  # a follower's route would leave the connection area

@@ -16,7 +16,7 @@ from typing import Any
 
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.metrics import labels as L
-from mrcomm.metrics.compute import RobotFacts, lf_metrics, mission_metrics, robot_metrics
+from mrcomm.metrics.compute import RobotFacts, mission_metrics, robot_metrics
 from mrcomm.metrics.timeline import Timeline
 from mrcomm.net.delivery import count_keys, has_radio_counts
 from mrcomm.run.config import RunConfig
@@ -101,7 +101,7 @@ def assemble(facts: RunFacts) -> MissionResult:
         for task in facts.agenda[rid]
         if (task.task_id, rid) not in facts.received
     ]
-    uses_aon = facts.config.spec("behaviour").uses_aon
+    behaviour_metrics = facts.config.spec("behaviour").robot_metrics_function()
     robots: dict[str, dict[str, Any]] = {}
     zone = collision_zone(facts.config)
     for rid in robot_ids:
@@ -116,8 +116,8 @@ def assemble(facts: RunFacts) -> MissionResult:
         metrics = robot_metrics(facts.timelines[rid], robot_facts)
         if facts.encounters is not None and zone is not None:
             metrics.update(judged_against_truth(facts.timelines[rid], facts.encounters, zone[1]))
-        if uses_aon:
-            metrics.update(lf_metrics(facts.timelines[rid]))
+        if behaviour_metrics is not None:
+            metrics.update(behaviour_metrics(facts.timelines[rid]))
         metrics["failed_tasks"] = [t for t, robot in failed_pairs if robot == rid]
         metrics["replans"] = truth.replans
         metrics["recoveries"] = truth.recoveries
