@@ -11,17 +11,20 @@ import pytest
 from mrcomm.messaging.messages import (
     TOPIC_ASSIGNMENT,
     TOPIC_POSE,
+    TOPIC_RELAYED,
     TOPIC_TASK_STATUS,
     Assignment,
     Message,
     PoseMsg,
+    RelayedMsg,
     TaskState,
     TaskStatus,
+    encode,
 )
 from mrcomm.messaging.topics import Lane, lane_of
 from mrcomm.net.delivery import DeliveryPolicy
 from mrcomm.net.inprocess import InProcessNetwork
-from mrcomm.net.network import AdHoc
+from mrcomm.net.network import AdHoc, AdHocParams
 from mrcomm.net.zenoh_bus import LinkRules, PositionBook, ZenohBus
 from mrcomm.net.zenoh_node import Presence
 from mrcomm.run.assemble import sum_counts
@@ -314,3 +317,49 @@ def _publish_pose_until(sender, bus, got) -> bool:  # type: ignore[no-untyped-de
     sender.publish(TOPIC_POSE, pose(sender.owner, 1, 0.0))
     _handle_all(bus, 0.1)
     return bool(got)
+
+
+def test_relayed_copies_are_unwrapped_once_and_bad_ones_refused() -> None:
+    def wrap(inner: object, topic: str = TOPIC_TASK_STATUS, hop: int = 2) -> RelayedMsg:
+        payload = inner if isinstance(inner, bytes) else encode(inner)  # type: ignore[arg-type]
+        return RelayedMsg(sender="robot_1", incarnation=1, seq=1, stamp=0.0, topic=topic,
+                          hop=hop, payload=payload)  # fmt: skip
+
+    relaying = AdHoc(AdHocParams(relay=True))
+    members = frozenset({"robot_1", "robot_2", "robot_3", "assigner"})
+    with nodes(mesh_options(1)) as (node,):
+        bus = ZenohBus(node, LinkRules(network=relaying), PositionBook(), members=members,
+                       robots=("robot_1", "robot_2", "robot_3"))  # fmt: skip
+        relayer = bus.endpoint("robot_1", stream(1, "loss", "robot_1"))
+        receiver = bus.endpoint("robot_2", stream(1, "loss", "robot_2"))
+        got: list[Message] = []
+        receiver.subscribe(TOPIC_TASK_STATUS, got.append)
+        for bad in (
+            wrap(status("intruder", 1)),  # not a team member
+            wrap(pose("robot_3", 1, 0.0)),  # a pose under a status topic
+            wrap(pose("robot_3", 1, 0.0), topic=TOPIC_POSE),  # poses are not relayed
+            wrap(b"\x93garbage"),  # not a message
+            wrap(status("robot_3", 1), hop=1),  # a copy has crossed at least 2 links
+        ):
+            relayer._put(TOPIC_RELAYED, bad)
+        good = wrap(status("robot_3", 7))
+        relayer._put(TOPIC_RELAYED, good)
+        relayer._put(TOPIC_RELAYED, good)  # the same copy again: a duplicate
+        wait_for(lambda: _pump_all(bus) and node.refused.get("bad_relay", 0) >= 5 and got,
+                 10, "the copies")  # fmt: skip
+        _pump_all(bus)
+        assert node.refused["bad_relay"] == 5
+        assert got == [status("robot_3", 7)]
+        stats = bus.relay_stats()["robot_2"]
+        assert stats["received_copies"] == 1 and stats["duplicates"] == 1
+        # robot_2 received it first after 2 links and passes it on (hop limit 4).
+        assert stats["passed_on"] == 1 and stats["hops"] == {"2": 1}
+
+
+def _pump_all(bus: ZenohBus) -> bool:
+    item = bus.node.poll(0.05)
+    while item is not None:
+        if item.channel == "bus":
+            bus.handle(item)
+        item = bus.node.poll(None)
+    return True

@@ -1,11 +1,8 @@
 """Relaying on whole missions: off by default (results unchanged), on with
 ``network.relay``: copies cross several hops in a 10-robot ad-hoc team, LF's AON works
-through it, and live mode refuses it in one line."""
+through it, and a status crosses a line of three robots only with it."""
 
 from __future__ import annotations
-
-import subprocess
-import sys
 
 import pytest
 
@@ -14,6 +11,7 @@ from mrcomm.sim.mission import run_mission
 from tests.conftest import ROOT, S1_PATH
 
 S2 = ROOT / "data" / "scenarios" / "s2" / "s2.yaml"
+LINE = ROOT / "tests" / "data" / "line" / "line.yaml"
 
 
 @pytest.mark.slow
@@ -48,15 +46,17 @@ def test_lf_with_relaying_succeeds_on_s1(spl: int, s1_resources) -> None:  # typ
         assert run_mission(config, s1_resources).summary()["mission"]["successful"], seed
 
 
-def test_live_mode_refuses_relaying_in_one_line(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    done = subprocess.run(
-        [sys.executable, "-c", "from mrcomm.cli.main import app; app()", "live",
-         str(S1_PATH), "--network", "ah", "--set", "network.relay=true",
-         "--record-dir", str(tmp_path / "rec")],
-        capture_output=True, text=True, timeout=120,
-    )  # fmt: skip
-    assert done.returncode == 2
-    assert done.stderr.strip() == (
-        "mrcomm: error: network.relay: relaying is simulated only (not yet in live mode)"
-    )
-    assert not (tmp_path / "rec").exists()
+def test_a_status_crosses_a_line_of_three_robots_only_with_relaying() -> None:
+    # tests/data/line: robot_1's task is 13 m from the assigner on robot_3 (range 8 m);
+    # robot_2, in the middle, hears it and passes it on.
+    def mission(relay: bool) -> dict[str, object]:
+        config = make_config(
+            scenario=str(LINE), network="ah", threshold="none", behaviour="nb", seed=1,
+            params={"network": {"relay": relay}},
+        )  # fmt: skip
+        return run_mission(config).summary()
+
+    assert mission(False)["mission"]["failed_tasks"] == ["1"]
+    relayed = mission(True)
+    assert relayed["mission"]["successful"]
+    assert relayed["relay"]["nodes"]["robot_3"]["hops"].get("2", 0) >= 1

@@ -16,7 +16,9 @@ _FORMATS = {".svg": "svg", ".png": "png", ".mmd": "mermaid", ".md": "mermaid"}
 
 
 def fsm(
-    behaviour: Annotated[str, typer.Option(help="A registered behaviour (mrcomm variants behaviour).")] = "lf",
+    behaviour: Annotated[
+        str, typer.Option(help="A registered behaviour (mrcomm variants behaviour).")
+    ] = "lf",
     out: Annotated[Path, typer.Option(help="Output file: .svg/.png (graphviz) or .mmd.")] = Path(
         "fsm.svg"
     ),

@@ -158,6 +158,7 @@ class AgentProcess:
             LinkRules(network=network, loss_percent=run.spl, radio=radio),
             positions,
             members=frozenset((*self.robot_ids, ASSIGNER_ID)),
+            robots=self.robot_ids,
         )
         self.journal = Journal(journal_path(settings.record_dir, agent, incarnation))
         executor_class = behaviour_class(run.behaviour)

@@ -31,7 +31,14 @@ from mrcomm.errors import InputError
 from mrcomm.live.protocol import WORLD_ID
 from mrcomm.messaging.aon_state import AON_COUNTERS
 from mrcomm.metrics.timeline import Event, Interval, Timeline
-from mrcomm.run.assemble import AonAgentFacts, RobotTruth, RunFacts, assemble, sum_counts
+from mrcomm.run.assemble import (
+    AonAgentFacts,
+    RobotTruth,
+    RunFacts,
+    add_relay,
+    assemble,
+    sum_counts,
+)
 from mrcomm.run.config import make_config
 from mrcomm.run.proximity import Encounter
 from mrcomm.run.result import MissionResult
@@ -160,12 +167,26 @@ def collect(record_dir: Path) -> tuple[MissionResult, dict[str, Any]]:
                 for a, b, state, t0, t1 in truth.get("link_states", [])
             ],
             encounters=_encounters(truth),
+            relay=_relay_facts(journals),
             config_extra={"mode": "live", "speed": start.get("speed")},
         )
     )
     report = _live_report(journals, world, by_process)
     report["record_fingerprint"] = record_fingerprint(record_dir)
     return result, report
+
+
+def _relay_facts(journals: list[JournalData]) -> dict[str, dict[str, Any]]:
+    """What relaying did per agent, summed over its incarnations (each journal's last
+    record); empty when relaying was off."""
+    out: dict[str, dict[str, Any]] = {}
+    for j in journals:
+        line = j.last("relay")
+        if line is None:
+            continue
+        for agent, stats in line["agents"].items():
+            add_relay(out.setdefault(agent, {}), stats)
+    return out
 
 
 def _encounters(truth: dict[str, Any]) -> list[Encounter] | None:

@@ -99,6 +99,9 @@ class AgentRecorder:
     def counts(self) -> None:
         """Cumulative message counts and AON statistics (the last snapshot counts)."""
         self.journal.write("counts", agents=self.bus.counts_by_agent())
+        relay = self.bus.relay_stats()
+        if relay:
+            self.journal.write("relay", agents=relay)
         # What peers sent that the bus edge refused (cumulative, by cause).
         self.journal.write("refused", causes=dict(self.bus.node.refused))
         for agent, aon in self.aon_endpoints().items():

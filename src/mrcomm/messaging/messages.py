@@ -24,6 +24,7 @@ TOPIC_ROLE = "role"
 TOPIC_RSSI = "rssi"
 TOPIC_AON = "aon"
 TOPIC_HEARTBEAT = "heartbeat"
+TOPIC_RELAYED = "relayed"
 # How the network treats each topic: mrcomm.messaging.topics.
 
 
@@ -123,7 +124,27 @@ class RssiMsg(Message, frozen=True, tag="rssi"):
     rssi: float
 
 
-AnyMessage = Assignment | PoseMsg | TaskStatus | UtilityMsg | RoleMsg | RssiMsg | AonMsg | Heartbeat
+class RelayedMsg(Message, frozen=True, tag="relayed"):
+    """A copy of a team mate's message passed on by the robot that sends this (live
+    mode's multi-hop relaying; ``mrcomm.net.relay``): the message's topic, the links it
+    will have crossed on arrival, and the message itself, encoded."""
+
+    topic: str
+    hop: int
+    payload: bytes
+
+
+AnyMessage = (
+    Assignment
+    | PoseMsg
+    | TaskStatus
+    | UtilityMsg
+    | RoleMsg
+    | RssiMsg
+    | AonMsg
+    | Heartbeat
+    | RelayedMsg
+)
 
 _encoder = msgspec.msgpack.Encoder()
 _decoder = msgspec.msgpack.Decoder(AnyMessage)

@@ -15,6 +15,7 @@ from mrcomm.messaging.messages import (
     TOPIC_ASSIGNMENT,
     TOPIC_HEARTBEAT,
     TOPIC_POSE,
+    TOPIC_RELAYED,
     TOPIC_ROLE,
     TOPIC_RSSI,
     TOPIC_TASK_STATUS,
@@ -24,6 +25,7 @@ from mrcomm.messaging.messages import (
     Heartbeat,
     Message,
     PoseMsg,
+    RelayedMsg,
     RoleMsg,
     RssiMsg,
     TaskStatus,
@@ -61,6 +63,9 @@ TOPICS: dict[str, Topic] = {
         Topic(TOPIC_TASK_STATUS, TaskStatus, lossy=True, exempt=False, lane=Lane.STATUS),
         # AON carries task statuses, so it is perturbed like them.
         Topic(TOPIC_AON, AonMsg, lossy=True, exempt=False, lane=Lane.STATUS),
+        # Live mode's relayed copies of statuses and AON messages (wrapped, so that
+        # the relaying robot sends them under its own key), perturbed like them.
+        Topic(TOPIC_RELAYED, RelayedMsg, lossy=True, exempt=False, lane=Lane.STATUS),
         Topic(TOPIC_UTILITY, UtilityMsg, lossy=False, exempt=False, lane=Lane.CONTROL),
         Topic(TOPIC_ROLE, RoleMsg, lossy=False, exempt=False, lane=Lane.CONTROL),
         # Presence of agents that publish no pose (the task assigner), like a Zenoh

@@ -15,6 +15,16 @@ bus does (``net.inprocess``), on the agent thread, and counts every decision:
 Each :class:`ZenohEndpoint` is one agent's endpoint (the Bus port); a process may host
 several (a robot and the task assigner it hosts).
 
+**Relaying** (the network model's ``relay`` option) follows the simulation's rules
+(:mod:`mrcomm.net.relay`, the same :class:`~mrcomm.net.relay.Relay` bookkeeping): a
+robot's endpoint that receives a task status or AON message first passes on a copy at
+once, wrapped in a :class:`~mrcomm.messaging.messages.RelayedMsg` under its own key (the
+access control lets a member publish under its own keys only), with the links the copy
+will have crossed; receivers judge the copy on the relaying robot's link, unwrap it, drop
+it if they had the message (a duplicate), and hand it to the agent as the original
+sender's. The relaying robot vouches for the copy: the origin inside it is not bound to
+a certificate (with relaying on, a team member can pass on messages in another's name).
+
 **The edge validates.** Nothing a peer sends is raised into an agent: the session
 refuses oversized and undecodable samples; :meth:`ZenohBus.handle` drops a message of
 another type than its topic carries (:data:`~mrcomm.messaging.topics.TOPICS`), whose
@@ -32,11 +42,14 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+import msgspec
 import numpy as np
 
 from mrcomm.messaging.messages import (
+    TOPIC_RELAYED,
     Message,
     PoseMsg,
+    RelayedMsg,
     decode,
     encode,
 )
@@ -51,6 +64,7 @@ from mrcomm.net.delivery import (
 from mrcomm.net.inprocess import DeliveryObserver
 from mrcomm.net.network import NetworkModel, Wlan
 from mrcomm.net.radio.links import RadioLinks
+from mrcomm.net.relay import RELAYED_TOPICS, Relay
 from mrcomm.net.zenoh_node import Airtime, Incoming, ZenohNode
 from mrcomm.ports import Handler
 
@@ -127,6 +141,10 @@ class ZenohEndpoint:
         node = bus.node
         for topic in AGENT_TOPICS:
             node.prepare(node.key(owner, topic), lane_of(topic))
+        #: This agent's place in the bus's relay (None: relaying off).
+        self._relay_index = bus.relay_index(owner)
+        if self._relay_index is not None:
+            bus._want(TOPIC_RELAYED)
 
     @property
     def owner(self) -> str:
@@ -134,6 +152,13 @@ class ZenohEndpoint:
 
     def publish(self, topic: str, message: Message) -> None:
         self._count(topic).sent += 1
+        relay = self._bus.relay
+        if relay is not None and self._relay_index is not None and topic in RELAYED_TOPICS:
+            relay.published(self._relay_index, topic, message)
+        self._put(topic, message)
+
+    def _put(self, topic: str, message: Message) -> None:
+        """Send one message under this agent's key."""
         bus = self._bus
         node = bus.node
         data = encode(message)
@@ -157,7 +182,11 @@ class ZenohEndpoint:
     def _receive(
         self, topic: str, sender: str, message: Message, on_air: OnAir | None = None
     ) -> None:
-        if sender == self._owner or topic not in self._handlers:
+        if sender == self._owner:
+            return
+        if topic not in self._handlers and not (
+            topic == TOPIC_RELAYED and self._relay_index is not None
+        ):
             return
         bus = self._bus
         if on_air is not None:
@@ -176,11 +205,65 @@ class ZenohEndpoint:
             outcome, delay = bus._decide(self, topic, sender), 0.0
         else:
             outcome, delay = bus._decide_radio(self, topic, sender, on_air)
-        self._count(topic).count(outcome, delay)
+        if topic != TOPIC_RELAYED:  # relayed copies are counted by the relay
+            self._count(topic).count(outcome, delay)
         observer = bus.observer
         if observer is not None:
             observer(bus.now, topic, sender, self._owner, message, outcome)
-        if outcome == RECEIVED:
+        if outcome != RECEIVED:
+            return
+        if topic == TOPIC_RELAYED:
+            assert isinstance(message, RelayedMsg)
+            self._unwrap(message)
+            return
+        if self._relay_index is not None and topic in RELAYED_TOPICS:
+            self._relayed(topic, message, hop=1, copy=False)
+            return
+        self._hand(topic, message)
+
+    def _unwrap(self, wrapper: RelayedMsg) -> None:
+        """A relayed copy reached this agent: the message inside, if it is one a robot
+        may relay, from a team member, and well formed (else refused as a bad relay)."""
+        spec = TOPICS.get(wrapper.topic)
+        try:
+            inner: Message | None = decode(wrapper.payload)
+        except msgspec.DecodeError:  # whatever a peer put in the payload
+            inner = None
+        bus = self._bus
+        if (
+            wrapper.topic not in RELAYED_TOPICS
+            or spec is None
+            or type(inner) is not spec.message
+            or not 2 <= wrapper.hop <= 64
+            or (bus.members is not None and inner.sender not in bus.members)
+        ):
+            bus.node.refuse("bad_relay")
+            return
+        assert inner is not None
+        self._relayed(wrapper.topic, inner, hop=wrapper.hop, copy=True)
+
+    def _relayed(self, topic: str, message: Message, hop: int, copy: bool) -> None:
+        """A relayed-topic message that crossed ``hop`` links: handed to the agent unless
+        it is a copy of one it had; passed on when the relay says so."""
+        relay = self._bus.relay
+        index = self._relay_index
+        assert relay is not None and index is not None
+        if not relay.receive(index, topic, message, hop, copy):
+            return  # a duplicate copy
+        if relay.passes_on(index, hop):
+            # The header names the relaying robot (the edge binds it to the key); the
+            # message's own header travels inside.
+            wrapper = RelayedMsg(
+                sender=self._owner,
+                incarnation=message.incarnation,
+                seq=message.seq,
+                stamp=self._bus.now,
+                topic=topic,
+                hop=hop + 1,
+                payload=encode(message),
+            )
+            self._put(TOPIC_RELAYED, wrapper)
+        if topic in self._handlers:
             self._hand(topic, message)
 
     def _hand(self, topic: str, message: Message) -> None:
@@ -224,12 +307,22 @@ class ZenohBus:
         rules: LinkRules,
         positions: PositionBook,
         members: frozenset[str] | None = None,
+        robots: tuple[str, ...] = (),
     ) -> None:
-        """``members``: the agents of the team (None: anyone)."""
+        """``members``: the agents of the team (None: anyone); ``robots``: the ones
+        among them that relay when the network model's relaying is on."""
         self.node = node
         self.rules = rules
         self.positions = positions
         self.members = members
+        hops = rules.network.relay_hops
+        #: The relay's bookkeeping over the team (robots first), when relaying is on.
+        self.relay: Relay | None = None
+        self._relay_ids: dict[str, int] = {}
+        if hops and members is not None:
+            ids = (*robots, *sorted(members - set(robots)))
+            self.relay = Relay(ids, range(len(robots)), hops)
+            self._relay_ids = {agent: i for i, agent in enumerate(ids)}
         self.endpoints: dict[str, ZenohEndpoint] = {}
         self._topics: set[str] = set()
         self.observer: DeliveryObserver | None = None
@@ -243,6 +336,17 @@ class ZenohBus:
         #: message, on_air): judged by :meth:`release` once the clock reaches them.
         self._held: list[tuple[float, int, ZenohEndpoint, str, str, Message, OnAir]] = []
         self._held_order = 0
+
+    def relay_index(self, agent: str) -> int | None:
+        """``agent``'s index in the relay (None: relaying off, or not a member)."""
+        return self._relay_ids.get(agent) if self.relay is not None else None
+
+    def relay_stats(self) -> dict[str, dict[str, Any]]:
+        """What relaying did at this process's agents (empty when it is off)."""
+        if self.relay is None:
+            return {}
+        stats = self.relay.stats()
+        return {agent: stats[agent] for agent in self.endpoints}
 
     def endpoint(self, owner: str, rng: np.random.Generator) -> ZenohEndpoint:
         if owner in self.endpoints:

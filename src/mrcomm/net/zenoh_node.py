@@ -48,6 +48,7 @@ REFUSALS = (
     "forged_sender",  # its sender field names another agent than its key
     "not_member",  # from an agent that is not in the team
     "implausible_tick",  # a clock tick the world cannot have sent (live/tick_guard.py)
+    "bad_relay",  # a relayed copy whose content no robot may relay (net/zenoh_bus.py)
 )
 _STAMP = struct.Struct("<q")  # wall-clock send time (ns) carried as a Zenoh attachment
 #: With a radio the attachment also carries the sender's mission time at publication

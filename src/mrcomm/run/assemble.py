@@ -187,15 +187,20 @@ def relay_summary(per_node: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
     duplicates dropped, and the hop counts of the messages received first."""
     if not per_node:
         return {}
-    total: dict[str, Any] = {"passed_on": 0, "received_copies": 0, "duplicates": 0}
-    hops: dict[str, int] = {}
+    total: dict[str, Any] = {}
     for stats in per_node.values():
-        for key in ("passed_on", "received_copies", "duplicates"):
-            total[key] += int(stats[key])
-        for hop, n in stats["hops"].items():
-            hops[hop] = hops.get(hop, 0) + int(n)
-    total["hops"] = dict(sorted(hops.items(), key=lambda item: int(item[0])))
+        add_relay(total, stats)
+    total["hops"] = dict(sorted(total["hops"].items(), key=lambda item: int(item[0])))
     return {"total": total, "nodes": dict(per_node)}
+
+
+def add_relay(into: dict[str, Any], stats: Mapping[str, Any]) -> None:
+    """Add one node's relaying counts (or one incarnation's) to ``into``."""
+    for key in ("passed_on", "received_copies", "duplicates"):
+        into[key] = into.get(key, 0) + int(stats[key])
+    hops = into.setdefault("hops", {})
+    for hop, n in stats["hops"].items():
+        hops[hop] = hops.get(hop, 0) + int(n)
 
 
 def sum_counts(

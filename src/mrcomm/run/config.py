@@ -148,11 +148,6 @@ class RunConfig(BaseModel):
                     f"{kind} '{spec.name}' runs in {where} mode only, not in {mode} mode",
                     field=f"--{kind}",
                 )
-        if mode != "sim" and getattr(self.variant_params("network"), "relay", False):
-            # The Zenoh bus does not relay yet: refused rather than silently ignored.
-            raise InputError(
-                "relaying is simulated only (not yet in live mode)", field="network.relay"
-            )
 
     def ignored_settings(self) -> list[str]:
         """Settings accepted that change nothing the team does, or that the network model
