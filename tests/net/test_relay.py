@@ -98,3 +98,60 @@ def test_poses_are_not_relayed_and_relaying_is_off_by_default() -> None:
     assert make_relay(("a", "b"), 2, 0) is None
     with pytest.raises(ValueError):
         AdHocParams(relay=True, relay_hops=1)
+
+
+# -- store and forward ----------------------------------------------------------------
+
+
+def alone(n: int, hops: int, store: bool) -> tuple[InProcessNetwork, dict[str, list[TaskStatus]]]:
+    """``n`` robots nobody can hear (every link down)."""
+    ids = tuple(f"r{i}" for i in range(n))
+    net = InProcessNetwork(
+        ids,
+        policy=DeliveryPolicy(0.0),
+        loss_rngs={i: stream(0, "loss", i) for i in ids},
+        relay=make_relay(ids, n, hops, store),
+    )
+    net.set_connected([[a == b for b in range(n)] for a in range(n)])
+    got: dict[str, list[TaskStatus]] = {i: [] for i in ids}
+    for i in ids:
+        net.endpoint(i).subscribe(TOPIC_TASK_STATUS, got[i].append)
+    return net, got
+
+
+def link(net: InProcessNetwork, n: int, *pairs: tuple[int, int]) -> None:
+    up = {frozenset(p) for p in pairs}
+    net.set_connected([[a == b or frozenset((a, b)) in up for b in range(n)] for a in range(n)])
+
+
+@pytest.mark.parametrize("store", [False, True])
+def test_a_status_published_out_of_range_travels_only_when_stored(store: bool) -> None:
+    net, got = alone(3, hops=4, store=store)
+    message = status("r0")
+    net.endpoint("r0").publish(TOPIC_TASK_STATUS, message)
+    net.deliver(0.1)  # nobody hears it
+    assert got == {"r0": [], "r1": [], "r2": []}
+    link(net, 3, (0, 1))  # r1 comes into r0's range
+    net.deliver(0.2)
+    link(net, 3, (1, 2))  # r1 leaves r0 and meets r2
+    net.deliver(0.3)
+    net.deliver(0.4)
+    if not store:  # relaying alone passes on only what it hears as it is sent
+        assert got == {"r0": [], "r1": [], "r2": []}
+        return
+    assert got == {"r0": [], "r1": [message], "r2": [message]}  # once each
+    stats = net.relay.stats()  # type: ignore[union-attr]
+    assert stats["r1"]["hops"] == {"1": 1} and stats["r2"]["hops"] == {"2": 1}
+
+
+def test_stored_copies_respect_the_hop_limit_and_aon_is_not_stored() -> None:
+    net, got = alone(4, hops=2, store=True)
+    net.endpoint("r0").publish(TOPIC_TASK_STATUS, status("r0"))
+    net.deliver(0.1)
+    for t, pair in enumerate([(0, 1), (1, 2), (2, 3)]):
+        link(net, 4, pair)
+        net.deliver(0.2 + t / 10)
+    assert [len(got[i]) for i in ("r1", "r2", "r3")] == [1, 1, 0]  # r3 is 3 links away
+    store = net.relay.store  # type: ignore[union-attr]
+    assert store is not None
+    assert all(topic == TOPIC_TASK_STATUS for kept in store for topic, _, _ in kept.values())

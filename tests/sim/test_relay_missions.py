@@ -4,6 +4,9 @@ through it, and a status crosses a line of three robots only with it."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import pytest
 
 from mrcomm.run.config import make_config
@@ -60,3 +63,35 @@ def test_a_status_crosses_a_line_of_three_robots_only_with_relaying() -> None:
     relayed = mission(True)
     assert relayed["mission"]["successful"]
     assert relayed["relay"]["nodes"]["robot_3"]["hops"].get("2", 0) >= 1
+
+
+@pytest.mark.slow
+def test_store_and_forward_delivers_the_statuses_sent_out_of_range(s1_resources) -> None:  # type: ignore[no-untyped-def]
+    # S1 · AH · NB at SPL 0: tasks 1 and 6 are completed where no mate can hear them;
+    # relaying alone cannot help (seeds 1-10: 20 failed tasks with and without it), a
+    # stored status travels with the robots to the assigner (0 failed).
+    def failed(seed: int, **network: bool) -> list[str]:
+        config = make_config(
+            None, scenario=S1_PATH, network="ah", threshold="slt", behaviour="nb",
+            spl=0.0, seed=seed, params={"network": network},
+        )  # fmt: skip
+        return run_mission(config, s1_resources).mission["failed_tasks"]
+
+    for seed in (1, 2, 3):
+        assert failed(seed, relay=True) == ["1", "6"]
+        assert failed(seed, relay=True, relay_store=True) == []
+
+
+def test_live_mode_refuses_store_and_forward_in_one_line(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    done = subprocess.run(
+        [sys.executable, "-c", "from mrcomm.cli.main import app; app()", "live",
+         str(S1_PATH), "--network", "ah", "--set", "network.relay=true",
+         "--set", "network.relay_store=true", "--record-dir", str(tmp_path / "rec")],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert done.returncode == 2
+    assert done.stderr.strip() == (
+        "mrcomm: error: network.relay_store: store and forward is simulated only "
+        "(live mode relays without it)"
+    )
+    assert not (tmp_path / "rec").exists()

@@ -37,8 +37,9 @@ from mrcomm.ports import Handler
 
 #: A message on its way: sender index, topic, message, due time, radio delay (None:
 #: lost to the sender's queue), bits on the air, links it crossed before this send (0:
-#: an original publication; relayed copies more).
-_Queued = tuple[int, str, Message, float, float | None, int, int]
+#: an original publication), and whether it is a relayed copy (a robot's own status sent
+#: again from its store is a copy that crossed no link before).
+_Queued = tuple[int, str, Message, float, float | None, int, int, bool]
 
 #: Observer of every delivery decision: (now, topic, sender, receiver, message, outcome)
 #: with outcome one of :data:`~mrcomm.net.delivery.OUTCOMES`. Used by recordings.
@@ -101,7 +102,13 @@ class InProcessNetwork:
         return InProcessEndpoint(self, agent_id, self.ids.index(agent_id))
 
     def set_connected(self, connected: list[list[bool]]) -> None:
-        """Link matrix for this step: ``connected[s][r]`` (sender s can reach receiver r)."""
+        """Link matrix for this step: ``connected[s][r]`` (sender s can reach receiver r).
+        With store and forward, a robot that gains a neighbour sends its stored statuses
+        again (delivered with this step's messages)."""
+        relay = self.relay
+        if relay is not None and relay.store is not None:
+            for relayer, topic, message, crossed in relay.on_links(self._connected, connected):
+                self._enqueue(relayer, topic, message, crossed, copy=True)
         self._connected = connected
 
     def subscribers(self, topic: str) -> list[str]:
@@ -129,7 +136,7 @@ class InProcessNetwork:
         observer = self.observer
         relay = self.relay
         copies: list[tuple[int, str, Message, int]] = []
-        for sender, topic, message, _, delay, bits, crossed in outbox:
+        for sender, topic, message, _, delay, bits, crossed, copy in outbox:
             receivers = self._subs.get(topic)
             if not receivers:
                 continue
@@ -153,7 +160,7 @@ class InProcessNetwork:
                         else 0.0
                     )
                     outcome = decide(topic, links[receiver], streams[receiver], per)
-                if not crossed:  # relayed copies are counted by the relay
+                if not copy:  # relayed copies are counted by the relay
                     entry = counts[receiver]
                     if entry is None:
                         entry = counts[receiver] = self._count(receiver, topic)
@@ -164,33 +171,33 @@ class InProcessNetwork:
                     if relayed:
                         assert relay is not None
                         hop = crossed + 1
-                        if not relay.receive(receiver, topic, message, hop, crossed > 0):
+                        if not relay.receive(receiver, topic, message, hop, copy):
                             continue  # a duplicate copy
                         if relay.passes_on(receiver, hop):
                             copies.append((receiver, topic, message, hop))
                     for handler in handlers:
                         handler(message)
         for relayer, topic, message, crossed in copies:
-            self._enqueue(relayer, topic, message, crossed)
+            self._enqueue(relayer, topic, message, crossed, copy=True)
 
     # -- endpoint plumbing ---------------------------------------------------------
     def _publish(self, sender: int, topic: str, message: Message) -> None:
         self._count(sender, topic).sent += 1
         if self.relay is not None and self.relay.relays(topic):
             self.relay.published(sender, topic, message)
-        self._enqueue(sender, topic, message, 0)
+        self._enqueue(sender, topic, message, 0, copy=False)
         if self.publish_observer is not None:
             self.publish_observer(message.stamp, topic, self.ids[sender], message)
 
-    def _enqueue(self, sender: int, topic: str, message: Message, crossed: int) -> None:
+    def _enqueue(self, sender: int, topic: str, message: Message, crossed: int, copy: bool) -> None:
         """Put a message (or a relayed copy) on its way from ``sender``."""
         if self.channel is None:
-            self._outbox.append((sender, topic, message, 0.0, 0.0, 0, crossed))
+            self._outbox.append((sender, topic, message, 0.0, 0.0, 0, crossed, copy))
         else:
             bits = self.channel.bits(message)
             delay = self.channel.transmit(sender, self._now, bits)
             due = self._now + (delay or 0.0)
-            self._outbox.append((sender, topic, message, due, delay, bits, crossed))
+            self._outbox.append((sender, topic, message, due, delay, bits, crossed, copy))
 
     def _subscribe(self, receiver: int, topic: str, handler: Handler) -> None:
         self._subs.setdefault(topic, {}).setdefault(receiver, []).append(handler)

@@ -45,6 +45,8 @@ class NetworkModel:
     reach_m: float = math.inf
     #: The hop limit of relaying (:mod:`mrcomm.net.relay`; 0: robots do not relay).
     relay_hops: int = 0
+    #: Store and forward task statuses too (:mod:`mrcomm.net.relay`).
+    relay_store: bool = False
     #: Whether range is decided from received power, which needs the walls between
     #: nodes (:class:`~mrcomm.net.radio.model.RadioNetwork`); otherwise from distance.
     needs_walls: ClassVar[bool] = False
@@ -129,6 +131,7 @@ class AdHoc(NetworkModel):
             params = AdHocParams.model_validate({})
         self.reach_m = params.range_m
         self.relay_hops = params.hop_limit()
+        self.relay_store = params.relay and params.relay_store
 
     def connected(self, distance: NDArray[np.float64]) -> NDArray[np.bool_]:
         return ~(distance > self.reach_m)  # NaN (virtual) stays connected

@@ -18,6 +18,14 @@ agents, which see only the messages that reach them):
 * a copy is sent from the relaying robot: the network decides its delivery on that
   robot's links and its receivers' losses, like any message it sends.
 
+**Store and forward** (``relay_store``, on top of relaying): a robot also keeps every
+task status it has had — its own and those it received first — and sends them all again
+(as relayed copies, each within the hop limit) whenever a robot comes into its range.
+Relaying alone is immediate: a status published where no mate can hear it is never
+passed on; stored, it travels with the robots until it meets the assigner (epidemic
+routing, as delay-tolerant networks do). AON messages are not stored: AON re-sends them
+by itself.
+
 What relaying did is counted per node (:meth:`Relay.stats`): copies it passed on,
 copies it received first, duplicates it dropped, and the hop counts of the messages it
 received first.
@@ -53,6 +61,12 @@ class RelayParams(BaseModel):
         json_schema_extra={"unit": "links"},
     )
 
+    relay_store: bool = Field(
+        False,
+        description="with relay: robots keep the task statuses they have had and send "
+        "them again whenever a robot comes into range (store and forward)",
+    )
+
     def hop_limit(self) -> int:
         """The hop limit when relaying is on, else 0."""
         return self.relay_hops if self.relay else 0
@@ -64,12 +78,20 @@ Key = tuple[str, str, int, int]
 class Relay:
     """Which node has had which relayed message, and what relaying did."""
 
-    def __init__(self, ids: Sequence[str], relayers: Sequence[int], hops: int) -> None:
+    def __init__(
+        self, ids: Sequence[str], relayers: Sequence[int], hops: int, store: bool = False
+    ) -> None:
         """``ids``: the network's nodes; ``relayers``: the indices of those that relay
-        (the robots); ``hops``: the hop limit (at least 2)."""
+        (the robots); ``hops``: the hop limit (at least 2); ``store``: store and
+        forward task statuses."""
         self.ids = tuple(ids)
         self.relayers = frozenset(relayers)
         self.hops = hops
+        #: Per node, the statuses it keeps to send again: key -> (topic, message, links
+        #: crossed when it got it; 0: its own). None: no store and forward.
+        self.store: list[dict[Key, tuple[str, Message, int]]] | None = (
+            [{} for _ in self.ids] if store else None
+        )
         self._had: list[set[Key]] = [set() for _ in self.ids]
         self.passed_on = [0] * len(self.ids)
         self.received_copies = [0] * len(self.ids)
@@ -86,7 +108,34 @@ class Relay:
 
     def published(self, node: int, topic: str, message: Message) -> None:
         """``node`` published ``message``: it has it (no copy of it is handed back)."""
-        self._had[node].add(self.key(topic, message))
+        key = self.key(topic, message)
+        self._had[node].add(key)
+        self._keep(node, key, topic, message, 0)
+
+    def _keep(self, node: int, key: Key, topic: str, message: Message, hop: int) -> None:
+        if self.store is not None and topic == TOPIC_TASK_STATUS and node in self.relayers:
+            self.store[node][key] = (topic, message, hop)
+
+    def on_links(
+        self, before: Sequence[Sequence[bool]], now: Sequence[Sequence[bool]]
+    ) -> list[tuple[int, str, Message, int]]:
+        """Store and forward: the copies robots send because a node came into their
+        range between ``before`` and ``now`` — (relayer, topic, message, links crossed
+        before this send), each stored status whose copy stays within the hop limit."""
+        assert self.store is not None
+        out: list[tuple[int, str, Message, int]] = []
+        for node in sorted(self.relayers):
+            kept = self.store[node]
+            if not kept:
+                continue
+            row, old = now[node], before[node]
+            if not any(row[j] and not old[j] for j in range(len(row)) if j != node):
+                continue
+            for topic, message, hop in kept.values():
+                if hop + 1 <= self.hops:
+                    self.passed_on[node] += 1
+                    out.append((node, topic, message, hop))
+        return out
 
     def receive(self, node: int, topic: str, message: Message, hop: int, copy: bool) -> bool:
         """``message`` reached ``node`` after crossing ``hop`` links (``copy``: relayed).
@@ -100,6 +149,7 @@ class Relay:
                 return False
             return True
         had.add(key)
+        self._keep(node, key, topic, message, hop)
         self.hop_counts[node][hop] += 1
         if copy:
             self.received_copies[node] += 1
@@ -127,7 +177,7 @@ class Relay:
         }
 
 
-def make_relay(nodes: Sequence[str], robots: int, hops: int) -> Relay | None:
+def make_relay(nodes: Sequence[str], robots: int, hops: int, store: bool = False) -> Relay | None:
     """The relay of a network whose first ``robots`` nodes are the robots (the ones
     that relay), or None when the hop limit is 0 (relaying off)."""
-    return Relay(nodes, range(robots), hops) if hops else None
+    return Relay(nodes, range(robots), hops, store) if hops else None

@@ -149,6 +149,14 @@ class RunConfig(BaseModel):
                     field=f"--{kind}",
                 )
 
+        network = self.variant_params("network")
+        if mode != "sim" and getattr(network, "relay", False) and network.relay_store:
+            # The Zenoh bus relays, but does not store and forward: refused, not ignored.
+            raise InputError(
+                "store and forward is simulated only (live mode relays without it)",
+                field="network.relay_store",
+            )
+
     def ignored_settings(self) -> list[str]:
         """Settings accepted that change nothing the team does, or that the network model
         finds doubtful (a threshold on another scale than its signal), one line each (the

@@ -57,7 +57,12 @@ class Mission:
             policy=DeliveryPolicy(config.spl),
             loss_rngs={a: stream(seed, "loss", a) for a in self.node_ids},
             channel=self.links.network.channel(self.node_ids),
-            relay=make_relay(self.node_ids, len(scenario.robots), self.links.network.relay_hops),
+            relay=make_relay(
+                self.node_ids,
+                len(scenario.robots),
+                self.links.network.relay_hops,
+                self.links.network.relay_store,
+            ),
         )
         self.bodies = RobotBodies(
             make_bases(self.resources, seed, config.robot_variation()), scenario.assigner

@@ -117,6 +117,7 @@ class RadioNetwork(NetworkModel):
         self.profile = profile if profile is not None else load_profile(params.profile)
         self.reach_m = reach_m(self.profile)
         self.relay_hops = params.hop_limit()
+        self.relay_store = params.relay and params.relay_store
         self.seed = seed
         self.field = ShadowingField(
             self.profile.shadowing_sigma_db,
