@@ -36,7 +36,7 @@ BEHAVIOUR_COLOURS = {"nb": "#4C72B0", "lf": "#DD8452"}
 SLT_WARNING_M = 4.0
 AH_LIMIT_M = 8.0
 
-PanelKey = tuple[str, str, str]  # (scenario, network, threshold)
+PanelKey = tuple[str, str, str, str]  # (scenario, network, threshold, setting)
 
 
 def _order(mapping: dict[str, int], value: str) -> tuple[int, str]:
@@ -44,19 +44,34 @@ def _order(mapping: dict[str, int], value: str) -> tuple[int, str]:
 
 
 def panel_keys(runs: pd.DataFrame) -> list[PanelKey]:
-    """The (scenario, network, threshold) panels present, in the original's order."""
-    keys = {
-        (str(s), str(n), str(t))
-        for s, n, t in runs[["scenario", "network", "threshold"]].itertuples(index=False)
-    }
+    """The (scenario, network, threshold, setting) panels present, in the original's
+    order (setting: the variant parameters a panel's runs share, "" for none)."""
+    settings = runs["setting"] if "setting" in runs else pd.Series("", index=runs.index)
+    columns = runs[["scenario", "network", "threshold"]].assign(setting=settings.fillna(""))
+    keys = {(str(s), str(n), str(t), str(p)) for s, n, t, p in columns.itertuples(index=False)}
     return sorted(
-        keys, key=lambda k: (k[0], _order(NETWORK_ORDER, k[1]), _order(THRESHOLD_ORDER, k[2]))
+        keys,
+        key=lambda k: (k[0], _order(NETWORK_ORDER, k[1]), _order(THRESHOLD_ORDER, k[2]), k[3]),
     )
 
 
+def in_panel(frame: pd.DataFrame, key: PanelKey) -> pd.DataFrame:
+    """The rows of ``frame`` that belong to panel ``key`` (a frame without a setting
+    column has the default setting only)."""
+    mask = (
+        (frame["scenario"] == key[0])
+        & (frame["network"] == key[1])
+        & (frame["threshold"] == key[2])
+    )
+    if "setting" in frame:
+        mask &= frame["setting"].fillna("") == key[3]
+    return frame[mask]
+
+
 def panel_title(key: PanelKey, with_scenario: bool) -> str:
-    scenario, network, threshold = key
+    scenario, network, threshold, setting = key
     text = network.upper() if threshold == "none" else f"{network.upper()} + {threshold.upper()}"
+    text += f" · {setting}" if setting else ""
     return f"{scenario} · {text}" if with_scenario else text
 
 
@@ -116,11 +131,7 @@ def _per_panel(
     behs = behaviours(runs)
     fig, axes = panel_grid(len(keys))
     for ax, key in zip(axes.flat, keys, strict=False):
-        frame = runs[
-            (runs["scenario"] == key[0])
-            & (runs["network"] == key[1])
-            & (runs["threshold"] == key[2])
-        ]
+        frame = in_panel(runs, key)
         draw(ax, frame, levels, behs)
         ax.set_title(panel_title(key, multi))
         _spl_axis(ax, levels)
@@ -148,11 +159,7 @@ def metric_bars(runs: pd.DataFrame, metric: str) -> Figure:
     fig, axes = panel_grid(len(keys), rows=2, height=3.0)
     cols = axes.shape[1]
     for k, key in enumerate(keys):
-        frame = runs[
-            (runs["scenario"] == key[0])
-            & (runs["network"] == key[1])
-            & (runs["threshold"] == key[2])
-        ]
+        frame = in_panel(runs, key)
         top, bottom = axes[2 * (k // cols), k % cols], axes[2 * (k // cols) + 1, k % cols]
         _mean_sd_bars(top, frame, metric, levels, behs)
         box_plots(bottom, frame, metric, levels, behs)
@@ -320,7 +327,7 @@ def failed_per_robot(
     )
     index = pd.MultiIndex.from_product([runs["run_id"], list(robots)], names=["run_id", "robot"])
     full = counts.reindex(index, fill_value=0).reset_index()
-    keys = ["scenario", "network", "threshold", "behaviour", "spl"]
+    keys = ["scenario", "network", "threshold", "setting", "behaviour", "spl"]
     full = full.merge(runs[["run_id", *keys]], on="run_id")
     return full.groupby([*keys, "robot"], as_index=False)["failed"].mean()
 
@@ -343,12 +350,8 @@ def failed_tasks_figure(
     for row, beh in enumerate(behs):
         for col, key in enumerate(keys):
             ax = axes[row, col]
-            sub = table[
-                (table["scenario"] == key[0])
-                & (table["network"] == key[1])
-                & (table["threshold"] == key[2])
-                & (table["behaviour"] == beh)
-            ]
+            sub = in_panel(table, key)
+            sub = sub[sub["behaviour"] == beh]
             for k, (off, robot) in enumerate(zip(offsets, robot_ids, strict=True)):
                 heights = [
                     float(sub.loc[(sub["spl"] == s) & (sub["robot"] == robot), "failed"].sum())

@@ -21,7 +21,10 @@ from mrcomm.analysis.figures import (
     _spl_axis,
     behaviour_colour,
     box_plots,
+    in_panel,
     panel_grid,
+    panel_keys,
+    panel_title,
     spl_levels,
 )
 from mrcomm.analysis.stats import GROUP, usable_runs
@@ -44,9 +47,9 @@ TOPIC_ORDER = ("pose", "task_status", "aon", "utility", "role", "clock")
 
 
 def _config_name(key: Sequence[str], multi_scenario: bool) -> str:
-    scenario, network, threshold, behaviour = (str(k) for k in key)
+    scenario, network, threshold, behaviour, setting = (str(k) for k in key)
     parts = [network.upper()] + ([threshold.upper()] if threshold != "none" else [])
-    name = "+".join([*parts, behaviour.upper()])
+    name = "+".join([*parts, behaviour.upper()]) + (f" ({setting})" if setting else "")
     return f"{scenario} {name}" if multi_scenario else name
 
 
@@ -181,7 +184,7 @@ def aon_figure(runs: pd.DataFrame) -> Figure | None:
     if "aon_publications" not in ok or ok["aon_publications"].isna().all():
         return None
     ok = ok[ok["aon_publications"].notna()]
-    keys = sorted(ok.groupby(["scenario", "network", "threshold"]).groups)
+    keys = panel_keys(ok)
     levels = spl_levels(ok)
     behs = sorted({str(b) for b in ok["behaviour"]})
     fig, axes = panel_grid(len(keys), rows=2, width=4.4, height=3.0)
@@ -191,14 +194,13 @@ def aon_figure(runs: pd.DataFrame) -> Figure | None:
         ("aon_max_finish_time", "slowest AON finish (s)"),
     )
     for k, key in enumerate(keys):
-        frame = ok[(ok[["scenario", "network", "threshold"]] == list(key)).all(axis=1)]
+        frame = in_panel(ok, key)
         for r, (column, label) in enumerate(columns):
             ax = axes[2 * (k // cols) + r, k % cols]
             box_plots(ax, frame, column, levels, behs)
             _spl_axis(ax, levels)
             ax.set_ylabel(label)
-            name = key[1].upper() + ("" if key[2] == "none" else f" + {key[2].upper()}")
-            ax.set_title(name)
+            ax.set_title(panel_title(key, False))
     for k in range(len(keys), axes.shape[0] // 2 * cols):
         for r in range(2):
             axes[2 * (k // cols) + r, k % cols].set_visible(False)

@@ -13,7 +13,14 @@ import pandas as pd
 from matplotlib.figure import Figure
 from scipy import stats as sps
 
-from mrcomm.analysis.figures import behaviours, panel_grid, panel_keys, panel_title, spl_levels
+from mrcomm.analysis.figures import (
+    behaviours,
+    in_panel,
+    panel_grid,
+    panel_keys,
+    panel_title,
+    spl_levels,
+)
 from mrcomm.analysis.stats import METRICS, usable_runs
 
 _SPL_COLOURS = matplotlib.colormaps["viridis"]
@@ -42,12 +49,8 @@ def qq_figure(runs: pd.DataFrame, metric: str) -> Figure:
     fig, axes = panel_grid(len(groups), width=3.0, height=2.8)
     used = 0
     for key, beh in groups:
-        frame = runs[
-            (runs["scenario"] == key[0])
-            & (runs["network"] == key[1])
-            & (runs["threshold"] == key[2])
-            & (runs["behaviour"] == beh)
-        ]
+        frame = in_panel(runs, key)
+        frame = frame[frame["behaviour"] == beh]
         values = pd.to_numeric(frame[metric], errors="coerce") if metric in frame else None
         if frame.empty or values is None or values.notna().sum() == 0:
             continue

@@ -22,6 +22,7 @@ from mrcomm.analysis.figures import (
     _bar_offsets,
     _hide_unused,
     behaviours,
+    in_panel,
     panel_grid,
     panel_keys,
     panel_title,
@@ -109,6 +110,8 @@ def time_components(runs: pd.DataFrame) -> pd.DataFrame:
         "switching": _col(runs, "switching_time"),
     }
     out = runs[["run_id", "scenario", "network", "threshold", "behaviour", "spl"]].copy()
+    if "setting" in runs:
+        out["setting"] = runs["setting"].to_numpy()
     for name, vals in values.items():
         out[name] = vals
     return out
@@ -125,11 +128,7 @@ def stacked_time_figure(runs: pd.DataFrame) -> Figure:
     fig, axes = panel_grid(len(keys), width=5.0, height=3.8)
     offsets, width = _bar_offsets(len(behs), 0.84)
     for ax, key in zip(axes.flat, keys, strict=False):
-        frame = comps[
-            (comps["scenario"] == key[0])
-            & (comps["network"] == key[1])
-            & (comps["threshold"] == key[2])
-        ]
+        frame = in_panel(comps, key)
         ticks, labels = [], []
         for off, beh in zip(offsets, behs, strict=True):
             for i, spl in enumerate(levels):

@@ -35,6 +35,7 @@ from mrcomm.analysis.figures_report import (
 from mrcomm.analysis.glossary import glossary_sections
 from mrcomm.analysis.inference import Correction
 from mrcomm.analysis.report_provenance import config_rows, provenance_rows
+from mrcomm.analysis.settings import with_settings
 from mrcomm.analysis.study import TABLE_NAMES, study_tables
 from mrcomm.errors import InputError
 from mrcomm.experiment.tables import RUN_MODES
@@ -49,6 +50,9 @@ TABLE_TITLES = {
     "success_tests": "Chi-squared tests of mission success",
     "rssi": "RSSI seen under two thresholds (Mann-Whitney U per run, two-sided; "
     "p corrected across the table)",
+    "between": "Between behaviours: Kruskal-Wallis per condition (p corrected across the table)",
+    "pairwise": "Between behaviours: pairwise Mann-Whitney U (two-sided; Holm within each "
+    "condition's pairs)",
 }
 
 
@@ -104,7 +108,18 @@ def _config(r: pd.Series, multi: bool) -> str:
     if str(r["threshold"]) != "none":
         parts.append(str(r["threshold"]).upper())
     parts.append(str(r["behaviour"]).upper())
-    return (f"{r['scenario']} " if multi else "") + "+".join(parts)
+    text = "+".join(parts) + (f" ({r['setting']})" if str(r.get("setting", "")) else "")
+    return (f"{r['scenario']} " if multi else "") + text
+
+
+def _condition(r: pd.Series, multi: bool) -> str:
+    """A between-behaviour condition: network, threshold, SPL and setting."""
+    parts = [str(r["network"]).upper()]
+    if str(r["threshold"]) != "none":
+        parts.append(str(r["threshold"]).upper())
+    text = "+".join(parts) + f" SPL{float(r['spl']):g}"
+    text += f" ({r['setting']})" if str(r.get("setting", "")) else ""
+    return (f"{r['scenario']} " if multi else "") + text
 
 
 def _method(m: Any) -> str:
@@ -174,6 +189,32 @@ _COLUMNS: dict[str, list[Column]] = {
         ("min expected", lambda r, _: fmt_num(r["min_expected"], 2)),
         ("note", lambda r, _: str(r["note"])),
     ],
+    "between": [
+        ("metric", lambda r, _: str(r["metric"])),
+        ("condition", _condition),
+        ("behaviours", lambda r, _: str(r["behaviours"])),
+        ("medians", lambda r, _: str(r["medians"])),
+        ("N", lambda r, _: str(r["n"])),
+        ("H", lambda r, _: fmt_num(r["h"], 2)),
+        ("df", lambda r, _: str(r["df"])),
+        ("p", lambda r, _: fmt_p(r["p"])),
+        ("p corr.", lambda r, _: fmt_p(r["p_adj"])),
+        ("ε²", lambda r, _: fmt_num(r["epsilon2"], 2)),
+        ("decision", lambda r, _: str(r["decision"])),
+    ],
+    "pairwise": [
+        ("metric", lambda r, _: str(r["metric"])),
+        ("condition", _condition),
+        ("A vs B", lambda r, _: f"{r['behaviour_a']} vs {r['behaviour_b']}"),
+        ("medians", lambda r, _: _medians_ab(r)),
+        ("m/n", lambda r, _: f"{r['m']}/{r['n']}"),
+        ("p", lambda r, _: fmt_p(r["p"])),
+        ("p Holm", lambda r, _: fmt_p(r["p_adj"])),
+        ("r=Z/√(m+n) [95% CI]", lambda r, _: _r_ci(r)),
+        ("effect", lambda r, _: str(r["effect"])),
+        ("direction", lambda r, _: str(r["direction"])),
+        ("decision", lambda r, _: str(r["decision"])),
+    ],
     "rssi": [
         ("configuration", lambda r, multi: _rssi_config(r, multi)),
         ("SPL", lambda r, _: f"{float(r['spl']):g}"),
@@ -232,6 +273,22 @@ COMPACT: dict[str, list[Column]] = {
         ("effect", lambda r, _: str(r["effect"])),
         ("decision", lambda r, _: str(r["decision"])),
     ],
+    "between": [
+        ("condition", _condition),
+        ("behaviours", lambda r, _: str(r["behaviours"])),
+        ("medians", lambda r, _: str(r["medians"])),
+        ("H", lambda r, _: fmt_num(r["h"], 2)),
+        ("p corr.", lambda r, _: fmt_p(r["p_adj"])),
+        ("ε²", lambda r, _: fmt_num(r["epsilon2"], 2)),
+    ],
+    "pairwise": [
+        ("condition", _condition),
+        ("A vs B", lambda r, _: f"{r['behaviour_a']} vs {r['behaviour_b']}"),
+        ("medians", lambda r, _: _medians_ab(r)),
+        ("p Holm", lambda r, _: fmt_p(r["p_adj"])),
+        ("r [95% CI]", lambda r, _: _r_ci(r)),
+        ("decision", lambda r, _: str(r["decision"])),
+    ],
     "rssi": [
         ("config", lambda r, multi: _rssi_config(r, multi)),
         ("SPL", lambda r, _: f"{float(r['spl']):g}"),
@@ -258,6 +315,7 @@ _LATEX = (
     ("r=Z/√(m+n)", r"$r=Z/\sqrt{m+n}$"),
     ("r=Z/√n", r"$r=Z/\sqrt{n}$"),
     ("95%", r"95\,\%"),
+    ("ε²", r"$\varepsilon^2$"),
     ("†", r"$^\dagger$"),
     ("±", r"$\pm$"),
     ("χ²", r"$\chi^2$"),
@@ -329,6 +387,7 @@ def load_study(db_path: Path, experiment: str | None = None, mode: str | None = 
     if mode is not None and data.runs.empty:
         data.close()
         raise InputError(f"the database has no {mode} runs", file=db_path, field="--mode")
+    data.runs = with_settings(data.runs, data.configs)
     return data
 
 
@@ -433,7 +492,8 @@ def _is_number(text: str) -> bool:
 
 def _html_table(name: str, frame: pd.DataFrame) -> dict[str, Any]:
     shown = display_frame(name, frame)
-    decided = frame["decision"].tolist() if name == "comparisons" else [""] * len(frame)
+    shaded = name in ("comparisons", "between", "pairwise")
+    decided = frame["decision"].tolist() if shaded else [""] * len(frame)
     rows = [
         {"cells": [(c, _is_number(c)) for c in cells], "cls": "sig" if flag == st.SUPPORTED else ""}
         for cells, flag in zip(shown.values.tolist(), decided, strict=True)

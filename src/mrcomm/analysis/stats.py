@@ -1,6 +1,7 @@
 """Statistics of a study: every SPLX compared with the ideal case SPL0.
 
-Per metric and per configuration group (scenario, network, threshold, behaviour):
+Per metric and per configuration group (scenario, network, threshold, behaviour with its
+own parameters, and the other variant parameters: :mod:`mrcomm.analysis.settings`):
 
 * Mann–Whitney U, one-sided (H_A "SPL0 < SPLX"; "SPL0 > SPLX" for near collisions),
   with U reported for the SPL0 sample, p, Z, the conventional effect size
@@ -52,8 +53,9 @@ from mrcomm.analysis.inference import (
 from mrcomm.errors import InputError, did_you_mean
 
 ALPHA = 0.05
-#: Group keys of a configuration without its packet-loss level.
-GROUP = ("scenario", "network", "threshold", "behaviour")
+#: Group keys of a configuration without its packet-loss level (``setting``: the
+#: variant parameters other than the behaviour's, :mod:`mrcomm.analysis.settings`).
+GROUP = ("scenario", "network", "threshold", "behaviour", "setting")
 #: Largest number of distinct splits enumerated for an exact test with ties.
 EXACT_PERMUTATIONS = 200_000
 Alternative = Literal["less", "greater", "two-sided"]
@@ -267,14 +269,17 @@ def shapiro_wilk(sample: ArrayLike) -> tuple[float, float]:
 
 
 def usable_runs(runs: pd.DataFrame) -> pd.DataFrame:
-    """Runs that finished (status 'ok'): the ones every statistic is computed over."""
+    """Runs that finished (status 'ok'): the ones every statistic is computed over,
+    with every :data:`GROUP` column (a missing ``setting``: "")."""
+    if "setting" not in runs.columns:
+        runs = runs.assign(setting="")
     if "status" not in runs.columns:
         return runs
     return runs[runs["status"] == "ok"]
 
 
 def _groups(runs: pd.DataFrame) -> list[tuple[tuple[str, ...], pd.DataFrame]]:
-    keys = [k for k in GROUP if k in runs.columns]
+    keys = list(GROUP)
     out = []
     for key, frame in runs.groupby(keys, sort=True, dropna=False):
         out.append((tuple(str(k) for k in key), frame))

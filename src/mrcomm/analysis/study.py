@@ -1,7 +1,7 @@
 """Every statistics table of a study in one object: the comparisons, normality,
-descriptive statistics and success tables of :mod:`mrcomm.analysis.stats`, and the SSD
-vs ESD comparison of :mod:`mrcomm.analysis.rssi_compare` (``mrcomm analyze``, the
-report's tables/)."""
+descriptive statistics and success tables of :mod:`mrcomm.analysis.stats`, the SSD vs
+ESD comparison of :mod:`mrcomm.analysis.rssi_compare`, and the between-behaviour tests
+of :mod:`mrcomm.analysis.between` (``mrcomm analyze``, the report's tables/)."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import pandas as pd
 
+from mrcomm.analysis.between import kruskal_table, pairwise_table
 from mrcomm.analysis.inference import Correction
 from mrcomm.analysis.rssi_compare import rssi_comparisons
 from mrcomm.analysis.stats import (
@@ -29,6 +30,8 @@ TABLE_NAMES = (
     "success_counts",
     "success_tests",
     "rssi",
+    "between",
+    "pairwise",
 )
 
 
@@ -43,6 +46,10 @@ class StudyTables:
     success_tests: pd.DataFrame
     #: SSD vs ESD: the RSSI of configurations differing only in their threshold.
     rssi: pd.DataFrame
+    #: Kruskal–Wallis across behaviours per condition (empty with one behaviour).
+    between: pd.DataFrame
+    #: Pairwise Mann–Whitney between behaviours, Holm within each condition.
+    pairwise: pd.DataFrame
 
     def get(self, name: str) -> pd.DataFrame:
         frame: pd.DataFrame = getattr(self, name)
@@ -74,4 +81,6 @@ def study_tables(
             alpha,
             correction,
         ),
+        between=kruskal_table(runs, metrics, alpha, correction),
+        pairwise=pairwise_table(runs, metrics, alpha),
     )

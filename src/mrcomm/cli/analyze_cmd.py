@@ -28,7 +28,7 @@ def analyze(
         list[str] | None,
         typer.Option(
             help="Table to print (repeatable): comparisons, normality, descriptive, "
-            "success_counts, success_tests, rssi (default: all)."
+            "success_counts, success_tests, rssi, between, pairwise (default: all)."
         ),
     ] = None,
     experiment: Annotated[
@@ -45,7 +45,8 @@ def analyze(
     ] = "holm",
 ) -> None:
     """Print the statistics of a study: Mann–Whitney SPL0 vs SPLX, Shapiro–Wilk,
-    descriptive statistics and mission-success contingency tables."""
+    descriptive statistics, mission-success contingency tables and, with several
+    behaviours, Kruskal–Wallis and pairwise Mann–Whitney between them."""
     # Imported here: scipy, pandas and DuckDB are not needed by the other commands.
     from mrcomm.analysis import report as rp
     from mrcomm.analysis import stats as st
@@ -91,6 +92,8 @@ def analyze(
                 _print_comparisons(console, frame, rp, st, method, alpha)
             elif name == "rssi":
                 _print_rssi(console, frame, rp)
+            elif name in ("between", "pairwise"):
+                _print_between(console, name, frame, rp, st)
             else:
                 shown = rp.display_frame(name, frame)
                 console.print(_rich_table(rp.TABLE_TITLES[name], shown))
@@ -131,6 +134,18 @@ def _print_comparisons(
     )
     for warning in st.unreachable(frame, alpha):
         console.print(f"warning: {warning}", style="yellow", markup=False)
+
+
+def _print_between(console: Console, name: str, frame: Any, rp: Any, st: Any) -> None:
+    """A between-behaviour table, one per metric; nothing when the study has one
+    behaviour."""
+    if frame.empty:
+        return
+    console.print(f"[bold]{rp.TABLE_TITLES[name]}[/]")
+    for metric, rows in frame.groupby("metric", sort=False):
+        info = st.METRICS[str(metric)]
+        shown = rp.display_frame(name, rows, compact=True)
+        console.print(_rich_table(f"{info.label} ({info.unit})", shown))
 
 
 def _print_rssi(console: Console, frame: Any, rp: Any) -> None:
