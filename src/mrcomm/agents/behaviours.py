@@ -49,6 +49,19 @@ LF_SPEC = VariantSpec(
     ),
     uses_aon=True,
 )
+RPS_SPEC = VariantSpec(
+    kind="behaviour",
+    name="rps",
+    entry="mrcomm.agents.rps:RendezvousExecutor",
+    params="mrcomm.agents.rps:RpsParams",
+    summary="RPS, rendezvous point: robots disperse to their tasks (as NB) and regroup "
+    "at a meeting point every K tasks or T seconds, publishing again there every status "
+    "they know of",
+    topics=("pose", "task_status"),
+    robot_metrics="mrcomm.metrics.compute:rps_metrics",
+    metrics=("rendezvous_count", "rendezvous_time", "statuses_reshared"),
+    uses_threshold=False,
+)
 LF_WAIT_SPEC = VariantSpec(
     kind="behaviour",
     name="lf-wait",

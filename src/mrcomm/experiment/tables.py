@@ -94,6 +94,8 @@ RUN_METRIC_COLUMNS: tuple[tuple[str, str, str], ...] = (
     # lf-wait: NULL for other behaviours.
     ("detour_tasks", "INTEGER", "detour_tasks"),
     ("leader_detour_wait_time", "DOUBLE", "leader_detour_wait_time"),
+    # rps: NULL for other behaviours.
+    ("rendezvous_time", "DOUBLE", "rendezvous_time"),
 )
 
 #: AON totals of ``runs`` (NULL when statuses go without AON): (column, type, key).

@@ -125,6 +125,18 @@ def lf_wait_metrics(timeline: Timeline) -> dict[str, Any]:
     }
 
 
+def rps_metrics(timeline: Timeline) -> dict[str, Any]:
+    """rps's metrics of one robot: its rendezvous, the time spent waiting at the
+    meeting point, and how many statuses it published again there."""
+    return {
+        "rendezvous_count": timeline.count(L.RENDEZVOUS_START),
+        "rendezvous_time": timeline.total(L.RENDEZVOUS),
+        "statuses_reshared": sum(
+            int(e.data.get("count", 0)) for e in timeline.events if e.label == L.STATUSES_RESHARED
+        ),
+    }
+
+
 LF_TOTALS = (
     "na_movement_time",
     "leader_movement_time",
@@ -136,6 +148,8 @@ LF_TOTALS = (
     # lf-wait
     "leader_detour_wait_time",
     "detour_tasks",
+    # rps
+    "rendezvous_time",
 )
 
 

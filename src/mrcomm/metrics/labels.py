@@ -36,6 +36,12 @@ ROLE_REGROUPING = "regrouping"
 DISCONNECT_DETECTED = "disconnect_detected"
 ROLE_ASSIGNED = "role_assigned"
 ROLES_DISSOLVED = "roles_dissolved"
+# rps: the rendezvous.
+RENDEZVOUS = "rendezvous"  # activity: waiting at the meeting point
+RENDEZVOUS_START = "rendezvous_start"  # event: leaves for the meeting point
+RENDEZVOUS_END = "rendezvous_end"  # event: leaves the meeting point
+STATUSES_RESHARED = "statuses_reshared"  # event: every known status published again
+
 # lf-wait: a follower doing a task of its own near the group, and its leader waiting.
 ROLE_DETOURING = "detouring"  # the role its poses carry meanwhile (a request to wait)
 LEADER_DETOUR_WAIT = "leader_detour_wait"  # activity: leader waiting for such a follower
