@@ -97,6 +97,19 @@ def test_other_schema_versions_are_refused_untouched(tmp_path: Path) -> None:
     assert _fingerprint(db) == before and not Path(f"{db}.wal").exists()
 
 
+def test_a_database_with_other_columns_is_refused_untouched(tmp_path: Path) -> None:
+    exp = load_experiment(write_schema(tmp_path))
+    db = tmp_path / "dev.duckdb"
+    ResultStore.open(db).close()
+    con = duckdb.connect(str(db))
+    con.execute("ALTER TABLE runs DROP COLUMN near_collisions_missed")
+    con.close()
+    before = _fingerprint(db)
+    with pytest.raises(InputError, match="table 'runs' has other columns"):
+        plan_sweep(exp, db)
+    assert _fingerprint(db) == before
+
+
 def test_foreign_files_are_refused(tmp_path: Path) -> None:
     text = tmp_path / "notes.duckdb"
     text.write_text("not a database\n" * 100)

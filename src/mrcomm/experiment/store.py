@@ -106,6 +106,14 @@ def _read_version(con: duckdb.DuckDBPyConnection, path: Path) -> bool:
     missing = sorted(set(TABLES) - tables)
     if missing:
         raise InputError(f"damaged results database: table '{missing[0]}' is missing", file=path)
+    for table, columns in TABLES.items():
+        have = [row[0] for row in con.execute(f"DESCRIBE {table}").fetchall()]
+        if have != [name for name, _ in columns]:
+            raise InputError(
+                f"table '{table}' has other columns than this mrcomm writes (a database "
+                "of another development version?); use a new --db",
+                file=path,
+            )
     return True
 
 
