@@ -38,8 +38,8 @@ from typing import Any
 from transitions.extensions import HierarchicalMachine
 
 from mrcomm.agents import agenda
+from mrcomm.agents.aon_statuses import AonStatuses
 from mrcomm.agents.collision import MateState
-from mrcomm.agents.executor import TaskExecutor
 from mrcomm.agents.lf_machine import (
     ACTIVITY_OF_FULL_STATE,
     LF_STATES,
@@ -49,13 +49,9 @@ from mrcomm.agents.lf_machine import (
 )
 from mrcomm.agents.role_round import RoleRound
 from mrcomm.agents.utility import UtilityInputs, utility_function
-from mrcomm.messaging.aon import AonEndpoint, MessageId
 from mrcomm.messaging.messages import (
-    TOPIC_HEARTBEAT,
     TOPIC_ROLE,
-    TOPIC_TASK_STATUS,
     TOPIC_UTILITY,
-    Assignment,
     Message,
     RoleMsg,
     TaskSpec,
@@ -71,14 +67,13 @@ from mrcomm.world.geometry import Pose, polyline_length
 NA_IDLE = "na_idle"  # transitions' name of NA's idle state
 
 
-class LeaderFollowerExecutor(TaskExecutor):
+class LeaderFollowerExecutor(AonStatuses):
     """LF task executor (see the module docstring)."""
 
     states = LF_STATES
     transitions = LF_TRANSITIONS
     initial = "na"
     machine_class = HierarchicalMachine
-    uses_aon = True
     Params = LfParams
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
@@ -86,7 +81,6 @@ class LeaderFollowerExecutor(TaskExecutor):
         lf = params if isinstance(params, LfParams) else LfParams()
         kwargs["params"] = lf
         self._utility = utility_function(lf.utility)
-        self.aon: AonEndpoint | None = None
         self.leader: str | None = None
         self._just_completed = False
         self._follow_target: tuple[float, float] | None = None
@@ -99,7 +93,6 @@ class LeaderFollowerExecutor(TaskExecutor):
         super().__init__(*args, **kwargs)
         self.role_round = RoleRound(self.robot_id)
         self.bus.subscribe(TOPIC_UTILITY, self._on_utility)
-        self.bus.subscribe(TOPIC_HEARTBEAT, self._on_heartbeat)
         self.bus.subscribe(TOPIC_ROLE, self._on_role)
 
     @property
@@ -113,20 +106,7 @@ class LeaderFollowerExecutor(TaskExecutor):
     def done(self) -> bool:
         """Agenda complete, back in NA, and every status finished with AON."""
         settled = self._t0 is not None and not self.agenda and self.state == NA_IDLE
-        return settled and (self.aon is None or not self.aon.pending_ids())
-
-    def send_status(self, task_id: str, state: TaskState) -> None:
-        status = self.status_message(task_id, state)
-        if self.aon is None or state is not TaskState.SUCCESS:
-            self.bus.publish(TOPIC_TASK_STATUS, status)  # informational statuses: plain
-            return
-        self.aon.send(status, self._now)
-
-    def rejoined(self) -> None:
-        """AON brings the team what this robot completed while it was away."""
-
-    def _on_aon_deliver(self, status: TaskStatus, msg_id: MessageId) -> None:
-        self.on_team_status(status)
+        return settled and self.aon_settled()
 
     def on_team_status(self, status: TaskStatus) -> None:
         super().on_team_status(status)
@@ -137,33 +117,9 @@ class LeaderFollowerExecutor(TaskExecutor):
         ):
             self._dissolve("leader completed its task")
 
-    def _on_pose(self, message: Message) -> None:
-        super()._on_pose(message)
-        if self.aon is not None:
-            self.aon.heard_from(message.sender, self._now)  # liveliness for the lease
-
-    def _on_heartbeat(self, message: Message) -> None:
-        if self.aon is not None:
-            self.aon.heard_from(message.sender, self._now)
-
-    def _on_assignment(self, message: Message) -> None:
-        first = self._t0 is None
-        super()._on_assignment(message)
-        if first and self._t0 is not None:
-            assert isinstance(message, Assignment)
-            self.aon = AonEndpoint(
-                self.bus,
-                self.robot_id,
-                self.incarnation,
-                (*message.team, message.sender),
-                lease=self.lf.aon_lease,
-                on_deliver=self._on_aon_deliver,
-            )
-
     # -- every step ----------------------------------------------------------------------
     def before_state_step(self) -> None:
-        if self.aon is not None:
-            self.aon.step(self._now)
+        super().before_state_step()  # AON first
         # Idle robots join rounds but never open one; links are judged at the pose rate.
         if (
             self._in("na")

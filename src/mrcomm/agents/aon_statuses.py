@@ -1,0 +1,84 @@
+"""Task statuses sent with AON (acknowledged All-Or-Nothing messaging): the part of an
+executor that LF and the other behaviours whose statuses must reach every member share.
+
+Once its assignment arrives the executor opens an :class:`AonEndpoint` over the team and
+the task assigner; the statuses in :attr:`AonStatuses.AON_STATES` go with it (re-sent
+until every member has them), the others are plain publications. Poses and heartbeats
+count as a member being heard (AON's lease); the endpoint is stepped before every state
+handler; the executor is done only when nothing it sent is still pending."""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+from mrcomm.agents.executor import TaskExecutor
+from mrcomm.messaging.aon import AonEndpoint, MessageId
+from mrcomm.messaging.messages import (
+    TOPIC_HEARTBEAT,
+    TOPIC_TASK_STATUS,
+    Assignment,
+    Message,
+    TaskState,
+    TaskStatus,
+)
+
+#: A member silent this long is left out of pending messages, unless the behaviour's
+#: parameters say otherwise (``aon_lease``).
+DEFAULT_AON_LEASE = 60.0
+
+
+class AonStatuses(TaskExecutor):
+    """An executor whose statuses go with AON (see the module docstring)."""
+
+    uses_aon = True
+    #: The statuses sent with AON.
+    AON_STATES: ClassVar[frozenset[TaskState]] = frozenset({TaskState.SUCCESS})
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        self.aon: AonEndpoint | None = None
+        super().__init__(*args, **kwargs)
+        self.bus.subscribe(TOPIC_HEARTBEAT, self._on_heartbeat)
+
+    def aon_settled(self) -> bool:
+        """Nothing this robot sent with AON is still pending."""
+        return self.aon is None or not self.aon.pending_ids()
+
+    def send_status(self, task_id: str, state: TaskState) -> None:
+        status = self.status_message(task_id, state)
+        if self.aon is None or state not in self.AON_STATES:
+            self.bus.publish(TOPIC_TASK_STATUS, status)  # informational statuses: plain
+            return
+        self.aon.send(status, self._now)
+
+    def rejoined(self) -> None:
+        """AON brings the team what this robot completed while it was away."""
+
+    def _on_aon_deliver(self, status: TaskStatus, msg_id: MessageId) -> None:
+        self.on_team_status(status)
+
+    def _on_pose(self, message: Message) -> None:
+        super()._on_pose(message)
+        if self.aon is not None:
+            self.aon.heard_from(message.sender, self._now)  # liveliness for the lease
+
+    def _on_heartbeat(self, message: Message) -> None:
+        if self.aon is not None:
+            self.aon.heard_from(message.sender, self._now)
+
+    def _on_assignment(self, message: Message) -> None:
+        first = self._t0 is None
+        super()._on_assignment(message)
+        if first and self._t0 is not None:
+            assert isinstance(message, Assignment)
+            self.aon = AonEndpoint(
+                self.bus,
+                self.robot_id,
+                self.incarnation,
+                (*message.team, message.sender),
+                lease=getattr(self.params, "aon_lease", DEFAULT_AON_LEASE),
+                on_deliver=self._on_aon_deliver,
+            )
+
+    def before_state_step(self) -> None:
+        if self.aon is not None:
+            self.aon.step(self._now)
