@@ -62,6 +62,19 @@ RPS_SPEC = VariantSpec(
     metrics=("rendezvous_count", "rendezvous_time", "statuses_reshared"),
     uses_threshold=False,
 )
+SERRIED_SPEC = VariantSpec(
+    kind="behaviour",
+    name="serried",
+    entry="mrcomm.agents.serried:SerriedExecutor",
+    params="mrcomm.agents.serried:SerriedParams",
+    summary="Serried ranks: the team moves as one group to each task in turn, led by each "
+    "robot in turn (team-wide order); the leader holds while a mate's link warns; "
+    "statuses with AON",
+    topics=("pose", "task_status", "aon"),
+    robot_metrics="mrcomm.metrics.compute:serried_metrics",
+    metrics=("group_hold_time",),
+    uses_aon=True,
+)
 LF_WAIT_SPEC = VariantSpec(
     kind="behaviour",
     name="lf-wait",

@@ -514,7 +514,9 @@ class TaskExecutor:
             activity = L.INIT  # assignment received, not yet moving
         if activity is not None:
             self.timeline.set_state(ACTIVITY, activity, self._now)
-        if self.leaf() == "idle" and not self._agenda_reported:
+        # Idle with tasks left (back from making way in a behaviour that idles then) is
+        # not the end of the agenda.
+        if self.leaf() == "idle" and not self._agenda_reported and not self.agenda:
             self._agenda_reported = True
             self.timeline.event(L.AGENDA_COMPLETE, self._now)
             self.send_status("", TaskState.AGENDA_COMPLETE)

@@ -96,6 +96,8 @@ RUN_METRIC_COLUMNS: tuple[tuple[str, str, str], ...] = (
     ("leader_detour_wait_time", "DOUBLE", "leader_detour_wait_time"),
     # rps: NULL for other behaviours.
     ("rendezvous_time", "DOUBLE", "rendezvous_time"),
+    # serried: NULL for other behaviours.
+    ("group_hold_time", "DOUBLE", "group_hold_time"),
 )
 
 #: AON totals of ``runs`` (NULL when statuses go without AON): (column, type, key).

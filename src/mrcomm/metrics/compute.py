@@ -137,6 +137,11 @@ def rps_metrics(timeline: Timeline) -> dict[str, Any]:
     }
 
 
+def serried_metrics(timeline: Timeline) -> dict[str, Any]:
+    """serried's metric of one robot: the time it held the group as its leader."""
+    return {"group_hold_time": timeline.total(L.LEADER_DISCONNECT)}
+
+
 LF_TOTALS = (
     "na_movement_time",
     "leader_movement_time",
@@ -150,6 +155,8 @@ LF_TOTALS = (
     "detour_tasks",
     # rps
     "rendezvous_time",
+    # serried
+    "group_hold_time",
 )
 
 

@@ -1,0 +1,202 @@
+"""serried — serried ranks: the team moves as one close group to each task in turn.
+
+One robot leads at a time: the robot of lowest rank in the team-wide random order (the
+order every robot draws from the mission's seed) among those this robot believes still
+have tasks. The leader drives to its own tasks one after another (the closest available
+first, as NB), the others follow it; when its agenda is done it says so (its
+AGENDA_COMPLETE status goes with AON, as its task statuses do, so every member learns
+it) and the next robot in the order leads the group to its tasks. The mission ends when
+every robot's agenda is done.
+
+* A follower drives towards the leader's last known position and stops within
+  ``follow_distance`` of it; it re-targets when the leader has moved more than 0.5 m
+  (at most every ``refresh_period``).
+* The leader holds (``holding``) while the link to any mate heard in the last
+  ``lost_timeout`` is in warning, so the group keeps every robot within the warning
+  threshold of the leader, and drives on when none is.
+* Robots may briefly disagree on who leads (the leader's AGENDA_COMPLETE has not reached
+  everyone yet): a robot then follows the robot it believes leads, which follows the
+  next; the two meet and AON settles it. No cycle outlives that: a robot follows only one
+  it believes unfinished and of lower rank, or, when finished itself, the next one.
+
+Near collisions are judged while leading (as NB), not while following: followers drive
+into the leader's wake on purpose, and the base keeps them clear of it. A follower that
+has stopped in the leader's way steps aside (NB's making way), then follows again.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from mrcomm.agents.aon_statuses import AonStatuses
+from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS, ExecutorParams
+from mrcomm.messaging.messages import TaskState, TaskStatus
+from mrcomm.metrics import labels as L
+from mrcomm.ports import NavStatus
+from mrcomm.specs import parameter
+
+
+class SerriedParams(ExecutorParams):
+    follow_distance: float = parameter(1.5, "a follower stops this close to the leader", "m", gt=0)
+    refresh_period: float = parameter(
+        1.0, "a follower re-targets the leader at most this often", "s", gt=0
+    )
+    lost_timeout: float = parameter(30.0, "a mate silent this long is not held for", "s", gt=0)
+    aon_lease: float | None = parameter(
+        60.0,
+        "AON: a member silent this long is reported as left out of pending messages; "
+        "null waits forever",
+        "s",
+        gt=0,
+    )
+
+
+SERRIED_STATES = [*NB_STATES, "following", "holding"]
+_TAKES_LEAD = ["following"]
+SERRIED_TRANSITIONS: list[dict[str, Any]] = [
+    *NB_TRANSITIONS,
+    {
+        "trigger": "follow",
+        "source": ["unassigned", "idle", "waiting", "executing", "retrying"],
+        "dest": "following",
+    },
+    # Idle with tasks left (back from making way) may take its turn at once.
+    {"trigger": "go", "source": [*_TAKES_LEAD, "idle"], "dest": "navigating"},
+    {"trigger": "wait", "source": [*_TAKES_LEAD, "idle"], "dest": "waiting"},
+    {"trigger": "finish_agenda", "source": _TAKES_LEAD, "dest": "idle"},
+    {"trigger": "make_way", "source": "following", "dest": "clearing"},
+    {"trigger": "hold", "source": "navigating", "dest": "holding"},
+    {"trigger": "release", "source": "holding", "dest": "navigating"},
+]
+_ACTIVITY = {"following": L.MOVING, "holding": L.LEADER_DISCONNECT}
+
+
+class SerriedExecutor(AonStatuses):
+    """The team as one group, led by each robot in turn (see the module docstring)."""
+
+    states = SERRIED_STATES
+    transitions = SERRIED_TRANSITIONS
+    Params = SerriedParams
+    AON_STATES = frozenset({TaskState.SUCCESS, TaskState.AGENDA_COMPLETE})
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        params = kwargs.get("params")
+        kwargs["params"] = params if isinstance(params, SerriedParams) else SerriedParams()
+        #: Robots whose agenda is done, as this robot knows.
+        self.finished: set[str] = set()
+        self._follow_target: tuple[float, float] | None = None
+        self._next_refresh = 0.0
+        super().__init__(*args, **kwargs)
+
+    @property
+    def serried(self) -> SerriedParams:
+        assert isinstance(self.params, SerriedParams)
+        return self.params
+
+    @property
+    def done(self) -> bool:
+        """Every robot's agenda done (as far as this robot knows), it idles, and its
+        statuses have reached everyone."""
+        everyone = all(m in self.finished for m in self.team)
+        return self.leaf() == "idle" and not self.agenda and everyone and self.aon_settled()
+
+    def activity_of(self, state: str) -> str | None:
+        return _ACTIVITY.get(state) or super().activity_of(state)
+
+    def on_team_status(self, status: TaskStatus) -> None:
+        super().on_team_status(status)
+        if status.state is TaskState.AGENDA_COMPLETE:
+            self.finished.add(status.robot)
+
+    # -- who leads ---------------------------------------------------------------------
+    def group_leader(self) -> str | None:
+        """The robot of lowest rank among those believed to have tasks left (None: the
+        whole team is done)."""
+        mine = [self.robot_id] if self.agenda else []
+        left = [*mine, *(m for m in self.team if m not in self.finished)]
+        return min(left, key=self._rank) if left else None
+
+    def current_role(self) -> str:
+        if self._t0 is None:
+            return ""
+        return L.ROLE_LEADER if self.group_leader() == self.robot_id else L.ROLE_FOLLOWER
+
+    def current_leader(self) -> str:
+        leader = self.group_leader()
+        return leader if leader not in (None, self.robot_id) else ""
+
+    def _select_next(self) -> None:
+        leader = self.group_leader()
+        own_turn = leader is None or leader == self.robot_id
+        # Its agenda just done: NB goes idle, which reports it (with AON); idle follows.
+        reports_first = not self.agenda and self.leaf() != "idle"
+        if own_turn or reports_first:
+            super()._select_next()
+            return
+        if self.leaf() != "following":
+            self._follow_target = None
+            self._next_refresh = self._now
+            self.trigger("follow")
+
+    # -- leading ---------------------------------------------------------------------
+    def _mate_out(self) -> bool:
+        """A mate heard lately whose link (from its last pose) is in warning."""
+        pose = self.base.pose
+        for mate in self.team:
+            known = self.mates.get(mate)
+            if known is None or self.team_view.age(mate, self._now) > self.serried.lost_timeout:
+                continue
+            if self.link_sensor.warning(mate, pose, known.x, known.y, self._now):
+                return True
+        return False
+
+    def _step_navigating(self) -> None:
+        if self.base.status is NavStatus.ACTIVE and self._mate_out():
+            self.base.cancel()
+            self.trigger("hold")
+            return
+        super()._step_navigating()
+
+    def _step_holding(self) -> None:
+        if not self._mate_out():
+            assert self.goal is not None
+            self.base.navigate_to(self.goal.x, self.goal.y)
+            self.trigger("release")
+
+    def _step_idle(self) -> None:
+        leader = self.group_leader()
+        if self.agenda or (leader is not None and leader != self.robot_id):
+            self._select_next()  # its turn, or follow the group to the others' tasks
+            return
+        super()._step_idle()  # everyone done: stay, making way when needed
+
+    # -- following ---------------------------------------------------------------------
+    def navigation_target(self) -> tuple[float, float] | None:
+        if self.leaf() == "following":
+            return self._follow_target
+        return super().navigation_target()
+
+    def _step_following(self) -> None:
+        leader = self.group_leader()
+        if leader is None or leader == self.robot_id:
+            super()._select_next()  # its turn to lead (or everyone is done)
+            return
+        known = self.mates.get(leader)
+        if known is None:
+            return
+        if self.base.status is not NavStatus.ACTIVE and self.in_way_of(known):
+            self.step_aside(known)  # stopped in the leader's way: make room (NB's rule)
+            return
+        pose = self.base.pose
+        if math.hypot(known.x - pose.x, known.y - pose.y) <= self.serried.follow_distance:
+            if self.base.status is NavStatus.ACTIVE:
+                self.base.cancel()
+            return
+        target = (known.x, known.y)
+        moved = self._follow_target is None or math.dist(target, self._follow_target) > 0.5
+        stalled = self.base.status is not NavStatus.ACTIVE
+        if (moved or stalled) and self._now >= self._next_refresh:
+            self._follow_target = target
+            self._next_refresh = self._now + self.serried.refresh_period
+            self.base.navigate_to(*target)
