@@ -76,3 +76,23 @@ def test_leader_holds_do_not_grow_with_loss_when_judged_on_geometry() -> None:
     aged = _leader_disconnect(75, **AGED) / _leader_disconnect(0, **AGED)
     assert original > 2.5
     assert aged < 1.6
+
+
+def test_with_a_hold_grace_the_team_stretches_past_the_limit_and_regroups() -> None:
+    def run(seed: int, **params: Any) -> Any:
+        return run_mission(_config(0, seed, **params))
+
+    # The original LF holds at the first warning: the team never reaches the 8 m limit.
+    assert all(run(seed).mission["max_separation"] < 8.0 for seed in (1, 2, 3))
+    # Followers may stay in warning 30 s: seed 3 stretches to 16.7 m, a robot past the
+    # limit regroups (drives back to its team's last known position), and the mission
+    # still succeeds.
+    stretched = run(3, hold_grace=30.0)
+    assert stretched.mission["max_separation"] > 8.0
+    regrouped = [
+        rid
+        for rid, tl in stretched.timelines.items()
+        if any(i.track == ROLE and i.label == "regrouping" for i in tl.intervals)
+    ]
+    assert regrouped
+    assert stretched.mission["successful"]

@@ -19,8 +19,10 @@ A hierarchical state machine: ``na`` is NB plus a network trigger; ``leader`` an
   they follow it (or that named it leader this round and have not spoken since). With
   ``hold_prediction`` it judges each follower where it should be by now (its last pose
   moved towards the leader at its speed for the pose's age), so a hold ends when the
-  follower is back inside, not when a pose saying so gets through. On completion it
-  reports with AON and dissolves the roles.
+  follower is back inside, not when a pose saying so gets through. With ``hold_grace``
+  it holds only once a follower has been in warning that long, so the group may stretch
+  to the communication limit and past it (a robot out of range regroups). On
+  completion it reports with AON and dissolves the roles.
 * Follower: drives to the leader's last known position (moved on for its age with
   ``mate_extrapolation``), refreshing the goal as leader poses arrive (more often when
   far), and waits there (follower waiting time). It
@@ -90,6 +92,7 @@ class LeaderFollowerExecutor(AonStatuses):
         self._top_state = "na"
         self._state_since_role = 0.0
         self._followers_were_out = False
+        self._out_since: float | None = None  # since when a follower has been in warning
         super().__init__(*args, **kwargs)
         self.role_round = RoleRound(self.robot_id)
         self.bus.subscribe(TOPIC_UTILITY, self._on_utility)
@@ -303,7 +306,17 @@ class LeaderFollowerExecutor(AonStatuses):
         if self._now < self._next_followers_check:
             return self._followers_were_out
         self._next_followers_check = self._now + self.params.pose_period
-        self._followers_were_out = self._judge_followers()
+        out = self._judge_followers()
+        if not out:
+            self._out_since = None
+        elif self._out_since is None:
+            self._out_since = self._now
+        # hold_grace: a follower may stay in warning this long before the leader holds,
+        # so the group uses its connection area up to the communication limit.
+        grace = self.lf.hold_grace
+        self._followers_were_out = out and (
+            grace <= 0 or self._now - (self._out_since or self._now) >= grace
+        )
         return self._followers_were_out
 
     def _judge_followers(self) -> bool:

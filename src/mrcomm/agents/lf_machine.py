@@ -123,6 +123,14 @@ class LfParams(ExecutorParams):
         "s",
         ge=0,
     )
+    hold_grace: float = parameter(
+        0.0,
+        "a leader holds only once a follower has been in warning this long (0: at once, "
+        "as the original): the group may stretch into its connection area up to the "
+        "communication limit, and a robot that drifts past it regroups",
+        "s",
+        ge=0,
+    )
     route_check_step: float = parameter(
         0.5, "spacing of the route points a follower checks against the threshold", "m", gt=0
     )
