@@ -13,7 +13,9 @@ every robot's agenda is done.
   (at most every ``refresh_period``).
 * The leader holds (``holding``) while the link to any mate heard in the last
   ``lost_timeout`` is in warning, so the group keeps every robot within the warning
-  threshold of the leader, and drives on when none is.
+  threshold of the leader, and drives on when none is — or after ``hold_timeout``, and
+  then drives that long before holding again (a signal-strength threshold may warn
+  through a wall however close the follower gets; then a hold could never end).
 * Robots may briefly disagree on who leads (the leader's AGENDA_COMPLETE has not reached
   everyone yet): a robot then follows the robot it believes leads, which follows the
   next; the two meet and AON settles it. No cycle outlives that: a robot follows only one
@@ -43,6 +45,7 @@ class SerriedParams(ExecutorParams):
         1.0, "a follower re-targets the leader at most this often", "s", gt=0
     )
     lost_timeout: float = parameter(30.0, "a mate silent this long is not held for", "s", gt=0)
+    hold_timeout: float = parameter(20.0, "the leader drives on after holding this long", "s", gt=0)
     aon_lease: float | None = parameter(
         60.0,
         "AON: a member silent this long is reported as left out of pending messages; "
@@ -87,6 +90,7 @@ class SerriedExecutor(AonStatuses):
         self.finished: set[str] = set()
         self._follow_target: tuple[float, float] | None = None
         self._next_refresh = 0.0
+        self._no_hold_until = 0.0
         super().__init__(*args, **kwargs)
 
     @property
@@ -152,14 +156,20 @@ class SerriedExecutor(AonStatuses):
         return False
 
     def _step_navigating(self) -> None:
-        if self.base.status is NavStatus.ACTIVE and self._mate_out():
+        may_hold = self._now >= self._no_hold_until
+        if may_hold and self.base.status is NavStatus.ACTIVE and self._mate_out():
             self.base.cancel()
             self.trigger("hold")
             return
         super()._step_navigating()
 
     def _step_holding(self) -> None:
-        if not self._mate_out():
+        # A hold no follower can end (it cannot get closer) gives way after hold_timeout.
+        timed_out = self._now - self._state_since >= self.serried.hold_timeout
+        if timed_out:
+            # ... and drives as long before holding again, so the group moves on.
+            self._no_hold_until = self._now + self.serried.hold_timeout
+        if timed_out or not self._mate_out():
             assert self.goal is not None
             self.base.navigate_to(self.goal.x, self.goal.y)
             self.trigger("release")
@@ -189,7 +199,11 @@ class SerriedExecutor(AonStatuses):
             self.step_aside(known)  # stopped in the leader's way: make room (NB's rule)
             return
         pose = self.base.pose
-        if math.hypot(known.x - pose.x, known.y - pose.y) <= self.serried.follow_distance:
+        close = math.hypot(known.x - pose.x, known.y - pose.y) <= self.serried.follow_distance
+        # Close is not enough when its own link to the leader warns (a wall between
+        # them, with a signal-strength threshold): it keeps closing in, or the leader
+        # would hold for it for ever.
+        if close and not self.link_sensor.warning(leader, pose, known.x, known.y, self._now):
             if self.base.status is NavStatus.ACTIVE:
                 self.base.cancel()
             return
