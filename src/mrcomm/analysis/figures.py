@@ -11,6 +11,7 @@ matplotlib Figure (backend Agg); :mod:`encoding` turns one into PNG/SVG/PDF byte
 
 from __future__ import annotations
 
+import hashlib
 import math
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -30,8 +31,17 @@ from mrcomm.analysis.stats import METRICS, usable_runs
 
 NETWORK_ORDER = {"wlan": 0, "ah": 1}
 THRESHOLD_ORDER = {"none": 0, "slt": 1, "ssd": 2, "esd": 3}
-BEHAVIOUR_ORDER = {"nb": 0, "lf": 1}
-BEHAVIOUR_COLOURS = {"nb": "#4C72B0", "lf": "#DD8452"}
+BEHAVIOUR_ORDER = {"nb": 0, "lf": 1, "lf-wait": 2, "rps": 3, "serried": 4}
+BEHAVIOUR_COLOURS = {
+    "nb": "#4C72B0",
+    "lf": "#DD8452",
+    "lf-wait": "#55A868",
+    "rps": "#C44E52",
+    "serried": "#8172B3",
+}
+#: Colours of other behaviours (plugins, or a behaviour with its own parameters), picked
+#: by name so that a behaviour keeps its colour from figure to figure.
+OTHER_COLOURS = ("#937860", "#DA8BC3", "#8C8C8C", "#CCB974", "#64B5CD")
 #: SLT warning and the AH range (m), drawn on separation figures for reference.
 SLT_WARNING_M = 4.0
 AH_LIMIT_M = 8.0
@@ -86,7 +96,11 @@ def spl_levels(runs: pd.DataFrame) -> list[float]:
 
 
 def behaviour_colour(behaviour: str) -> str:
-    return BEHAVIOUR_COLOURS.get(behaviour.lower(), "#55A868")
+    known = BEHAVIOUR_COLOURS.get(behaviour.lower())
+    if known is not None:
+        return known
+    index = int(hashlib.sha256(behaviour.lower().encode()).hexdigest(), 16) % len(OTHER_COLOURS)
+    return OTHER_COLOURS[index]
 
 
 def panel_grid(

@@ -273,22 +273,14 @@ COMPACT: dict[str, list[Column]] = {
         ("effect", lambda r, _: str(r["effect"])),
         ("decision", lambda r, _: str(r["decision"])),
     ],
-    "between": [
-        ("condition", _condition),
-        ("behaviours", lambda r, _: str(r["behaviours"])),
-        ("medians", lambda r, _: str(r["medians"])),
-        ("H", lambda r, _: fmt_num(r["h"], 2)),
-        ("p corr.", lambda r, _: fmt_p(r["p_adj"])),
-        ("ε²", lambda r, _: fmt_num(r["epsilon2"], 2)),
-    ],
-    "pairwise": [
-        ("condition", _condition),
-        ("A vs B", lambda r, _: f"{r['behaviour_a']} vs {r['behaviour_b']}"),
-        ("medians", lambda r, _: _medians_ab(r)),
-        ("p Holm", lambda r, _: fmt_p(r["p_adj"])),
-        ("r [95% CI]", lambda r, _: _r_ci(r)),
-        ("decision", lambda r, _: str(r["decision"])),
-    ],
+    # The between-behaviour tables: a terminal shows these of their columns.
+    **{
+        name: [c for c in _COLUMNS[name] if c[0] in shown]
+        for name, shown in (
+            ("between", ("condition", "behaviours", "medians", "H", "p corr.", "ε²")),
+            ("pairwise", ("condition", "A vs B", "medians", "p Holm", "r=Z/√(m+n) [95% CI]")),
+        )
+    },
     "rssi": [
         ("config", lambda r, multi: _rssi_config(r, multi)),
         ("SPL", lambda r, _: f"{float(r['spl']):g}"),
