@@ -95,3 +95,9 @@ class LinkSensor(Protocol):
     def rssi(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> float | None:
         """Signal strength estimate (dBm), where the sensor has one."""
         ...
+
+    def warning_between(self, ax: float, ay: float, bx: float, by: float) -> bool | None:
+        """Whether a link between two other positions (two mates) would be in warning,
+        judged by the same rule; None when the sensor judges only the robot's own links
+        (a measured RSSI exists only for them)."""
+        ...

@@ -96,3 +96,25 @@ def test_with_a_hold_grace_the_team_stretches_past_the_limit_and_regroups() -> N
     ]
     assert regrouped
     assert stretched.mission["successful"]
+
+
+def test_with_path_quality_the_team_spreads_over_relay_chains_and_completes() -> None:
+    # Seeds 1-10 at SPL 0 (closing note): direct links only 5.1 m furthest pair, 124.5 s
+    # of NA movement, 329.5 s execution; chain_hops=3 with relaying 7.7 m, 279.4 s,
+    # 293.6 s — the trigger fires only when no chain of good links reaches a mate.
+    def run(seed: int, hops: int) -> Any:
+        config = make_config(
+            scenario=S1, network="ah", threshold="slt", behaviour="lf", spl=0, seed=seed,
+            params={"behaviour": {"chain_hops": hops}, "network": {"relay": True}},
+        )  # fmt: skip
+        return run_mission(config).mission
+
+    direct = [run(seed, 1) for seed in (1, 2, 3)]
+    chained = [run(seed, 3) for seed in (1, 2, 3)]
+    assert all(m["successful"] for m in direct + chained)
+    assert (
+        mean(m["max_separation"] for m in chained) > mean(m["max_separation"] for m in direct) + 1
+    )
+    assert mean(m["na_movement_time"] for m in chained) > 1.5 * mean(
+        m["na_movement_time"] for m in direct
+    )

@@ -49,6 +49,7 @@ from mrcomm.agents.lf_machine import (
     ROLE_OF_TOP_STATE,
     LfParams,
 )
+from mrcomm.agents.link_chain import chain_links
 from mrcomm.agents.role_round import RoleRound
 from mrcomm.agents.utility import UtilityInputs, utility_function
 from mrcomm.messaging.messages import (
@@ -136,9 +137,7 @@ class LeaderFollowerExecutor(AonStatuses):
         pose = self.base.pose
         for mate in self.team:
             known = self.mates.get(mate)
-            if known is not None and self.link_sensor.warning(
-                mate, pose, known.x, known.y, self._now
-            ):
+            if known is not None and self._link_warns(mate, pose, known.x, known.y):
                 self.timeline.event(L.DISCONNECT_DETECTED, self._now, mate=mate)
                 self.send_status("", TaskState.DISCONNECT_ROLE)
                 self._open_round(self.role_round.number + 1)
@@ -328,9 +327,24 @@ class LeaderFollowerExecutor(AonStatuses):
             if not self._follows_me(mate):
                 continue
             x, y = self._predicted_follower(known, pose)
-            if self.link_sensor.warning(mate, pose, x, y, self._now):
+            if self._link_warns(mate, pose, x, y):
                 return True
         return False
+
+    def _link_warns(self, mate: str, pose: Pose, x: float, y: float) -> bool:
+        """Whether this robot's link to ``mate`` (at x, y) is in warning: the direct
+        link, or with ``chain_hops`` > 1 the best chain through the mates' last known
+        positions (:mod:`mrcomm.agents.link_chain`)."""
+        if not self.link_sensor.warning(mate, pose, x, y, self._now):
+            return False
+        if self.lf.chain_hops <= 1:
+            return True
+        positions = {m: (state.x, state.y) for m, state in self.mates.items()}
+        positions[mate] = (x, y)
+        return (
+            chain_links(self.link_sensor, pose, mate, positions, self.lf.chain_hops, self._now)
+            is None
+        )
 
     def _predicted_follower(self, known: MateState, pose: Pose) -> tuple[float, float]:
         """Where a follower should be now (``hold_prediction``): a follower drives to its

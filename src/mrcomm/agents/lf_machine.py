@@ -131,6 +131,16 @@ class LfParams(ExecutorParams):
         "s",
         ge=0,
     )
+    chain_hops: int = parameter(
+        1,
+        "the trigger and a leader's hold judge a mate's link over the best chain of at "
+        "most this many links through the team's known positions, none in warning "
+        "(path quality; use with network.relay, which carries statuses over such chains; "
+        "1: the direct link only, as the original)",
+        "links",
+        ge=1,
+        le=32,
+    )
     route_check_step: float = parameter(
         0.5, "spacing of the route points a follower checks against the threshold", "m", gt=0
     )

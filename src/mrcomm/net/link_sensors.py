@@ -23,6 +23,9 @@ class NoSensor:
     def rssi(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> float | None:
         return None
 
+    def warning_between(self, ax: float, ay: float, bx: float, by: float) -> bool | None:
+        return False
+
 
 class DistanceSensor:
     """SLT: distance stands in for signal strength."""
@@ -31,10 +34,13 @@ class DistanceSensor:
         self.warning_m = warning_m
 
     def warning(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> bool:
-        return math.hypot(peer_x - own.x, peer_y - own.y) > self.warning_m
+        return self.warning_between(own.x, own.y, peer_x, peer_y)
 
     def rssi(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> float | None:
         return None
+
+    def warning_between(self, ax: float, ay: float, bx: float, by: float) -> bool:
+        return math.hypot(bx - ax, by - ay) > self.warning_m
 
 
 class ModelSensor:
@@ -48,13 +54,18 @@ class ModelSensor:
         self.table = table
         self.warning_dbm = warning_dbm
 
+    def _rssi_between(self, ax: float, ay: float, bx: float, by: float) -> float | None:
+        visible = self.sight.line_of_sight(ax, ay, bx, by)
+        return self.table.rssi_at(math.hypot(bx - ax, by - ay), visible)
+
     def rssi(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> float | None:
-        distance = math.hypot(peer_x - own.x, peer_y - own.y)
-        visible = self.sight.line_of_sight(own.x, own.y, peer_x, peer_y)
-        return self.table.rssi_at(distance, visible)
+        return self._rssi_between(own.x, own.y, peer_x, peer_y)
 
     def warning(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> bool:
-        value = self.rssi(peer, own, peer_x, peer_y, now)
+        return bool(self.warning_between(own.x, own.y, peer_x, peer_y))
+
+    def warning_between(self, ax: float, ay: float, bx: float, by: float) -> bool | None:
+        value = self._rssi_between(ax, ay, bx, by)
         return value is not None and value < self.warning_dbm
 
 
@@ -84,3 +95,6 @@ class MeasuredSensor:
     def warning(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> bool:
         value = self.rssi(peer, own, peer_x, peer_y, now)
         return value is not None and value < self.warning_dbm
+
+    def warning_between(self, ax: float, ay: float, bx: float, by: float) -> bool | None:
+        return None  # only this robot's own links are measured
