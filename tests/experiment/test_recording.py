@@ -1,29 +1,30 @@
 """MCAP recordings: a recorded mission reads back with the expected channels and message
-counts, its messages conform to the foxglove schemas, and recording does not change the
-mission."""
+counts, its foxglove messages decode with the schemas the Foxglove SDK publishes (and
+mrcomm's own with their JSON schemas), times are on the wall clock, and recording does
+not change the mission."""
 
 from __future__ import annotations
 
 import base64
 import json
+import time
 from collections import Counter
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from foxglove import messages as fg
+from google.protobuf.json_format import MessageToDict
+from mcap.decoder import DecoderFactory as McapDecoderFactory
 from mcap.reader import make_reader
+from mcap.records import Schema
+from mcap_protobuf.decoder import DecoderFactory
 
 from mrcomm.errors import InputError
 from mrcomm.experiment import recording_scene as scene
 from mrcomm.experiment.recording import run_and_record
 from mrcomm.experiment.recording_reader import read_recording
-from mrcomm.experiment.recording_schemas import (
-    grid_schema,
-    log_schema,
-    pose_in_frame_schema,
-    scene_update_schema,
-)
 from mrcomm.net.links import LinkState
 from mrcomm.run.config import RunConfig, make_config
 from mrcomm.run.result import MissionResult
@@ -46,30 +47,77 @@ CHANNELS = {
 }
 
 
+#: The channels of the SDK's message types, and those types.
+FOXGLOVE: dict[str, Any] = {
+    "/map": fg.Grid,
+    "/scene": fg.SceneUpdate,
+    "/events": fg.Log,
+    **{f"/robots/{r}/pose": fg.PoseInFrame for r in ROBOTS},
+}
+_DECODERS = DecoderFactory()
+
+
+class _JsonDecoders(McapDecoderFactory):
+    """Decodes mrcomm's JSON channels."""
+
+    def decoder_for(self, message_encoding: str, schema: Schema | None) -> Any:
+        return json.loads if message_encoding == "json" else None
+
+
+def as_dict(proto: Any) -> dict[str, Any]:
+    """A decoded protobuf message as JSON-like data (bytes base64, enums by name)."""
+    return MessageToDict(
+        proto, preserving_proto_field_name=True, always_print_fields_with_no_presence=True
+    )
+
+
+def decode_sdk(message: Any) -> Any:
+    """An SDK message encoded by the SDK, decoded with the schema it publishes."""
+    schema = type(message).get_schema()
+    record = Schema(id=1, name=schema.name, encoding=schema.encoding, data=schema.data)
+    decoder = _DECODERS.decoder_for("protobuf", record)
+    assert decoder is not None
+    return decoder(message.encode())
+
+
 class Recording:
-    """A recorded run, decoded: topic -> [(log time s, message)], plus its schemas."""
+    """A recorded run, decoded: topic -> [(mission time s, message as data)], the
+    decoded protobuf messages of the foxglove channels, plus the schemas."""
 
     def __init__(self, path: Path, result: MissionResult) -> None:
         self.path = path
         self.result = result
         self.messages: dict[str, list[tuple[float, Any]]] = {}
-        self.schemas: dict[str, tuple[str, str, dict[str, Any]]] = {}
+        self.protos: dict[str, list[tuple[int, Any]]] = {}  # topic -> [(log time ns, msg)]
+        self.schemas: dict[str, tuple[str, str, bytes]] = {}
         self.encodings: dict[str, str] = {}
         with path.open("rb") as stream:
-            reader = make_reader(stream, validate_crcs=True)
-            for _schema, channel, message in reader.iter_messages(log_time_order=True):
-                self.messages.setdefault(channel.topic, []).append(
-                    (message.log_time / 1e9, json.loads(message.data))
-                )
+            reader = make_reader(
+                stream, validate_crcs=True, decoder_factories=[_DECODERS, _JsonDecoders()]
+            )
+            (meta,) = [m.metadata for m in reader.iter_metadata() if m.name == "mrcomm"]
+            self.epoch_ns = int(meta["epoch_ns"])
+            for _schema, channel, message, decoded in reader.iter_decoded_messages(
+                log_time_order=True
+            ):
+                t = (message.log_time - self.epoch_ns) / 1e9
+                if channel.message_encoding == "protobuf":
+                    self.protos.setdefault(channel.topic, []).append((message.log_time, decoded))
+                    decoded = as_dict(decoded)
+                self.messages.setdefault(channel.topic, []).append((t, decoded))
             summary = reader.get_summary()
             assert summary is not None
             for channel in summary.channels.values():
                 sch = summary.schemas[channel.schema_id]
-                self.schemas[channel.topic] = (sch.name, sch.encoding, json.loads(sch.data))
+                self.schemas[channel.topic] = (sch.name, sch.encoding, sch.data)
                 self.encodings[channel.topic] = channel.message_encoding
 
     def payloads(self, topic: str) -> list[Any]:
         return [m for _, m in self.messages.get(topic, [])]
+
+
+def _rgba(color: scene.Color) -> dict[str, float]:
+    return dict(zip("rgba", color, strict=True))
 
 
 def _config(**fields: Any) -> RunConfig:
@@ -104,22 +152,33 @@ def test_recording_has_the_expected_channels_and_schemas(nb_recording: Recording
     rec = nb_recording
     assert set(rec.schemas) == CHANNELS
     assert set(rec.messages) == CHANNELS  # every channel has messages
-    assert all(enc == "json" for enc in rec.encodings.values())
-    assert all(enc == "jsonschema" for _, enc, _ in rec.schemas.values())
-    names = {topic: name for topic, (name, _, _) in rec.schemas.items()}
-    assert names["/map"] == "foxglove.Grid"
-    assert names["/scene"] == "foxglove.SceneUpdate"
-    assert names["/events"] == "foxglove.Log"
-    assert {names[f"/robots/{r}/pose"] for r in ROBOTS} == {"foxglove.PoseInFrame"}
-    for name, _, schema in rec.schemas.values():
-        assert schema["title"] == name
-    # Written in simulated-time order (to within one step: an event raised by a message
+    for topic, (name, encoding, data) in rec.schemas.items():
+        if topic in FOXGLOVE:  # the SDK's own schema, byte for byte
+            published = FOXGLOVE[topic].get_schema()
+            assert (name, encoding, data) == (published.name, "protobuf", published.data)
+            assert rec.encodings[topic] == "protobuf"
+        else:
+            assert rec.encodings[topic] == "json" and encoding == "jsonschema"
+            assert json.loads(data)["title"] == name and name.startswith("mrcomm.")
+    # Written in mission-time order (to within one step: an event raised by a message
     # handler carries the agent's previous step time), so players can stream the file.
     with rec.path.open("rb") as stream:
         reader = make_reader(stream)
         times = np.array([m.log_time for _, _, m in reader.iter_messages(log_time_order=False)])
-    assert np.all(times >= np.maximum.accumulate(times) - scene.to_ns(0.1))
-    assert times.max() == times[-1] == scene.to_ns(rec.result.sim_time_s)
+    assert np.all(times >= np.maximum.accumulate(times) - 100_000_000)
+    assert times.max() == times[-1] == rec.epoch_ns + round(rec.result.sim_time_s * 1e9)
+
+
+def test_times_are_on_the_wall_clock(s1_resources: Any, tmp_path: Path) -> None:
+    before = time.time_ns()
+    path = tmp_path / "clock.mcap"
+    rec = Recording(
+        path, run_and_record(_config(**{**NB_FIELDS, "max_time": 5}), s1_resources, path)
+    )
+    assert before <= rec.epoch_ns <= time.time_ns()  # mission time 0: when the run started
+    summary = read_recording(path)  # ... and replay still reads mission seconds
+    scenes = summary.channel("/scene")
+    assert scenes is not None and scenes.start == 0.0 and scenes.end == pytest.approx(5.0)
 
 
 def test_messages_channel_matches_the_network_bookkeeping(nb_recording: Recording) -> None:
@@ -151,9 +210,10 @@ def test_scene_poses_and_links_at_the_scene_rate(nb_recording: Recording) -> Non
     for r in ROBOTS:
         poses = rec.messages[f"/robots/{r}/pose"]
         assert len(poses) == len(scenes)
-        for t, pose in poses:
+        for _, pose in poses:
             assert pose["frame_id"] == "map"
-            assert pose["timestamp"]["sec"] + pose["timestamp"]["nsec"] / 1e9 == pytest.approx(t)
+        for log_time, proto in rec.protos[f"/robots/{r}/pose"]:
+            assert proto.timestamp.ToNanoseconds() == log_time
     # Final poses are the robots' last trajectory samples.
     for r in ROBOTS:
         _, last = rec.messages[f"/robots/{r}/pose"][-1]
@@ -245,7 +305,7 @@ def test_lf_recording_shows_roles_links_and_task_outcomes(lf_recording: Recordin
     assert {"leader", "follower"} <= seen_roles
     assert all(m["changed"] for m in roles)
     # Link lines are coloured from the link matrices of the same instant.
-    colours = {state: scene._rgba(c) for state, c in scene.LINK_COLORS.items()}
+    colours = {state: _rgba(c) for state, c in scene.LINK_COLORS.items()}
     seen_states = set()
     for (t, update), (t2, links) in zip(
         rec.messages["/scene"], rec.messages["/links"], strict=True
@@ -274,10 +334,10 @@ def test_lf_recording_shows_roles_links_and_task_outcomes(lf_recording: Recordin
         if entity["id"].startswith("task/"):
             task_id = entity["id"].removeprefix("task/")
             state = "failed" if task_id in failed else "communicated"
-            assert entity["cubes"][0]["color"] == scene._rgba(scene.TASK_COLORS[state])
+            assert entity["cubes"][0]["color"] == _rgba(scene.TASK_COLORS[state])
 
 
-# -- conformance to the foxglove schemas ----------------------------------------------------
+# -- conformance to the schemas --------------------------------------------------------------
 _JSON_TYPES: dict[str, tuple[type, ...]] = {
     "number": (int, float),
     "integer": (int,),
@@ -289,54 +349,56 @@ _JSON_TYPES: dict[str, tuple[type, ...]] = {
 
 
 def _conforms(value: Any, schema: dict[str, Any], where: str = "") -> None:
-    """Minimal JSON Schema check: types, known properties, enum consts, array items."""
-    if "oneOf" in schema:
-        assert value in [c["const"] for c in schema["oneOf"]], where
-        return
-    kind = schema.get("type")
-    if kind is not None:
-        assert isinstance(value, _JSON_TYPES[kind]), f"{where}: {value!r} is not {kind}"
-        assert not (kind in ("number", "integer") and isinstance(value, bool)), where
-    if kind == "object" and "properties" in schema:
+    """Minimal JSON Schema check: types (one or a list), known properties, enums, array
+    items."""
+    kinds = schema.get("type")
+    if kinds is not None:
+        kinds = [kinds] if isinstance(kinds, str) else kinds
+        allowed = tuple(t for k in kinds if k != "null" for t in _JSON_TYPES[k])
+        assert (value is None and "null" in kinds) or isinstance(value, allowed), where
+        if isinstance(value, bool):
+            assert "boolean" in kinds, where
+    if "enum" in schema:
+        assert value in schema["enum"], where
+    if isinstance(value, dict) and "properties" in schema:
         for key, item in value.items():
             assert key in schema["properties"], f"{where}.{key} is not in the schema"
             _conforms(item, schema["properties"][key], f"{where}.{key}")
-    if kind == "array":
+    if isinstance(value, list) and "items" in schema:
         for i, item in enumerate(value):
             _conforms(item, schema["items"], f"{where}[{i}]")
 
 
-def test_messages_conform_to_the_foxglove_schemas(nb_recording: Recording) -> None:
+def test_mrcomm_channels_conform_to_their_json_schemas(nb_recording: Recording) -> None:
     rec = nb_recording
-    checks = {
-        "/map": grid_schema(),
-        "/scene": scene_update_schema(),
-        "/events": log_schema(),
-        "/robots/robot_1/pose": pose_in_frame_schema(),
-    }
-    for topic, schema in checks.items():
-        assert rec.schemas[topic][2] == schema
-        for payload in rec.payloads(topic)[:50]:
+    for topic in CHANNELS - set(FOXGLOVE):
+        schema = json.loads(rec.schemas[topic][2])
+        for payload in rec.payloads(topic)[:200]:
             _conforms(payload, schema, topic)
-    grid = grid_schema()["properties"]
-    assert grid["data"] == {
-        "type": "string",
-        "contentEncoding": "base64",
-        "description": "Grid cell data, interpreted using `fields`, in row-major (y-major) order",
-    }
-    primitives = scene_update_schema()["properties"]["entities"]["items"]["properties"]
-    assert {"arrows", "cubes", "spheres", "cylinders", "lines", "triangles", "texts"} <= set(
-        primitives
-    )
-    assert primitives["lines"]["items"]["title"] == "foxglove.LinePrimitive"
+
+
+def test_foxglove_messages_decode_with_the_sdks_schemas(nb_recording: Recording) -> None:
+    # Decoding (done while reading) fails on data that does not match the schema; the
+    # decoded scene has the primitives it was built with.
+    _, first = nb_recording.protos["/scene"][0]
+    kinds = {f.name for e in first.entities for f, _ in e.ListFields()}
+    assert {"cylinders", "arrows", "texts", "cubes", "lines"} <= kinds
+    (entity,) = [e for e in first.entities if e.id == "links"]
+    assert all(line.type == 0 for line in entity.lines)  # LINE_STRIP
+    levels = {proto.level for _, proto in nb_recording.protos["/events"]}
+    assert levels <= {2, 3}  # INFO, WARNING
 
 
 # -- scene builders ------------------------------------------------------------------------
-def test_stamps_quaternions_and_link_states() -> None:
-    assert scene.to_ns(1.5) == 1_500_000_000
-    assert scene.stamp(2.25) == {"sec": 2, "nsec": 250_000_000}
-    q = scene.pose_message(0.0, Pose(1.0, 2.0, np.pi / 2))["pose"]["orientation"]
-    assert q["z"] == pytest.approx(np.sqrt(0.5)) and q["w"] == pytest.approx(np.sqrt(0.5))
+def test_clock_quaternions_and_link_states() -> None:
+    clock = scene.RecordingClock(epoch_ns=1_700_000_000_000_000_000)
+    assert clock.ns(1.5) == 1_700_000_001_500_000_000
+    assert decode_sdk(fg.Log(timestamp=clock.timestamp(2.25))).timestamp.ToNanoseconds() == (
+        1_700_000_002_250_000_000
+    )
+    pose = decode_sdk(scene.pose_message(clock.timestamp(0.0), Pose(1.0, 2.0, np.pi / 2)))
+    q = pose.pose.orientation
+    assert q.z == pytest.approx(np.sqrt(0.5)) and q.w == pytest.approx(np.sqrt(0.5))
     n = 3
     connected = np.ones((n, n), dtype=bool)
     warning = np.zeros((n, n), dtype=bool)
@@ -353,11 +415,13 @@ def test_stamps_quaternions_and_link_states() -> None:
 def test_grid_rows_start_at_the_map_origin() -> None:
     occupied = np.zeros((2, 3), dtype=bool)
     occupied[0, 2] = True  # bottom row (at the origin), right column
-    msg = scene.grid_message(OccupancyGrid(occupied, 0.5, (1.0, -2.0)))
-    cells = np.frombuffer(base64.b64decode(msg["data"]), dtype=np.uint8).reshape(2, 3, 5)
+    grid = decode_sdk(
+        scene.grid_message(OccupancyGrid(occupied, 0.5, (1.0, -2.0)), fg.Timestamp(0))
+    )
+    cells = np.frombuffer(grid.data, dtype=np.uint8).reshape(2, 3, 5)
     assert cells[0, 2, 0] == 100 and cells[:, :, 0].sum() == 100
-    assert msg["pose"]["position"] == {"x": 1.0, "y": -2.0, "z": 0.0}
-    assert msg["column_count"] == 3 and msg["row_stride"] == 15
+    assert (grid.pose.position.x, grid.pose.position.y) == (1.0, -2.0)
+    assert grid.column_count == 3 and grid.row_stride == 15
 
 
 # -- options and failures ---------------------------------------------------------------------
@@ -396,3 +460,12 @@ def test_nothing_is_left_behind_when_the_run_fails(
     with pytest.raises(RuntimeError, match="boom"):
         run_and_record(_config(**NB_FIELDS), s1_resources, path)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_shipped_foxglove_layout_is_the_generated_one_and_shows_recorded_topics() -> None:
+    from mrcomm.experiment.foxglove_layout import SHIPPED, layout_json
+
+    assert SHIPPED.read_text() == layout_json(), "run python -m mrcomm.experiment.foxglove_layout"
+    shown = json.dumps(json.loads(SHIPPED.read_text()))
+    for topic in ("/map", "/scene", "/events", "/result", "/roles.states.robot_1"):
+        assert f'"{topic}' in shown

@@ -44,6 +44,25 @@ def run(
     record: Annotated[
         Path | None, typer.Option(help="Record the run to an MCAP file (opens in Foxglove).")
     ] = None,
+    foxglove: Annotated[
+        bool,
+        typer.Option(
+            "--foxglove",
+            help="Stream the run live to the Foxglove app (a Foxglove WebSocket server on "
+            "--foxglove-port; the same channels as --record).",
+        ),
+    ] = False,
+    foxglove_port: Annotated[
+        int, typer.Option(min=0, max=65535, help="Port of the --foxglove server (0: any free).")
+    ] = 8765,
+    speed: Annotated[
+        float | None,
+        typer.Option(
+            min=0.001,
+            help="Pace the mission at this many times real time (default: as fast as "
+            "possible); with --foxglove, to watch it.",
+        ),
+    ] = None,
     db: DbOpt = None,
     experiment: ExperimentOpt = None,
     keep_duplicate: KeepDuplicateOpt = False,
@@ -58,10 +77,14 @@ def run(
         check_output_file(record, "--record", RECORDING_SUFFIXES)
     check_db(db, experiment)
     warn_ignored_settings(config)
-    if record is not None:
+    if record is not None or foxglove or speed is not None:
         from mrcomm.experiment.recording import run_and_record
 
-        result = run_and_record(config, None, record)
+        def serving(port: int) -> None:
+            typer.echo(f"Foxglove: open ws://localhost:{port} in the Foxglove app", err=True)
+
+        serve = ("127.0.0.1", foxglove_port) if foxglove else None
+        result = run_and_record(config, None, record, serve=serve, speed=speed, on_serving=serving)
     else:
         result = run_mission(config)
     if plot is not None:

@@ -1,51 +1,53 @@
 """MCAP recordings of simulated missions that Foxglove opens (``--record``).
 
 :func:`run_and_record` builds a :class:`~mrcomm.sim.mission.Mission`, steps it to its end
-itself and writes one MCAP file (JSON message encoding, ``jsonschema`` schemas, log time
-= simulated time in nanoseconds) with these channels:
+itself and writes one MCAP file through the Foxglove SDK (``foxglove-sdk``), with these
+channels:
 
-* ``/map`` — ``foxglove.Grid``, once at t = 0;
+* ``/map`` — ``foxglove.Grid``, once at the start;
 * ``/robots/<id>/pose`` — ``foxglove.PoseInFrame``, at the scene rate;
 * ``/scene`` — ``foxglove.SceneUpdate``: robots, tasks (by state), links coloured by
   state (green ok, orange warning, red disconnected), at the scene rate (5 Hz) plus a
   final one at the end;
-* ``/links`` — link matrices (distance, connected, warning, line of sight, RSSI), at the
-  scene rate;
-* ``/messages`` — every delivery decision of the network (received / dropped_loss /
-  dropped_range): exactly the network's per-topic bookkeeping;
-* ``/publications`` — every message published, as it is published;
-* ``/roles`` — every robot's behaviour state and LF role, whenever one changes;
 * ``/events`` — ``foxglove.Log``: the robots' timeline events and the statuses the
   assigner received;
-* ``/result`` — the mission summary (``mrcomm run --json``), once at the end.
+* mrcomm's own JSON channels (``jsonschema`` schemas in :mod:`recording_scene`):
+  ``/links`` — link matrices (distance, connected, warning, line of sight, RSSI), at
+  the scene rate; ``/messages`` — every delivery decision of the network (received /
+  dropped_loss / dropped_range): exactly the network's per-topic bookkeeping;
+  ``/publications`` — every message published; ``/roles`` — every robot's behaviour
+  state and LF role, whenever one changes; ``/result`` — the mission summary
+  (``mrcomm run --json``), once at the end.
+
+The ``foxglove.*`` channels are encoded by the SDK with the schemas it publishes
+(protobuf), so Foxglove decodes them as its own. Times are wall-clock: mission time 0
+is when the run started (its epoch in the file's ``mrcomm`` metadata, ``epoch_ns``);
+mrcomm's channels also carry mission seconds (``t``).
 
 Recording only observes (the network's delivery observer, read-only state after each
 step): the mission, and so its result, is the same as without recording. The file is
-written to a temporary name and renamed into place, so it is complete or absent.
+written to a temporary name and renamed into place, so it is complete or absent. With
+``serve`` the same channels also go to the SDK's WebSocket server, live, for the
+Foxglove app (``mrcomm run --foxglove``).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import json
 import time
-from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
+import foxglove
 import msgspec
-from mcap.writer import CompressionType, Writer
+from foxglove.channels import GridChannel, LogChannel, PoseInFrameChannel, SceneUpdateChannel
+from foxglove.mcap import MCAPWriteOptions
+from foxglove.websocket import ChannelView, Client, ServerListener
 
 import mrcomm
 from mrcomm.errors import InputError
 from mrcomm.experiment import recording_scene as scene
-from mrcomm.experiment.recording_schemas import (
-    Schema,
-    grid_schema,
-    log_schema,
-    pose_in_frame_schema,
-    scene_update_schema,
-)
 from mrcomm.fileio import atomic_write
 from mrcomm.messaging.messages import Message
 from mrcomm.metrics.timeline import ROLE
@@ -63,7 +65,6 @@ TOPIC_PUBLICATIONS = "/publications"
 TOPIC_ROLES = "/roles"
 TOPIC_EVENTS = "/events"
 TOPIC_RESULT = "/result"
-PROFILE = ""  # no ROS profile: plain JSON channels
 METADATA_NAME = "mrcomm"
 
 
@@ -71,51 +72,104 @@ def pose_topic(robot: str) -> str:
     return f"/robots/{robot}/pose"
 
 
-class JsonMcapWriter:
-    """MCAP channels carrying JSON messages described by JSON schemas."""
+#: The foxglove message channels: topic (or a robot's pose topic) -> SDK channel class.
+_TYPED_CHANNELS: dict[str, type[Any]] = {
+    TOPIC_MAP: GridChannel,
+    TOPIC_SCENE: SceneUpdateChannel,
+    TOPIC_EVENTS: LogChannel,
+}
 
-    def __init__(self, stream: IO[bytes]) -> None:
-        self._writer = Writer(stream, compression=CompressionType.ZSTD)
-        self._writer.start(profile=PROFILE, library=f"mrcomm {mrcomm.__version__}")
-        self._schemas: dict[str, int] = {}
-        self._channels: dict[str, int] = {}
-        self._sequence: Counter[str] = Counter()
+
+class _Latch(ServerListener):
+    """The WebSocket server's listener: a new subscriber gets the latched messages."""
+
+    def __init__(self, sink: RecordingSink) -> None:
+        self._sink = sink
+
+    def on_subscribe(self, client: Client, channel: ChannelView) -> None:
+        self._sink.resend(channel.topic)
+
+
+class RecordingSink:
+    """The channels of one recording on their own Foxglove SDK context (so that two
+    recordings in one process never mix), written to an MCAP file and, with
+    :meth:`serve`, to a live WebSocket server too. Messages are logged at wall-clock
+    times from ``clock``."""
+
+    def __init__(self, path: Path | None, clock: scene.RecordingClock) -> None:
+        """``path``: the MCAP file (None: no file, e.g. only a live server)."""
+        self.clock = clock
+        self.context = foxglove.Context()
+        options = MCAPWriteOptions(profile="")  # no ROS profile; zstd chunks
+        self._mcap = (
+            foxglove.open_mcap(
+                path, allow_overwrite=True, context=self.context, writer_options=options
+            )
+            if path is not None
+            else None
+        )
+        self._channels: dict[str, Any] = {}
+        self._server: Any = None
+        self._latched: dict[str, tuple[float, Any]] = {}
         self._encode = msgspec.json.Encoder().encode  # NaN/inf -> null: always valid JSON
 
-    def add_channel(self, topic: str, schema: Schema) -> None:
-        name = schema["title"]
-        schema_id = self._schemas.get(name)
-        if schema_id is None:
-            data = json.dumps(schema).encode()
-            schema_id = self._schemas[name] = self._writer.register_schema(
-                name=name, encoding="jsonschema", data=data
-            )
-        self._channels[topic] = self._writer.register_channel(
-            topic=topic, message_encoding="json", schema_id=schema_id
-        )
+    def add_typed(self, topic: str, channel_class: type[Any]) -> None:
+        """A channel of one of the SDK's message types (encoded by the SDK)."""
+        self._channels[topic] = channel_class(topic, context=self.context)
 
-    def write(self, topic: str, t: float, payload: Any) -> None:
-        ns = scene.to_ns(t)
-        self._sequence[topic] += 1
-        self._writer.add_message(
-            channel_id=self._channels[topic],
-            log_time=ns,
-            publish_time=ns,
-            data=self._encode(payload),
-            sequence=self._sequence[topic],
-        )
+    def add_json(self, topic: str, schema: scene.Schema) -> None:
+        """One of mrcomm's own channels: JSON messages described by a JSON schema."""
+        self._channels[topic] = foxglove.Channel(topic, schema=schema, context=self.context)
+
+    def write(self, topic: str, t: float, message: Any) -> None:
+        """Log ``message`` (an SDK message, or a JSON-able payload for a JSON channel)
+        at mission time ``t``."""
+        if isinstance(message, dict):
+            message = self._encode(message)
+        self._channels[topic].log(message, log_time=self.clock.ns(t))
 
     def metadata(self, name: str, data: dict[str, str]) -> None:
-        self._writer.add_metadata(name, data)
+        if self._mcap is not None:
+            self._mcap.write_metadata(name, data)
 
-    def finish(self) -> None:
-        self._writer.finish()
+    def serve(self, host: str, port: int) -> int:
+        """Also send every channel to a Foxglove WebSocket server (live view in the
+        Foxglove app); returns the port it listens on. Messages sent once (the map)
+        are sent again whenever a client subscribes to their channel, as a latched ROS
+        topic would be (so they are in the file again too, at that time)."""
+        try:
+            self._server = foxglove.start_server(
+                name="mrcomm",
+                host=host,
+                port=port,
+                context=self.context,
+                server_listener=_Latch(self),
+            )
+        except RuntimeError as err:  # the SDK's FoxgloveError, e.g. the port in use
+            message = str(err).removeprefix("FoxgloveError: ")
+            raise InputError(message, field="--foxglove-port") from None
+        return int(self._server.port)
+
+    def latch(self, topic: str, t: float, message: Any) -> None:
+        """Write ``message`` and keep it to send again to new subscribers."""
+        self._latched[topic] = (t, message)
+        self.write(topic, t, message)
+
+    def resend(self, topic: str) -> None:
+        if topic in self._latched:
+            self.write(topic, *self._latched[topic])
+
+    def close(self) -> None:
+        if self._mcap is not None:
+            self._mcap.close()
+        if self._server is not None:
+            self._server.stop()
 
 
 class MissionRecorder:
     """Observes a mission while it is stepped and writes what it sees."""
 
-    def __init__(self, mission: Mission, out: JsonMcapWriter, scene_period: float) -> None:
+    def __init__(self, mission: Mission, out: RecordingSink, scene_period: float) -> None:
         if not scene_period > 0.0:
             raise ValueError("scene_period must be positive")
         self.mission = mission
@@ -134,19 +188,18 @@ class MissionRecorder:
         self._status_index = 0
         self._last_states: dict[str, str] = {}
         self._last_roles: dict[str, str | None] = {}
+        for topic, channel_class in _TYPED_CHANNELS.items():
+            out.add_typed(topic, channel_class)
         for topic, schema in (
-            (TOPIC_MAP, grid_schema()),
-            (TOPIC_SCENE, scene_update_schema()),
             (TOPIC_LINKS, scene.links_schema()),
             (TOPIC_MESSAGES, scene.message_event_schema()),
             (TOPIC_PUBLICATIONS, scene.publication_schema()),
             (TOPIC_ROLES, scene.roles_schema()),
-            (TOPIC_EVENTS, log_schema()),
             (TOPIC_RESULT, scene.result_schema()),
         ):
-            out.add_channel(topic, schema)
+            out.add_json(topic, schema)
         for rid in mission.robot_ids:
-            out.add_channel(pose_topic(rid), pose_in_frame_schema())
+            out.add_typed(pose_topic(rid), PoseInFrameChannel)
         out.metadata(
             METADATA_NAME,
             {
@@ -155,10 +208,11 @@ class MissionRecorder:
                 "scenario": scenario.name,
                 "seed": str(mission.config.seed),
                 "scene_period": repr(scene_period),
+                "epoch_ns": str(out.clock.epoch_ns),
                 "config": mission.config.model_dump_json(),
             },
         )
-        out.write(TOPIC_MAP, 0.0, scene.grid_message(scenario.grid, 0.0))
+        out.latch(TOPIC_MAP, 0.0, scene.grid_message(scenario.grid, out.clock.timestamp(0.0)))
         mission.network.observer = self._on_delivery
         mission.network.publish_observer = self._on_publish
 
@@ -238,13 +292,15 @@ class MissionRecorder:
         for rid, timeline in m.timelines.items():
             start = self._event_index[rid]
             for event in timeline.events[start:]:
-                msg = scene.log_message(event.time, rid, event.label, event.data)
+                when = self.out.clock.timestamp(event.time)
+                msg = scene.log_message(when, rid, event.label, event.data)
                 self.out.write(TOPIC_EVENTS, event.time, msg)
             self._event_index[rid] = len(timeline.events)
         log = m.assigner.status_log
         for t, status in log[self._status_index :]:
             data = {"task": status.task_id, "robot": status.robot, "state": str(status.state)}
-            msg = scene.log_message(t, m.assigner.agent_id, "status_received", data)
+            when = self.out.clock.timestamp(t)
+            msg = scene.log_message(when, m.assigner.agent_id, "status_received", data)
             self.out.write(TOPIC_EVENTS, t, msg)
         self._status_index = len(log)
 
@@ -260,12 +316,13 @@ class MissionRecorder:
             )
             for rid in m.robot_ids
         ]
+        when = self.out.clock.timestamp(t)
         update = scene.scene_update(
-            t, robots, self._tasks(final), m.last_links, robot_radius=self._robot_radius
+            when, robots, self._tasks(final), m.last_links, robot_radius=self._robot_radius
         )
         self.out.write(TOPIC_SCENE, t, update)
         for rid in m.robot_ids:
-            self.out.write(pose_topic(rid), t, scene.pose_message(t, poses[rid]))
+            self.out.write(pose_topic(rid), t, scene.pose_message(when, poses[rid]))
         if m.last_links is not None:
             self.out.write(TOPIC_LINKS, t, scene.links_message(t, m.last_links))
 
@@ -293,32 +350,54 @@ class MissionRecorder:
 def run_and_record(
     config: RunConfig,
     resources: ScenarioResources | None,
-    path: Path,
+    path: Path | None,
     *,
     scene_period: float = 0.2,
+    serve: tuple[str, int] | None = None,
+    speed: float | None = None,
+    on_serving: Callable[[int], None] | None = None,
 ) -> MissionResult:
     """Simulate one mission, recording it to the MCAP file ``path``; return its results
-    (identical to :func:`~mrcomm.sim.mission.run_mission` except for wall time)."""
-    path = Path(path).expanduser()
-    if not path.parent.is_dir():
-        raise InputError(f"directory {path.parent} does not exist", file=path, field="--record")
+    (identical to :func:`~mrcomm.sim.mission.run_mission` except for wall time).
+
+    ``serve=(host, port)`` also streams the recording live to a Foxglove WebSocket
+    server (``on_serving(port)`` is called once it listens; ``path`` may then be None:
+    no file); ``speed`` paces the mission at that many times real time (None: as fast
+    as possible)."""
+    if path is not None:
+        path = Path(path).expanduser()
+        if not path.parent.is_dir():
+            raise InputError(f"directory {path.parent} does not exist", file=path, field="--record")
     if not scene_period > 0.0:
         raise InputError("must be positive", field="scene_period")
+    if speed is not None and not speed > 0.0:
+        raise InputError("must be positive", field="--speed")
     mission = Mission(config, resources)
     results: list[MissionResult] = []
 
-    def record(tmp: Path) -> None:
-        with tmp.open("wb") as stream:
-            out = JsonMcapWriter(stream)
-            recorder = MissionRecorder(mission, out, scene_period)
+    def record(tmp: Path | None) -> None:
+        out = RecordingSink(tmp, scene.RecordingClock(time.time_ns()))
+        try:
+            port = out.serve(*serve) if serve is not None else None
+            recorder = MissionRecorder(mission, out, scene_period)  # channels advertised
+            if port is not None and on_serving is not None:
+                on_serving(port)
             start = time.perf_counter()
             while not mission.done:
                 recorder.step()
+                if speed is not None:  # pace: mission time runs at speed x wall time
+                    ahead = mission.now / speed - (time.perf_counter() - start)
+                    if ahead > 0:
+                        time.sleep(ahead)
             wall = time.perf_counter() - start
             result = dataclasses.replace(mission.result(), wall_time_s=wall)
             recorder.finish(result)
-            out.finish()
             results.append(result)
+        finally:
+            out.close()
 
-    atomic_write(path, record)
+    if path is None:
+        record(None)
+    else:
+        atomic_write(path, record)
     return results[0]

@@ -41,7 +41,7 @@ class ChannelStats:
     schema: str
     encoding: str
     count: int = 0
-    start: float | None = None  # s, simulated
+    start: float | None = None  # s, mission time
     end: float | None = None
 
     def as_dict(self) -> dict[str, Any]:
@@ -108,6 +108,12 @@ def read_recording(path: Path) -> RecordingSummary:
 
 def _summarise(path: Path, stream: Any) -> RecordingSummary:
     reader = make_reader(stream, validate_crcs=True)
+    metadata: dict[str, dict[str, str]] = {}
+    for record in reader.iter_metadata():
+        metadata[record.name] = dict(record.metadata)
+    # Log times are wall-clock from the mission's start (recordings before the
+    # Foxglove SDK had mission time itself: no epoch).
+    epoch_ns = int(metadata.get(METADATA_NAME, {}).get("epoch_ns", "0"))
     stats: dict[int, ChannelStats] = {}
     outcomes: dict[str, Counter[str]] = {}
     result: dict[str, Any] | None = None
@@ -117,7 +123,7 @@ def _summarise(path: Path, stream: Any) -> RecordingSummary:
         if st is None:
             name = schema.name if schema is not None else ""
             st = stats[channel.id] = ChannelStats(channel.topic, name, channel.message_encoding)
-        t = message.log_time / 1e9
+        t = (message.log_time - epoch_ns) / 1e9
         st.count += 1
         st.start = t if st.start is None else min(st.start, t)
         st.end = t if st.end is None else max(st.end, t)
@@ -126,9 +132,6 @@ def _summarise(path: Path, stream: Any) -> RecordingSummary:
             outcomes.setdefault(str(event["topic"]), Counter())[str(event["outcome"])] += 1
         elif channel.topic == TOPIC_RESULT:
             result = decode_event(message.data)
-    metadata: dict[str, dict[str, str]] = {}
-    for record in reader.iter_metadata():
-        metadata[record.name] = dict(record.metadata)
     # Channels without messages still count (they say what the file could hold).
     summary = reader.get_summary()
     if summary is not None:

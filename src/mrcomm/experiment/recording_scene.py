@@ -1,27 +1,32 @@
 """The messages of an MCAP recording, built from plain data: the map as a
-``foxglove.Grid``, robot poses, the 3D scene (robots, tasks, links coloured by state),
-timeline events as ``foxglove.Log``, and the JSON schemas of mrcomm's own channels.
+``foxglove.Grid``, robot poses as ``foxglove.PoseInFrame``, the 3D scene (robots, tasks,
+links coloured by state) as ``foxglove.SceneUpdate``, timeline events as
+``foxglove.Log`` — the Foxglove SDK's own message types, which it encodes with their
+published schemas — and the JSON schemas of mrcomm's own channels.
 
 Pure functions, no simulator: :mod:`mrcomm.experiment.recording` gathers the data from a
-running mission and hands it here. Everything is in the ``map`` frame, so Foxglove's 3D
-panel needs no transforms (set its display frame to ``map``).
+running mission and hands it here with the time of the message (a
+:class:`RecordingClock` turns mission seconds into wall-clock time). Everything is in
+the ``map`` frame, so Foxglove's 3D panel needs no transforms (set its display frame to
+``map``).
 """
 
 from __future__ import annotations
 
-import base64
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from foxglove import messages as fg
 
-from mrcomm.experiment.recording_schemas import Schema
 from mrcomm.net.delivery import OUTCOMES
 from mrcomm.net.links import LinkState
 from mrcomm.world.geometry import Pose
 from mrcomm.world.occupancy import OccupancyGrid
+
+Schema = dict[str, Any]
 
 FRAME = "map"
 ROBOT_HEIGHT = 0.3  # m, only for drawing
@@ -64,31 +69,44 @@ _WALL_RGBA = (40, 40, 40, 255)
 _FREE_RGBA = (255, 255, 255, 40)
 
 
-def to_ns(t: float) -> int:
-    """Simulated seconds -> MCAP log time (nanoseconds)."""
-    return round(t * 1e9)
+@dataclass(frozen=True)
+class RecordingClock:
+    """Mission time -> recording time: nanoseconds since the Unix epoch, counted from
+    ``epoch_ns`` (the wall-clock time the mission started), so recordings line up
+    with other logs of the same day; the mission's own seconds stay in the payloads of
+    mrcomm's channels (``t``) and the epoch in the file's metadata."""
+
+    epoch_ns: int = 0
+
+    def ns(self, t: float) -> int:
+        return self.epoch_ns + round(t * 1e9)
+
+    def timestamp(self, t: float) -> fg.Timestamp:
+        ns = self.ns(t)
+        return fg.Timestamp(ns // 1_000_000_000, ns % 1_000_000_000)
 
 
-def stamp(t: float) -> dict[str, int]:
-    ns = to_ns(t)
-    return {"sec": ns // 1_000_000_000, "nsec": ns % 1_000_000_000}
+def _position(x: float, y: float, z: float = 0.0) -> fg.Vector3:
+    return fg.Vector3(x=x, y=y, z=z)
 
 
-def _position(x: float, y: float, z: float = 0.0) -> dict[str, float]:
-    return {"x": x, "y": y, "z": z}
+def _point(x: float, y: float, z: float = 0.0) -> fg.Point3:
+    return fg.Point3(x=x, y=y, z=z)
 
 
-def _yaw(theta: float) -> dict[str, float]:
+def yaw_quaternion(theta: float) -> tuple[float, float, float, float]:
+    """(x, y, z, w) of a rotation by ``theta`` about z."""
     half = theta / 2.0
-    return {"x": 0.0, "y": 0.0, "z": math.sin(half), "w": math.cos(half)}
+    return (0.0, 0.0, math.sin(half), math.cos(half))
 
 
-def _pose(x: float, y: float, z: float = 0.0, theta: float = 0.0) -> dict[str, Any]:
-    return {"position": _position(x, y, z), "orientation": _yaw(theta)}
+def _pose(x: float, y: float, z: float = 0.0, theta: float = 0.0) -> fg.Pose:
+    qx, qy, qz, qw = yaw_quaternion(theta)
+    return fg.Pose(position=_position(x, y, z), orientation=fg.Quaternion(x=qx, y=qy, z=qz, w=qw))
 
 
-def _rgba(color: Color) -> dict[str, float]:
-    return {"r": color[0], "g": color[1], "b": color[2], "a": color[3]}
+def _rgba(color: Color) -> fg.Color:
+    return fg.Color(r=color[0], g=color[1], b=color[2], a=color[3])
 
 
 def robot_color(index: int) -> Color:
@@ -96,35 +114,44 @@ def robot_color(index: int) -> Color:
 
 
 # -- map and poses ------------------------------------------------------------------------
-def grid_message(grid: OccupancyGrid, t: float = 0.0) -> dict[str, Any]:
-    """foxglove.Grid of the occupancy map: per cell ``occupancy`` (uint8, 0 free / 100
-    occupied) then ``red, green, blue, alpha``; rows from the map origin upwards, as in
-    :class:`OccupancyGrid` (so no flip)."""
+GRID_FIELDS = ("occupancy", "red", "green", "blue", "alpha")
+
+
+def grid_cells(grid: OccupancyGrid) -> np.ndarray:
+    """The map's cells, rows from the map origin upwards as in :class:`OccupancyGrid`
+    (so no flip): per cell ``occupancy`` (uint8, 0 free / 100 occupied) then ``red,
+    green, blue, alpha``."""
     occupied = grid.occupied
-    cells = np.empty((*occupied.shape, 5), dtype=np.uint8)
+    cells = np.empty((*occupied.shape, len(GRID_FIELDS)), dtype=np.uint8)
     cells[..., 0] = np.where(occupied, _OCCUPIED, _FREE)
     cells[..., 1:] = np.where(occupied[..., None], _WALL_RGBA, _FREE_RGBA)
-    names = ("occupancy", "red", "green", "blue", "alpha")
-    return {
-        "timestamp": stamp(t),
-        "frame_id": FRAME,
-        "pose": _pose(grid.origin[0], grid.origin[1]),
-        "column_count": grid.width,
-        "cell_size": {"x": grid.resolution, "y": grid.resolution},
-        "row_stride": grid.width * 5,
-        "cell_stride": 5,
-        "fields": [{"name": n, "offset": i, "type": 1} for i, n in enumerate(names)],  # UINT8
-        "data": base64.b64encode(cells.tobytes()).decode("ascii"),
-    }
+    return cells
 
 
-def pose_message(t: float, pose: Pose) -> dict[str, Any]:
+def grid_message(grid: OccupancyGrid, when: fg.Timestamp) -> fg.Grid:
+    """foxglove.Grid of the occupancy map (:func:`grid_cells`)."""
+    stride = len(GRID_FIELDS)
+    uint8 = fg.PackedElementFieldNumericType.Uint8
+    return fg.Grid(
+        timestamp=when,
+        frame_id=FRAME,
+        pose=_pose(grid.origin[0], grid.origin[1]),
+        column_count=grid.width,
+        cell_size=fg.Vector2(x=grid.resolution, y=grid.resolution),
+        row_stride=grid.width * stride,
+        cell_stride=stride,
+        fields=[
+            fg.PackedElementField(name=n, offset=i, type=uint8) for i, n in enumerate(GRID_FIELDS)
+        ],
+        data=grid_cells(grid).tobytes(),
+    )
+
+
+def pose_message(when: fg.Timestamp, pose: Pose) -> fg.PoseInFrame:
     """foxglove.PoseInFrame of one robot (true pose, map frame)."""
-    return {
-        "timestamp": stamp(t),
-        "frame_id": FRAME,
-        "pose": _pose(pose.x, pose.y, 0.0, pose.theta),
-    }
+    return fg.PoseInFrame(
+        timestamp=when, frame_id=FRAME, pose=_pose(pose.x, pose.y, 0.0, pose.theta)
+    )
 
 
 # -- the scene ----------------------------------------------------------------------------
@@ -157,119 +184,125 @@ def link_state(links: LinkState, i: int, j: int) -> str:
     return "ok"
 
 
-def _entity(t: float, entity_id: str, **primitives: Any) -> dict[str, Any]:
-    metadata = primitives.pop("metadata", {})
-    return {
-        "timestamp": stamp(t),
-        "frame_id": FRAME,
-        "id": entity_id,
-        "lifetime": {"sec": 0, "nsec": 0},  # until replaced
-        "frame_locked": False,
-        "metadata": [{"key": k, "value": str(v)} for k, v in metadata.items()],
+def _entity(
+    when: fg.Timestamp, entity_id: str, metadata: Mapping[str, Any], **primitives: Any
+) -> fg.SceneEntity:
+    return fg.SceneEntity(
+        timestamp=when,
+        frame_id=FRAME,
+        id=entity_id,
+        lifetime=fg.Duration(0, 0),  # until replaced
+        frame_locked=False,
+        metadata=[fg.KeyValuePair(key=k, value=str(v)) for k, v in metadata.items()],
         **primitives,
-    }
+    )
 
 
-def _text(x: float, y: float, z: float, text: str, color: Color) -> dict[str, Any]:
-    return {
-        "pose": _pose(x, y, z),
-        "billboard": True,
-        "font_size": 14.0,
-        "scale_invariant": True,  # pixels: readable at any zoom
-        "color": _rgba(color),
-        "text": text,
-    }
+def _text(x: float, y: float, z: float, text: str, color: Color) -> fg.TextPrimitive:
+    return fg.TextPrimitive(
+        pose=_pose(x, y, z),
+        billboard=True,
+        font_size=14.0,
+        scale_invariant=True,  # pixels: readable at any zoom
+        color=_rgba(color),
+        text=text,
+    )
 
 
-def robot_entity(t: float, robot: RobotView, radius: float) -> dict[str, Any]:
+def robot_entity(when: fg.Timestamp, robot: RobotView, radius: float) -> fg.SceneEntity:
     p = robot.pose
     label = robot.id if robot.role in (None, "na") else f"{robot.id} ({robot.role})"
     return _entity(
-        t,
+        when,
         f"robot/{robot.id}",
+        {"state": robot.state, "role": robot.role or ""},
         cylinders=[
-            {
-                "pose": _pose(p.x, p.y, ROBOT_HEIGHT / 2),
-                "size": {"x": 2 * radius, "y": 2 * radius, "z": ROBOT_HEIGHT},
-                "bottom_scale": 1.0,
-                "top_scale": 1.0,
-                "color": _rgba(robot.color),
-            }
+            fg.CylinderPrimitive(
+                pose=_pose(p.x, p.y, ROBOT_HEIGHT / 2),
+                size=_position(2 * radius, 2 * radius, ROBOT_HEIGHT),
+                bottom_scale=1.0,
+                top_scale=1.0,
+                color=_rgba(robot.color),
+            )
         ],
         arrows=[
-            {
-                "pose": _pose(p.x, p.y, ROBOT_HEIGHT + 0.02, p.theta),
-                "shaft_length": 2 * radius,
-                "shaft_diameter": 0.05,
-                "head_length": 0.12,
-                "head_diameter": 0.12,
-                "color": _rgba((1.0, 1.0, 1.0, 1.0)),
-            }
+            fg.ArrowPrimitive(
+                pose=_pose(p.x, p.y, ROBOT_HEIGHT + 0.02, p.theta),
+                shaft_length=2 * radius,
+                shaft_diameter=0.05,
+                head_length=0.12,
+                head_diameter=0.12,
+                color=_rgba((1.0, 1.0, 1.0, 1.0)),
+            )
         ],
         texts=[_text(p.x, p.y, ROBOT_HEIGHT + 0.4, label, robot.color)],
-        metadata={"state": robot.state, "role": robot.role or ""},
     )
 
 
-def task_entity(t: float, task: TaskView) -> dict[str, Any]:
+def task_entity(when: fg.Timestamp, task: TaskView) -> fg.SceneEntity:
     color = TASK_COLORS[task.state]
     return _entity(
-        t,
+        when,
         f"task/{task.id}",
+        {"state": task.state, "robots": ",".join(task.robots)},
         cubes=[
-            {
-                "pose": _pose(task.x, task.y, TASK_SIZE / 2),
-                "size": {"x": TASK_SIZE, "y": TASK_SIZE, "z": TASK_SIZE},
-                "color": _rgba(color),
-            }
+            fg.CubePrimitive(
+                pose=_pose(task.x, task.y, TASK_SIZE / 2),
+                size=_position(TASK_SIZE, TASK_SIZE, TASK_SIZE),
+                color=_rgba(color),
+            )
         ],
         texts=[_text(task.x, task.y, TASK_SIZE + 0.3, f"task {task.id}", color)],
-        metadata={"state": task.state, "robots": ",".join(task.robots)},
     )
 
 
-def links_entity(t: float, robots: Sequence[RobotView], links: LinkState) -> dict[str, Any]:
+def link_states(robots: Sequence[RobotView], links: LinkState) -> dict[str, str]:
+    """State of every robot pair ``"a-b"`` (robots are the first rows of ``links``,
+    in team order)."""
+    return {
+        f"{a.id}-{robots[j].id}": link_state(links, i, j)
+        for i, a in enumerate(robots)
+        for j in range(i + 1, len(robots))
+    }
+
+
+def links_entity(
+    when: fg.Timestamp, robots: Sequence[RobotView], links: LinkState
+) -> fg.SceneEntity:
     """One line per robot pair, coloured by link state (green ok, orange warning, red
-    disconnected). Robots are the first rows of ``links`` in team order."""
+    disconnected)."""
+    states = link_states(robots, links)
+    where = {r.id: r.pose for r in robots}
     lines = []
-    states: dict[str, str] = {}
-    for i, a in enumerate(robots):
-        for j in range(i + 1, len(robots)):
-            b = robots[j]
-            state = link_state(links, i, j)
-            states[f"{a.id}-{b.id}"] = state
-            lines.append(
-                {
-                    "type": 0,  # LINE_STRIP
-                    "pose": _pose(0.0, 0.0),
-                    "thickness": 3.0,
-                    "scale_invariant": True,
-                    "points": [
-                        _position(a.pose.x, a.pose.y, ROBOT_HEIGHT),
-                        _position(b.pose.x, b.pose.y, ROBOT_HEIGHT),
-                    ],
-                    "color": _rgba(LINK_COLORS[state]),
-                    "colors": [],
-                    "indices": [],
-                }
+    for pair, state in states.items():
+        a, b = (where[r] for r in pair.split("-", 1))
+        lines.append(
+            fg.LinePrimitive(
+                type=fg.LinePrimitiveLineType.LineStrip,
+                pose=_pose(0.0, 0.0),
+                thickness=3.0,
+                scale_invariant=True,
+                points=[_point(a.x, a.y, ROBOT_HEIGHT), _point(b.x, b.y, ROBOT_HEIGHT)],
+                color=_rgba(LINK_COLORS[state]),
             )
-    return _entity(t, "links", lines=lines, metadata=states)
+        )
+    return _entity(when, "links", states, lines=lines)
 
 
 def scene_update(
-    t: float,
+    when: fg.Timestamp,
     robots: Sequence[RobotView],
     tasks: Sequence[TaskView],
     links: LinkState | None,
     *,
     robot_radius: float,
-) -> dict[str, Any]:
+) -> fg.SceneUpdate:
     """foxglove.SceneUpdate replacing every entity (same ids each time)."""
-    entities = [robot_entity(t, r, robot_radius) for r in robots]
-    entities += [task_entity(t, task) for task in tasks]
+    entities = [robot_entity(when, r, robot_radius) for r in robots]
+    entities += [task_entity(when, task) for task in tasks]
     if links is not None and len(robots) > 1:
-        entities.append(links_entity(t, robots, links))
-    return {"deletions": [], "entities": entities}
+        entities.append(links_entity(when, robots, links))
+    return fg.SceneUpdate(deletions=[], entities=entities)
 
 
 def links_message(t: float, links: LinkState) -> dict[str, Any]:
@@ -294,17 +327,11 @@ def links_message(t: float, links: LinkState) -> dict[str, Any]:
 _WARNING_EVENTS = frozenset({"near_collision", "nav_aborted", "disconnect_detected"})
 
 
-def log_message(t: float, source: str, label: str, data: Mapping[str, Any]) -> dict[str, Any]:
+def log_message(when: fg.Timestamp, source: str, label: str, data: Mapping[str, Any]) -> fg.Log:
     """foxglove.Log of one timeline event (warnings for collisions and disconnects)."""
     details = " ".join(f"{k}={v}" for k, v in data.items())
-    return {
-        "timestamp": stamp(t),
-        "level": 3 if label in _WARNING_EVENTS else 2,  # WARNING / INFO
-        "message": f"{label} {details}".strip(),
-        "name": source,
-        "file": "",
-        "line": 0,
-    }
+    level = fg.LogLevel.Warning if label in _WARNING_EVENTS else fg.LogLevel.Info
+    return fg.Log(timestamp=when, level=level, message=f"{label} {details}".strip(), name=source)
 
 
 # -- schemas of mrcomm's own JSON channels -------------------------------------------------
