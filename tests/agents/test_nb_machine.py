@@ -10,7 +10,13 @@ import pytest
 
 from mrcomm.agents.executor import NB_TRANSITIONS, TaskExecutor
 from mrcomm.agents.team_view import TeamView
-from mrcomm.messaging.messages import TOPIC_POSE, TOPIC_TASK_STATUS, TaskState
+from mrcomm.messaging.messages import (
+    TOPIC_POSE,
+    TOPIC_TASK_STATUS,
+    CommandKind,
+    OperatorCommand,
+    TaskState,
+)
 from mrcomm.metrics import labels as L
 from mrcomm.ports import NavStatus
 
@@ -155,6 +161,48 @@ def test_a_task_that_depends_on_another_waits_for_its_completion(nb: Harness) ->
     assert nb.step() == "navigating" and nb.base.goal == (1.0, 0.0)
 
 
+def command(kind: CommandKind, robot: str = "robot_1", **fields: Any) -> OperatorCommand:
+    return OperatorCommand(
+        sender="operator", incarnation=1, seq=1, stamp=0.0, command=kind, robot=robot, **fields
+    )
+
+
+def test_operator_commands_change_the_agenda_and_stop_the_robot(nb: Harness) -> None:
+    far, near = task("far", 10.0, 0.0), task("near", 2.0, 0.0)
+    nb.assign([far, near])
+    assert nb.step() == "navigating" and nb.base.goal == (2.0, 0.0)
+    # The task it drives to is reassigned: it stops and chooses again.
+    nb.agent.on_command(command(CommandKind.REASSIGN, "robot_2", task=near, former="robot_1"))
+    assert nb.step() == "retrying" and nb.agent.agenda == [far]
+    nb.step(times=20)
+    assert nb.base.goal == (10.0, 0.0)
+    # Paused: it stops and decides nothing (its pose still goes out) until resumed.
+    nb.agent.on_command(command(CommandKind.PAUSE))
+    assert nb.base.goal is None and nb.agent.paused
+    poses = len(nb.bus.published(TOPIC_POSE))
+    nb.step(times=10)
+    assert nb.base.goal is None and len(nb.bus.published(TOPIC_POSE)) > poses
+    nb.agent.on_command(command(CommandKind.RESUME))
+    assert nb.base.goal == (10.0, 0.0)
+    nb.base.arrive()
+    assert nb.step() == "idle"
+    # A task added to an idle robot: it plans again; a command for another robot is
+    # not its business.
+    nb.agent.on_command(command(CommandKind.ADD, "robot_2", task=task("x", 1.0, 1.0)))
+    assert nb.step() == "idle"
+    nb.agent.on_command(command(CommandKind.ADD, task=task("x", 1.0, 1.0)))
+    assert nb.step() == "navigating" and nb.base.goal == (1.0, 1.0)
+    nb.base.arrive()
+    assert nb.step() == "idle"
+    # Sent back to a task it did (its status was lost): it does and reports it again.
+    nb.agent.on_command(command(CommandKind.REDO, task=task("x", 1.0, 1.0)))
+    assert nb.step() == "navigating" and nb.base.goal == (1.0, 1.0)
+    nb.base.arrive()
+    nb.step()
+    done = [s.task_id for s in nb.bus.published(TOPIC_TASK_STATUS) if s.state is TaskState.SUCCESS]
+    assert done == ["far", "x", "x"]
+
+
 def _fields(message: Any) -> dict[str, Any]:
     return {f: getattr(message, f) for f in message.__struct_fields__}
 
@@ -179,4 +227,5 @@ SCENARIOS = [
     test_a_mate_ahead_heading_at_us_is_a_near_collision_then_we_resume,
     test_an_idle_robot_in_a_mates_way_steps_aside,
     test_a_task_that_depends_on_another_waits_for_its_completion,
+    test_operator_commands_change_the_agenda_and_stop_the_robot,
 ]

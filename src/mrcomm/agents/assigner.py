@@ -12,6 +12,7 @@ from collections import Counter
 from collections.abc import Sequence
 
 from mrcomm.agents.assignment import round_robin
+from mrcomm.agents.commands import CommandInbox, command_team
 from mrcomm.messaging.aon import AonEndpoint
 from mrcomm.messaging.messages import (
     TOPIC_ASSIGNMENT,
@@ -19,8 +20,10 @@ from mrcomm.messaging.messages import (
     TOPIC_POSE,
     TOPIC_TASK_STATUS,
     Assignment,
+    CommandKind,
     Heartbeat,
     Message,
+    OperatorCommand,
     TaskSpec,
     TaskState,
     TaskStatus,
@@ -69,6 +72,9 @@ class TaskAssigner:
             )
         bus.subscribe(TOPIC_TASK_STATUS, self._on_status)
         bus.subscribe(TOPIC_POSE, self._on_pose)
+        self.commands = CommandInbox(
+            bus, incarnation, lambda: command_team(self.team, self.agent_id), self.on_command
+        )
 
     @property
     def agent_id(self) -> str:
@@ -77,7 +83,7 @@ class TaskAssigner:
     @property
     def settled(self) -> bool:
         """No acknowledged message still in flight at the assigner."""
-        return self.aon is None or not self.aon.pending_ids()
+        return (self.aon is None or not self.aon.pending_ids()) and self.commands.settled()
 
     def set_time(self, now: float) -> None:
         """The time of the coming delivery and step (see TaskExecutor.set_time)."""
@@ -85,6 +91,7 @@ class TaskAssigner:
 
     def step(self, now: float) -> None:
         self._now = now
+        self.commands.step(now)
         if self.aon is not None:
             self.aon.step(now)
             if now >= self._next_heartbeat:
@@ -121,6 +128,19 @@ class TaskAssigner:
         self.status_log.append((self._now, status))
         if status.state is TaskState.SUCCESS:
             self.success_received.setdefault((status.task_id, status.robot), self._now)
+
+    def on_command(self, command: OperatorCommand) -> None:
+        """An operator's command: a task reassigned or added changes whose SUCCESS the
+        assigner expects (what failed tasks are counted against)."""
+        task = command.task
+        if task is None or command.robot not in self.agenda:
+            return
+        if command.command is CommandKind.REASSIGN and command.former in self.agenda:
+            former = self.agenda[command.former]
+            self.agenda[command.former] = [t for t in former if t.task_id != task.task_id]
+        adds = command.command in (CommandKind.REASSIGN, CommandKind.ADD)
+        if adds and task not in self.agenda[command.robot]:
+            self.agenda[command.robot].append(task)
 
     def failed(self) -> list[tuple[str, str]]:
         """(task_id, robot) pairs whose completion never reached the assigner."""

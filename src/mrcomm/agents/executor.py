@@ -26,6 +26,7 @@ from transitions import Machine
 from mrcomm.agents import agenda
 from mrcomm.agents.avoidance import Avoidance
 from mrcomm.agents.collision import CollisionParams, MateState
+from mrcomm.agents.commands import CommandInbox, command_team
 from mrcomm.agents.machine_table import StateEntry, build_table
 from mrcomm.agents.team_view import TeamView
 from mrcomm.messaging.messages import (
@@ -33,7 +34,9 @@ from mrcomm.messaging.messages import (
     TOPIC_POSE,
     TOPIC_TASK_STATUS,
     Assignment,
+    CommandKind,
     Message,
+    OperatorCommand,
     PoseMsg,
     TaskSpec,
     TaskState,
@@ -67,6 +70,8 @@ NB_TRANSITIONS: list[dict[str, Any]] = [
     {"trigger": "resume", "source": "avoiding", "dest": "navigating"},
     {"trigger": "make_way", "source": "idle", "dest": "clearing"},
     {"trigger": "cleared", "source": "clearing", "dest": "idle"},
+    # An operator gave an idle robot tasks: it plans again.
+    {"trigger": "new_tasks", "source": "idle", "dest": "unassigned"},
 ]
 
 #: Timeline activity recorded while in each state.
@@ -218,6 +223,9 @@ class TaskExecutor:
         bus.subscribe(TOPIC_ASSIGNMENT, self._on_assignment)
         bus.subscribe(TOPIC_POSE, self._on_pose)
         bus.subscribe(TOPIC_TASK_STATUS, self._on_status)
+        self.paused = False  # by the operator
+        self._assigner_id = ""
+        self.commands = CommandInbox(bus, incarnation, self._command_team, self.on_command)
 
     # -- the agent's life ----------------------------------------------------------
     @property
@@ -252,11 +260,14 @@ class TaskExecutor:
         self._now = now
         if self._t0 is None:
             return
-        if self.leaf() == "unassigned":
+        self.commands.step(now)
+        if self.leaf() == "unassigned" and not self.paused:
             self._select_next()
         if now >= self._next_pose:
             self._publish_pose()
             self._next_pose = max(self._next_pose + self.params.pose_period, now)
+        if self.paused:
+            return  # stopped by the operator: shares its pose, decides nothing
         self.before_state_step()
         # A behaviour may handle a nested state itself (``_step_leader_holding``);
         # otherwise the NB handler of the innermost state runs (see machine_table).
@@ -269,6 +280,12 @@ class TaskExecutor:
 
     # -- state handlers --------------------------------------------------------------
     def _step_navigating(self) -> None:
+        if self.goal is not None and self.goal not in self.agenda and self._t0 is not None:
+            # The operator reassigned the task it was driving to: choose again.
+            self.base.cancel()
+            self.goal = None
+            self.trigger("nav_fail")
+            return
         status = self.base.status
         if not self._moved_once and self.base.speed > 1e-3:
             self._moved_once = True
@@ -291,6 +308,11 @@ class TaskExecutor:
             return
         task = self.goal
         assert task is not None
+        if task not in self.agenda:  # reassigned by the operator on the way
+            self.goal = None
+            self.timeline.event(L.TASK_DROPPED, self._now, task_id=task.task_id)
+            self.after_task_completed()
+            return
         self.agenda.remove(task)
         self.completed.append(task.task_id)
         self.known_done.add(task.task_id)
@@ -484,6 +506,7 @@ class TaskExecutor:
             return
         self.agenda = list(message.tasks)
         self.team = tuple(r for r in message.team if r != self.robot_id)
+        self._assigner_id = message.sender
         self._t0 = self._now
         self.timeline.event(L.ASSIGNMENT_RECEIVED, self._now, tasks=len(self.agenda))
         self.timeline.set_state(ACTIVITY, L.INIT, self._now)
@@ -502,6 +525,40 @@ class TaskExecutor:
         """A team mate's status reached us (by whatever layer)."""
         if status.state is TaskState.SUCCESS:
             self.known_done.add(status.task_id)
+
+    # -- the operator's commands (agents/commands.py) --------------------------------
+    def _command_team(self) -> tuple[str, ...] | None:
+        if self._t0 is None:
+            return None
+        return command_team(tuple(sorted((*self.team, self.robot_id))), self._assigner_id)
+
+    def on_command(self, command: OperatorCommand) -> None:
+        """Act on the part of an operator's command that concerns this robot: a task
+        taken away leaves the agenda (a robot driving to it chooses again), a task
+        given, added or to do again joins it (an idle robot plans again), pause stops
+        the robot where it is and resume sends it on to where it was going."""
+        kind, task, me = command.command, command.task, self.robot_id
+        if me not in (command.robot, command.former):
+            return
+        self.timeline.event(L.OPERATOR_COMMAND, self._now, command=str(kind))
+        if kind is CommandKind.REASSIGN and task is not None and command.former == me:
+            self.agenda = [t for t in self.agenda if t.task_id != task.task_id]
+        elif kind in (CommandKind.REASSIGN, CommandKind.ADD, CommandKind.REDO) and task:
+            if kind is CommandKind.REDO and task.task_id in self.completed:
+                self.completed.remove(task.task_id)  # done again, reported again
+            if task not in self.agenda and task.task_id not in self.completed:
+                self.agenda.append(task)
+                self._agenda_reported = False
+                if self.leaf() == "idle":
+                    self.trigger("new_tasks")
+        elif kind is CommandKind.PAUSE and not self.paused:
+            self.paused = True
+            self.base.cancel()
+        elif kind is CommandKind.RESUME and self.paused:
+            self.paused = False
+            target = self.navigation_target()
+            if target is not None:
+                self.base.navigate_to(*target)
 
     def activity_of(self, state: str) -> str | None:
         """Timeline activity recorded while in ``state`` (full state name)."""

@@ -63,6 +63,13 @@ def run(
             "possible); with --foxglove, to watch it.",
         ),
     ] = None,
+    operator: Annotated[
+        Path | None,
+        typer.Option(
+            help="An operator in the loop: a YAML file with where it sits and the commands "
+            "it sends when (reassign, redo, add, pause, resume; README)."
+        ),
+    ] = None,
     db: DbOpt = None,
     experiment: ExperimentOpt = None,
     keep_duplicate: KeepDuplicateOpt = False,
@@ -77,6 +84,13 @@ def run(
         check_output_file(record, "--record", RECORDING_SUFFIXES)
     check_db(db, experiment)
     warn_ignored_settings(config)
+    resources, plan = None, None
+    if operator is not None:
+        from mrcomm.run.operator_plan import load_operator_plan
+        from mrcomm.run.resources import ScenarioResources
+
+        resources = ScenarioResources.load(config.scenario)
+        plan = load_operator_plan(operator, resources.scenario)
     if record is not None or foxglove or speed is not None:
         from mrcomm.experiment.recording import run_and_record
 
@@ -84,9 +98,12 @@ def run(
             typer.echo(f"Foxglove: open ws://localhost:{port} in the Foxglove app", err=True)
 
         serve = ("127.0.0.1", foxglove_port) if foxglove else None
-        result = run_and_record(config, None, record, serve=serve, speed=speed, on_serving=serving)
+        result = run_and_record(
+            config, resources, record, serve=serve, speed=speed, on_serving=serving,
+            operator=plan,
+        )  # fmt: skip
     else:
-        result = run_mission(config)
+        result = run_mission(config, resources, plan)
     if plot is not None:
         from mrcomm.analysis.mission_plot import save_mission_plot
 
@@ -219,6 +236,16 @@ def print_result(result: MissionResult, console: Console) -> None:
         for key in _LF_KEYS:
             lf.add_row(_named(key), fmt(m.get(key)))
         console.print(lf)
+
+    commands = result.operator.get("commands", [])
+    if commands:
+        table = _table("Operator commands", "time (s)", "command", "robot", "task",
+                       "acknowledged by", "finished (s)")  # fmt: skip
+        for c in commands:
+            acked = ", ".join(m for m in c["acknowledged"] if m != "operator")
+            table.add_row(fmt(c["time"]), c["command"], c["robot"], c["task_id"] or "-",
+                          acked or "-", fmt(c["finished_at"]))  # fmt: skip
+        console.print(table)
 
     total = result.aon.get("total") or {}
     if total:

@@ -52,6 +52,7 @@ from mrcomm.fileio import atomic_write
 from mrcomm.messaging.messages import Message
 from mrcomm.metrics.timeline import ROLE
 from mrcomm.run.config import RunConfig
+from mrcomm.run.operator_plan import OperatorPlan
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.result import MissionResult
 from mrcomm.sim.mission import Mission
@@ -186,6 +187,7 @@ class MissionRecorder:
         self._next_scene = 0  # index k of the next scene, due at k * scene_period
         self._event_index = dict.fromkeys(mission.robot_ids, 0)
         self._status_index = 0
+        self._command_index = 0
         self._last_states: dict[str, str] = {}
         self._last_roles: dict[str, str | None] = {}
         for topic, channel_class in _TYPED_CHANNELS.items():
@@ -303,6 +305,15 @@ class MissionRecorder:
             msg = scene.log_message(when, m.assigner.agent_id, "status_received", data)
             self.out.write(TOPIC_EVENTS, t, msg)
         self._status_index = len(log)
+        operator = m.operator
+        if operator is not None:
+            for record in operator.log[self._command_index :]:
+                data = {"command": str(record.command), "robot": record.robot,
+                        "task": record.task_id}  # fmt: skip
+                when = self.out.clock.timestamp(record.time)
+                msg = scene.log_message(when, operator.agent_id, "command_sent", data)
+                self.out.write(TOPIC_EVENTS, record.time, msg)
+            self._command_index = len(operator.log)
 
     def _scene(self, t: float, poses: dict[str, Pose], *, final: bool) -> None:
         m = self.mission
@@ -356,6 +367,7 @@ def run_and_record(
     serve: tuple[str, int] | None = None,
     speed: float | None = None,
     on_serving: Callable[[int], None] | None = None,
+    operator: OperatorPlan | None = None,
 ) -> MissionResult:
     """Simulate one mission, recording it to the MCAP file ``path``; return its results
     (identical to :func:`~mrcomm.sim.mission.run_mission` except for wall time).
@@ -363,7 +375,7 @@ def run_and_record(
     ``serve=(host, port)`` also streams the recording live to a Foxglove WebSocket
     server (``on_serving(port)`` is called once it listens; ``path`` may then be None:
     no file); ``speed`` paces the mission at that many times real time (None: as fast
-    as possible)."""
+    as possible); ``operator``: an operator in the loop (:mod:`mrcomm.run.operator_plan`)."""
     if path is not None:
         path = Path(path).expanduser()
         if not path.parent.is_dir():
@@ -372,7 +384,7 @@ def run_and_record(
         raise InputError("must be positive", field="scene_period")
     if speed is not None and not speed > 0.0:
         raise InputError("must be positive", field="--speed")
-    mission = Mission(config, resources)
+    mission = Mission(config, resources, operator)
     results: list[MissionResult] = []
 
     def record(tmp: Path | None) -> None:

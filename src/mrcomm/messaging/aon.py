@@ -60,6 +60,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from typing import Any
 
 from mrcomm.messaging.aon_state import (
     AonStats,
@@ -69,12 +70,21 @@ from mrcomm.messaging.aon_state import (
     SeqRecord,
     TeamIndex,
 )
-from mrcomm.messaging.messages import TOPIC_AON, AonEntry, AonMsg, Message, TaskStatus
+from mrcomm.messaging.messages import (
+    TOPIC_AON,
+    AonEntry,
+    AonMsg,
+    Message,
+    OperatorCommand,
+    TaskStatus,
+)
 from mrcomm.ports import Bus
 
 __all__ = ["AonEndpoint", "AonStats", "FinishReport", "MessageId"]
 
-DeliverFn = Callable[[TaskStatus, MessageId], None]
+#: What AON carries: task statuses (topic ``aon``), operator commands (``command``).
+Payload = TaskStatus | OperatorCommand
+DeliverFn = Callable[[Any, MessageId], None]
 FinishFn = Callable[[MessageId, FinishReport], None]
 
 # Placeholder time for state created before the endpoint first saw a clock (a message
@@ -97,7 +107,12 @@ class AonEndpoint:
         lease: float | None = None,
         on_deliver: DeliverFn,
         on_finished: FinishFn | None = None,
+        topic: str = TOPIC_AON,
+        subscribe: bool = True,
     ) -> None:
+        """``topic``: where this team's AON messages travel (one AON team per topic);
+        ``subscribe=False``: the owner hands the endpoint its messages
+        (:meth:`receive`) instead of the bus."""
         if resend_period <= 0.0:
             raise ValueError("resend_period must be positive")
         if failsafe_timeout <= 0.0:
@@ -127,7 +142,9 @@ class AonEndpoint:
         self._heard: set[str] = set()  # publishers heard since the last step
         self._expired_bits = 0
         self.stats = AonStats()
-        bus.subscribe(TOPIC_AON, self._on_message)
+        self.topic = topic
+        if subscribe:
+            bus.subscribe(topic, self._on_message)
 
     # ------------------------------------------------------------------ public API
 
@@ -136,7 +153,7 @@ class AonEndpoint:
         """Team members, sorted by id (the bitmap order)."""
         return self._team.members
 
-    def send(self, payload: TaskStatus, now: float) -> MessageId:
+    def send(self, payload: Payload, now: float) -> MessageId:
         """Start communicating ``payload`` to the team; publishes at once (stage 1)."""
         self._clock(now)
         msg_id: MessageId = (self.owner, self.incarnation, self._seq)
@@ -186,6 +203,13 @@ class AonEndpoint:
         up to date when they are heard again."""
         return tuple(m for m, st in self._states.items() if st.reported_left_out is not None)
 
+    def holders(self, msg_id: MessageId) -> tuple[str, ...] | None:
+        """The members known to have ``msg_id`` (None once its state is released)."""
+        st = self._states.get(msg_id)
+        if st is None:
+            return None
+        return self._team.names(st.have)
+
     def is_finished(self, msg_id: MessageId) -> bool:
         """True once ``msg_id`` has been reported finished here (also after release)."""
         st = self._states.get(msg_id)
@@ -204,6 +228,10 @@ class AonEndpoint:
         }
 
     # ------------------------------------------------------------------ receiving
+
+    def receive(self, message: Message) -> None:
+        """Handle one message of the topic (what the bus calls when subscribed)."""
+        self._on_message(message)
 
     def _on_message(self, message: Message) -> None:
         if not isinstance(message, AonMsg) or message.sender == self.owner:
@@ -376,7 +404,7 @@ class AonEndpoint:
         if not entries:
             return
         self._bus.publish(
-            TOPIC_AON,
+            self.topic,
             AonMsg(
                 sender=self.owner,
                 incarnation=self.incarnation,

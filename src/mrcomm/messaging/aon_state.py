@@ -10,7 +10,7 @@ import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from mrcomm.messaging.messages import TaskStatus
+from mrcomm.messaging.messages import OperatorCommand, TaskStatus
 
 #: Identity of an AON message: (sender id, sender incarnation, sender's AON sequence).
 MessageId = tuple[str, int, int]
@@ -77,7 +77,7 @@ class SeqRecord:
 class MsgState:
     """What one member knows about one message it holds and has not yet released."""
 
-    payload: TaskStatus
+    payload: TaskStatus | OperatorCommand
     #: Members known (from real receipts) to have the message.
     have: int
     #: Members known to have set *received* (each knew every member had it).

@@ -25,6 +25,7 @@ TOPIC_RSSI = "rssi"
 TOPIC_AON = "aon"
 TOPIC_HEARTBEAT = "heartbeat"
 TOPIC_RELAYED = "relayed"
+TOPIC_COMMAND = "command"  # the operator's commands, with AON (messages: AonMsg)
 # How the network treats each topic: mrcomm.messaging.topics.
 
 
@@ -77,6 +78,28 @@ class TaskStatus(Message, frozen=True, tag="task_status"):
     state: TaskState
 
 
+class CommandKind(StrEnum):
+    """What an operator can tell the team (:class:`OperatorCommand`)."""
+
+    REASSIGN = "reassign"  # the task goes to ``robot`` (its former owner drops it)
+    REDO = "redo"  # ``robot`` does the task again and reports it again (a lost status)
+    ADD = "add"  # a new task for ``robot``
+    PAUSE = "pause"  # ``robot`` stops where it is ...
+    RESUME = "resume"  # ... and carries on
+
+
+class OperatorCommand(Message, frozen=True, tag="command"):
+    """Operator -> team: one command, sent with AON to every robot and the task
+    assigner (topic ``TOPIC_COMMAND``); each acts on the part that concerns it.
+    ``robot``: the robot it is for; ``task``: the task concerned (reassign, redo, add);
+    ``former``: a reassigned task's former owner."""
+
+    command: CommandKind
+    robot: str
+    task: TaskSpec | None = None
+    former: str = ""
+
+
 class AonEntry(msgspec.Struct, frozen=True, array_like=True):
     """One message's AON state as its publisher knows it (see messaging.aon).
 
@@ -91,7 +114,7 @@ class AonEntry(msgspec.Struct, frozen=True, array_like=True):
     have: bytes
     recv: bytes
     ask: bool = False
-    payload: TaskStatus | None = None
+    payload: TaskStatus | OperatorCommand | None = None
 
 
 class AonMsg(Message, frozen=True, tag="aon"):

@@ -13,6 +13,7 @@ from enum import Enum
 from mrcomm.messaging.messages import (
     TOPIC_AON,
     TOPIC_ASSIGNMENT,
+    TOPIC_COMMAND,
     TOPIC_HEARTBEAT,
     TOPIC_POSE,
     TOPIC_RELAYED,
@@ -63,6 +64,9 @@ TOPICS: dict[str, Topic] = {
         Topic(TOPIC_TASK_STATUS, TaskStatus, lossy=True, exempt=False, lane=Lane.STATUS),
         # AON carries task statuses, so it is perturbed like them.
         Topic(TOPIC_AON, AonMsg, lossy=True, exempt=False, lane=Lane.STATUS),
+        # The operator's commands, with AON among the robots, the assigner and the
+        # operator: perturbed like statuses.
+        Topic(TOPIC_COMMAND, AonMsg, lossy=True, exempt=False, lane=Lane.STATUS),
         # Live mode's relayed copies of statuses and AON messages (wrapped, so that
         # the relaying robot sends them under its own key), perturbed like them.
         Topic(TOPIC_RELAYED, RelayedMsg, lossy=True, exempt=False, lane=Lane.STATUS),

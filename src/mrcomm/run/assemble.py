@@ -125,7 +125,8 @@ def assemble(facts: RunFacts) -> MissionResult:
     mission = mission_metrics(
         robots,
         facts.timelines,
-        tasks_total=len(facts.scenario.tasks),
+        # The tasks of the final agenda: an operator may have added some.
+        tasks_total=len({t.task_id for tasks in facts.agenda.values() for t in tasks}),
         failed_tasks=list(dict.fromkeys(t for t, _ in failed_pairs)),
     )
     mission.update(team_scale(facts, mission))

@@ -32,9 +32,13 @@ class MissionResult:
     link_states: list[tuple[str, str, str, float, float]] = field(default_factory=list)
     #: What relaying did per node (:meth:`mrcomm.net.relay.Relay.stats`; empty when off).
     relay: dict[str, Any] = field(default_factory=dict)
+    #: The operator's commands (:meth:`mrcomm.agents.operator.Operator.summary`; empty
+    #: without an operator).
+    operator: dict[str, Any] = field(default_factory=dict)
 
     def summary(self) -> dict[str, Any]:
         relay = {"relay": self.relay} if self.relay else {}
+        operator = {"operator": self.operator} if self.operator else {}
         return {
             "config": self.config,
             "mission": self.mission,
@@ -46,4 +50,5 @@ class MissionResult:
             "sim_time_s": self.sim_time_s,
             "wall_time_s": self.wall_time_s,
             **relay,
+            **operator,
         }

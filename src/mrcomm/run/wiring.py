@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from mrcomm.agents.assigner import ASSIGNER_ID
+from mrcomm.agents.commands import OPERATOR_ID
 from mrcomm.net.link_sensors import MeasuredSensor
 from mrcomm.net.links import LinkModel, LinkRecorder, LinkState
 from mrcomm.net.network import NetworkModel
@@ -224,13 +225,17 @@ def make_bases(
     }
 
 
-def make_links(resources: ScenarioResources, config: RunConfig) -> tuple[LinkModel, LinkRecorder]:
-    """The link model of the robots and the task assigner (in that order) and its
+def make_links(
+    resources: ScenarioResources, config: RunConfig, operator: str | None = None
+) -> tuple[LinkModel, LinkRecorder]:
+    """The link model of the robots and the task assigner (in that order; then the
+    operator when there is one, placed ``operator``: "base" or a robot id) and its
     recorder. A hosted assigner shares its robot's position, so its links are its
     host's (evaluated once; ESD's trace has no row for it: it measures with its host's
-    card) and its link to its host is not a link."""
+    card) and its link to its host is not a link; the same for the operator and where
+    it sits."""
     scenario = resources.scenario
-    node_ids, aliases = link_nodes(scenario)
+    node_ids, aliases = link_nodes(scenario, operator)
     evaluated = tuple(n for n in node_ids if n not in aliases)
     links = LinkModel(
         node_ids,
@@ -239,17 +244,25 @@ def make_links(resources: ScenarioResources, config: RunConfig) -> tuple[LinkMod
         build_threshold(config, resources, evaluated),
         aliases=aliases,
     )
-    host = scenario.assigner.host
-    skip = {(ASSIGNER_ID, host), (host, ASSIGNER_ID)} if host else set()
+    skip = {pair for node, host in aliases.items() for pair in ((node, host), (host, node))}
+    if OPERATOR_ID in aliases and ASSIGNER_ID in aliases:  # both on the same robot
+        skip |= {(OPERATOR_ID, ASSIGNER_ID), (ASSIGNER_ID, OPERATOR_ID)}
     return links, LinkRecorder(node_ids, len(scenario.robots), skip)
 
 
-def link_nodes(scenario: Scenario) -> tuple[tuple[str, ...], dict[str, str]]:
-    """The nodes of the link model in its order (the robots, then the task assigner)
-    and the aliases among them (an assigner hosted on a robot shares its position)."""
-    node_ids = (*(r.id for r in scenario.robots), ASSIGNER_ID)
+def link_nodes(
+    scenario: Scenario, operator: str | None = None
+) -> tuple[tuple[str, ...], dict[str, str]]:
+    """The nodes of the link model in its order (the robots, the task assigner, then
+    the operator when ``operator`` places one) and the aliases among them (an assigner
+    hosted on a robot shares its position; an operator shares the position of the
+    robot it is on, or of the task assigner at "base")."""
     host = scenario.assigner.host
-    return node_ids, ({ASSIGNER_ID: host} if host else {})
+    aliases = {ASSIGNER_ID: host} if host else {}
+    if operator is None:
+        return (*(r.id for r in scenario.robots), ASSIGNER_ID), aliases
+    aliases[OPERATOR_ID] = aliases.get(ASSIGNER_ID, ASSIGNER_ID) if operator == "base" else operator
+    return (*(r.id for r in scenario.robots), ASSIGNER_ID, OPERATOR_ID), aliases
 
 
 def build_radio_links(

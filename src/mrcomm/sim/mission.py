@@ -15,10 +15,13 @@ assembled once by :meth:`Mission.result`.
 
 from __future__ import annotations
 
+import math
 import time
 
 from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
+from mrcomm.agents.commands import OPERATOR_ID
 from mrcomm.agents.executor import TaskExecutor
+from mrcomm.agents.operator import Operator
 from mrcomm.metrics.timeline import Timeline
 from mrcomm.net.delivery import DeliveryPolicy
 from mrcomm.net.inprocess import InProcessNetwork
@@ -27,6 +30,7 @@ from mrcomm.net.relay import make_relay
 from mrcomm.run.assemble import AonAgentFacts, RunFacts, assemble
 from mrcomm.run.bodies import RobotBodies
 from mrcomm.run.config import RunConfig
+from mrcomm.run.operator_plan import OperatorPlan, ScriptedOperator
 from mrcomm.run.proximity import make_proximity
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.result import MissionResult
@@ -34,6 +38,7 @@ from mrcomm.run.wiring import (
     build_executor,
     build_link_sensor,
     build_pulse,
+    link_nodes,
     make_bases,
     make_links,
 )
@@ -43,14 +48,22 @@ from mrcomm.seeding import stream
 class Mission:
     """A mission being simulated; drive it with :meth:`run` or :meth:`step`."""
 
-    def __init__(self, config: RunConfig, resources: ScenarioResources | None = None) -> None:
+    def __init__(
+        self,
+        config: RunConfig,
+        resources: ScenarioResources | None = None,
+        operator: OperatorPlan | None = None,
+    ) -> None:
+        """``operator``: an operator in the loop, sending the plan's commands (None:
+        no operator, as in every run before it existed)."""
         self.config = config
         self.resources = resources or ScenarioResources.load(config.scenario)
         scenario = self.resources.scenario
         self.robot_ids = tuple(r.id for r in scenario.robots)
-        self.node_ids = (*self.robot_ids, ASSIGNER_ID)
+        placement = operator.placement if operator is not None else None
+        self.node_ids = link_nodes(scenario, placement)[0]
         seed = config.seed
-        self.links, self.link_recorder = make_links(self.resources, config)
+        self.links, self.link_recorder = make_links(self.resources, config, placement)
         self.proximity = make_proximity(config, self.robot_ids)
         self.network = InProcessNetwork(
             self.node_ids,
@@ -90,6 +103,13 @@ class Mission:
             scenario.tasks,
             use_aon=config.spec("behaviour").uses_aon,
         )
+        self.operator: Operator | None = None
+        self.script: ScriptedOperator | None = None
+        if operator is not None:
+            self.operator = Operator(
+                self.network.endpoint(OPERATOR_ID), self.robot_ids, scenario.tasks
+            )
+            self.script = ScriptedOperator(self.operator, operator)
         self.trajectories: dict[str, list[tuple[float, float, float]]] = {
             rid: [] for rid in self.robot_ids
         }
@@ -116,18 +136,25 @@ class Mission:
         dt = self.config.dt
         truth = self.bodies.true_xy()
         positions = self.bodies.node_positions(truth)
+        if self.operator is not None:
+            positions.append((math.nan, math.nan))  # it shares its host's position
         links = self.links.update(positions, now)
         self.last_links = links
         self.network.set_connected(links.connected.tolist())
         if self.network.channel is not None and links.power is not None:
             self.network.channel.set_links(links.power, links.line_of_sight)
         self.assigner.set_time(now)
+        if self.operator is not None:
+            self.operator.set_time(now)
         for executor in self.executors.values():
             executor.set_time(now)
         self.network.deliver(now)
         if self.pulse is not None:
             self.pulse.step(now, links)
         self.assigner.step(now)
+        if self.operator is not None and self.script is not None:
+            self.script.step(now)
+            self.operator.step(now)
         for executor in self.executors.values():
             executor.step(now)
         # Bases have not moved since `truth` was taken: it is each one's view of the others.
@@ -143,8 +170,15 @@ class Mission:
             all(e.done for e in self.executors.values())
             and self.assigner.settled
             and self.network.pending() == 0
+            and self._operator_settled()
         ):
             self.finished = True
+
+    def _operator_settled(self) -> bool:
+        """No operator, or every command of its plan sent and finished."""
+        if self.operator is None or self.script is None:
+            return True
+        return self.script.done and self.operator.settled
 
     # -- per-step bookkeeping ------------------------------------------------------------
     def _sample_trajectories(self, now: float) -> None:
@@ -168,7 +202,7 @@ class Mission:
             for agent, endpoint in endpoints.items()
             if endpoint is not None
         }
-        return assemble(
+        result = assemble(
             RunFacts(
                 config=self.config,
                 scenario=self.resources.scenario,
@@ -190,8 +224,15 @@ class Mission:
                 encounters=self.proximity.encounters(end) if self.proximity else None,
             )
         )
+        if self.operator is not None:
+            result.operator = self.operator.summary()
+        return result
 
 
-def run_mission(config: RunConfig, resources: ScenarioResources | None = None) -> MissionResult:
+def run_mission(
+    config: RunConfig,
+    resources: ScenarioResources | None = None,
+    operator: OperatorPlan | None = None,
+) -> MissionResult:
     """Simulate one mission to its end and return its results."""
-    return Mission(config, resources).run()
+    return Mission(config, resources, operator).run()
