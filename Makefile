@@ -15,10 +15,11 @@ $(STAMP): pyproject.toml examples/mrcomm-repeat/pyproject.toml
 
 # System packages some features need: graphviz renders the state-machine diagrams
 # (mrcomm fsm; without it: Mermaid text), chromium renders the HTML report in the browser
-# test, nftables and iproute2 build the network-namespace tests of live mode (certificates
+# test and, driven by chromium-driver, runs the operator console's browser test,
+# nftables and iproute2 build the network-namespace tests of live mode (certificates
 # are made in Python, by the cryptography package). Installed as root with apt-get when
 # missing; otherwise the tests that need them are skipped with their reason.
-SYSTEM_PACKAGES := graphviz:dot chromium:chromium nftables:nft iproute2:ip
+SYSTEM_PACKAGES := graphviz:dot chromium:chromium chromium-driver:chromedriver nftables:nft iproute2:ip
 system-deps:
 	@for entry in $(SYSTEM_PACKAGES); do \
 	  pkg=$${entry%%:*}; cmd=$${entry##*:}; \

@@ -35,6 +35,7 @@ RANKS = {
     "experiment": 6,
     "analysis": 6,
     "testing": 6,
+    "console": 6,  # the operator console: a paced simulation and its web page
     "cli": 7,
 }
 

@@ -70,6 +70,17 @@ def run(
             "it sends when (reassign, redo, add, pause, resume; README)."
         ),
     ] = None,
+    console: Annotated[
+        bool,
+        typer.Option(
+            "--console",
+            help="Watch and steer the run in a browser: the operator console on "
+            "http://localhost:--port (paced at --speed, default x1; needs mrcomm[console]).",
+        ),
+    ] = False,
+    port: Annotated[int, typer.Option(min=1, max=65535, help="Port of the --console page.")] = (
+        8080
+    ),
     db: DbOpt = None,
     experiment: ExperimentOpt = None,
     keep_duplicate: KeepDuplicateOpt = False,
@@ -91,7 +102,9 @@ def run(
 
         resources = ScenarioResources.load(config.scenario)
         plan = load_operator_plan(operator, resources.scenario)
-    if record is not None or foxglove or speed is not None:
+    if console:
+        result = _run_with_console(config, resources, plan, speed, port, record is not None)
+    elif record is not None or foxglove or speed is not None:
         from mrcomm.experiment.recording import run_and_record
 
         def serving(port: int) -> None:
@@ -116,6 +129,35 @@ def run(
         if_lost="the run is deterministic: run the command again",
     )
     show_result(result, result.summary(), stored, as_json)
+
+
+def _run_with_console(
+    config: RunConfig,
+    resources: Any,
+    plan: Any,
+    speed: float | None,
+    port: int,
+    recording: bool,
+) -> MissionResult:
+    """The run paced under the operator console (its own page; see mrcomm.console)."""
+    from mrcomm.errors import InputError
+
+    if recording:
+        raise InputError("--console and --record cannot be combined yet", field="--console")
+    try:
+        from mrcomm.console.page import serve
+        from mrcomm.console.session import ConsoleSession
+    except ImportError as err:
+        raise InputError(
+            f"needs the console extra: pip install 'mrcomm[console]' ({err.name} missing)",
+            field="--console",
+        ) from None
+    session = ConsoleSession(config, resources, plan, speed if speed is not None else 1.0)
+    typer.echo(f"console: http://localhost:{port}", err=True)
+    serve(session, port)
+    if session.result is None:
+        raise InputError("the console stopped before the mission ended", field="--console")
+    return session.result
 
 
 def show_result(

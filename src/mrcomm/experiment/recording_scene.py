@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from foxglove import messages as fg
@@ -155,6 +155,11 @@ def pose_message(when: fg.Timestamp, pose: Pose) -> fg.PoseInFrame:
 
 
 # -- the scene ----------------------------------------------------------------------------
+class HasId(Protocol):
+    @property
+    def id(self) -> str: ...
+
+
 @dataclass(frozen=True)
 class RobotView:
     """What the scene shows of one robot."""
@@ -256,7 +261,7 @@ def task_entity(when: fg.Timestamp, task: TaskView) -> fg.SceneEntity:
     )
 
 
-def link_states(robots: Sequence[RobotView], links: LinkState) -> dict[str, str]:
+def link_states(robots: Sequence[HasId], links: LinkState) -> dict[str, str]:
     """State of every robot pair ``"a-b"`` (robots are the first rows of ``links``,
     in team order)."""
     return {

@@ -1,0 +1,148 @@
+"""The operator console's web page (NiceGUI: its JavaScript ships with the package, so
+the page works offline), served locally while a :class:`ConsoleSession` runs.
+
+The page shows the session's latest snapshot, refreshed four times a second: the map
+with every robot where the operator knows it (faded when its pose is old; with "ground
+truth" on, also where it is, and each link coloured by state), the tasks as the
+operator heard them (green: its completion reached the operator; yellow, with ground
+truth: done by the robot but not heard — a lost status), the mission clock and a speed
+control, the commands sent and who acknowledged them, message counters and the events.
+Clicking a task selects it; clicking free map selects a position. The buttons send the
+operator's commands for the selected task, robot and position.
+"""
+
+from __future__ import annotations
+
+import base64
+import threading
+from typing import Any
+
+from nicegui import app, ui
+
+from mrcomm.console.session import SPEEDS, ConsoleSession
+from mrcomm.console.view import Pixels, map_png, svg
+
+REFRESH = 0.25  # s between page updates
+
+
+def build(session: ConsoleSession) -> None:
+    """Register the console page for ``session``."""
+    grid = session.mission.resources.scenario.grid
+    pixels = Pixels(grid)
+    source = "data:image/png;base64," + base64.b64encode(map_png(grid)).decode("ascii")
+    robots = session.mission.robot_ids
+
+    @ui.page("/")
+    def index() -> None:
+        picked: dict[str, Any] = {"task": "", "robot": robots[0], "where": None, "events": 0}
+        ui.page_title("MRComm console")
+        with ui.row().classes("items-center w-full"):
+            clock = ui.label("").props('id="clock"').classes("text-lg font-mono")
+            speeds = dict(SPEEDS)
+            start = next((n for n, v in speeds.items() if v == session.speed), None)
+            if start is None:  # the pace the run was started with
+                start = f"x{session.speed:g}"
+                speeds[start] = session.speed
+            ui.toggle(list(speeds), value=start,
+                      on_change=lambda e: setattr(session, "speed", speeds[e.value])
+                      ).props('id="speed"')  # fmt: skip
+            truth = ui.switch("ground truth", value=True).props('id="truth"')
+            status = ui.label("").props('id="status"')
+        with ui.row().classes("w-full no-wrap"):
+            image = ui.interactive_image(source, content="", events=["click"],
+                                         sanitize=False).classes("w-3/4")  # fmt: skip
+            image.props('id="map"')
+            with ui.column().classes("w-1/4"):
+                selection = ui.label("").props('id="selection"')
+                with ui.row():
+                    for rid in robots:
+                        ui.button(rid, on_click=lambda _e, r=rid: pick("robot", r)).props(
+                            f'id="pick-{rid}" dense outline'
+                        )
+                with ui.row():
+                    for kind in ("reassign", "redo", "add", "pause", "resume", "end"):
+                        ui.button(kind, on_click=lambda _e, k=kind: send(k)).props(
+                            f'id="cmd-{kind}" dense'
+                        )
+                notes = ui.label("").props('id="notes"').classes("text-red-700 text-sm")
+                commands = ui.table(
+                    columns=[{"name": n, "label": n, "field": n} for n in
+                             ("time", "command", "robot", "task", "acknowledged", "finished")],
+                    rows=[], row_key="time",
+                ).props('id="commands" dense').classes("w-full")  # fmt: skip
+                counters = ui.table(
+                    columns=[{"name": n, "label": n, "field": n}
+                             for n in ("topic", "sent", "received", "dropped")],
+                    rows=[], row_key="topic",
+                ).props('id="counters" dense').classes("w-full")  # fmt: skip
+        log = ui.log(max_lines=300).props('id="events"').classes("w-full h-48")
+
+        def pick(what: str, value: Any) -> None:
+            picked[what] = value
+            where = picked["where"]
+            place = f"({where[0]:.1f}, {where[1]:.1f})" if where else "-"
+            selection.text = f"task {picked['task'] or '-'} · robot {picked['robot']} · at {place}"
+
+        def send(kind: str) -> None:
+            task = picked["task"] if kind in ("reassign", "redo") else ""
+            if kind == "add":
+                task = f"op{len(session.view.commands) + 1}"
+            robot = "" if kind == "redo" else picked["robot"]
+            where = picked["where"] if kind == "add" else None
+            session.submit(kind, robot, task, where)
+
+        def on_svg(event: Any) -> None:
+            element = str(event.args.get("element_id", ""))
+            if element.startswith("task-"):
+                pick("task", element.removeprefix("task-"))
+
+        def on_click(event: Any) -> None:
+            pick("where", pixels.to_map(event.image_x, event.image_y))
+
+        image.on("svg:pointerdown", on_svg)
+        image.on_mouse(on_click)
+        pick("robot", robots[0])
+
+        def refresh() -> None:
+            view = session.view
+            image.content = svg(view, pixels, truth=truth.value, selected_task=picked["task"])
+            clock.text = f"t = {view.now:7.1f} s"
+            if view.ended:
+                verdict = "successful" if view.successful else "failed"
+                status.text = f"mission ended: {verdict}"
+            else:
+                heard = sum(t.heard for t in view.tasks)
+                waiting = " · robots done: send them back for lost statuses, or end" if (
+                    session.mission.finished) else ""  # fmt: skip
+                status.text = f"{heard} of {len(view.tasks)} tasks heard{waiting}"
+            notes.text = " · ".join(view.notes)
+            commands.rows = [
+                {"time": f"{c['time']:.1f}", "command": c["command"], "robot": c["robot"],
+                 "task": c["task_id"] or "-",
+                 "acknowledged": ", ".join(m for m in c["acknowledged"] if m != "operator"),
+                 "finished": "-" if c["finished_at"] is None else f"{c['finished_at']:.1f}"}
+                for c in view.commands
+            ]  # fmt: skip
+            counters.rows = [{"topic": t, **c} for t, c in sorted(view.counters.items())]
+            new = min(view.events_total - picked["events"], len(view.events))
+            for line in view.events[len(view.events) - new :] if new > 0 else ():
+                log.push(line)
+            picked["events"] = view.events_total
+
+        ui.timer(REFRESH, refresh)
+
+
+def serve(session: ConsoleSession, port: int, *, linger: float = 2.0) -> None:
+    """Run the page on ``port`` (localhost) while the session steps the mission in its
+    own thread; stop the server ``linger`` s after the mission ended."""
+    build(session)
+
+    def simulate() -> None:
+        try:
+            session.run()
+        finally:
+            threading.Timer(linger, app.shutdown).start()
+
+    app.on_startup(lambda: threading.Thread(target=simulate, daemon=True).start())
+    ui.run(host="127.0.0.1", port=port, reload=False, show=False, title="MRComm console",
+           show_welcome_message=False)  # fmt: skip

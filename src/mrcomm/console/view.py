@@ -1,0 +1,200 @@
+"""What the operator console shows, as plain data taken from a running mission at one
+instant (:func:`snapshot`), and drawn as an SVG overlay on the map image (:func:`svg`).
+
+The console shows the team *as the operator knows it* — each robot at its last pose
+that reached the operator, with its age (faded when older than :data:`STALE_AFTER`),
+each task as the operator heard it (done when its SUCCESS reached the operator) — and,
+switchable, the ground truth the simulation has: true positions, what each robot has
+completed, whether its status reached the task assigner, and every link's state. So a
+lost status is visible: a task the robot has done whose status never arrived.
+"""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass, field
+from html import escape
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from PIL import Image
+
+from mrcomm.experiment.recording_scene import LINK_COLORS, ROBOT_COLORS, link_states
+
+if TYPE_CHECKING:
+    from mrcomm.agents.operator import Operator
+    from mrcomm.sim.mission import Mission
+    from mrcomm.world.occupancy import OccupancyGrid
+
+#: A pose older than this (s) is drawn faded: the operator has lost sight of the robot.
+STALE_AFTER = 2.0
+#: Teams up to this size are drawn with their out-of-range links too.
+SMALL_TEAM_LINKS = 4
+#: Events the timeline keeps (the newest).
+EVENTS_KEPT = 200
+
+
+@dataclass(frozen=True)
+class RobotMark:
+    id: str
+    known: tuple[float, float, float] | None  # x, y, theta as the operator knows it
+    age: float | None  # s since the known pose was sent
+    truth: tuple[float, float]
+    state: str
+
+
+@dataclass(frozen=True)
+class TaskMark:
+    id: str
+    x: float
+    y: float
+    owner: str  # as the operator knows it
+    heard: bool  # its owner's SUCCESS reached the operator
+    done: bool  # ground truth: its owner has completed it
+    received: bool  # ground truth: its owner's SUCCESS reached the task assigner
+
+
+@dataclass(frozen=True)
+class ConsoleView:
+    now: float
+    robots: tuple[RobotMark, ...]
+    tasks: tuple[TaskMark, ...]
+    links: dict[str, str]  # "a-b" -> ok / warning / disconnected (ground truth)
+    events: tuple[str, ...]  # the newest
+    events_total: int  # how many there have been
+    counters: dict[str, dict[str, int]]  # topic -> sent / received / dropped
+    commands: tuple[dict[str, Any], ...]
+    ended: bool = False
+    successful: bool | None = None
+    notes: tuple[str, ...] = field(default=())
+
+
+def snapshot(mission: Mission, operator: Operator, events: list[str]) -> ConsoleView:
+    """The console's view of ``mission`` now (call from the thread that steps it)."""
+    now = mission.now
+    robots = []
+    for rid in mission.robot_ids:
+        pose = operator.poses.get(rid)
+        true = mission.bases[rid].true_pose
+        robots.append(
+            RobotMark(
+                rid,
+                (pose.x, pose.y, pose.theta) if pose is not None else None,
+                now - pose.stamp if pose is not None else None,
+                (true.x, true.y),
+                str(mission.executors[rid].state),
+            )
+        )
+    own = operator.ownership
+    tasks = tuple(
+        TaskMark(
+            task_id, task.x, task.y, own.owner[task_id],
+            (task_id, own.owner[task_id]) in operator.successes,
+            task_id in mission.executors[own.owner[task_id]].completed,
+            (task_id, own.owner[task_id]) in mission.assigner.success_received,
+        )
+        for task_id, task in own.tasks.items()
+    )  # fmt: skip
+    links: dict[str, str] = {}
+    if mission.last_links is not None:
+        links = link_states(robots, mission.last_links)
+    counters: dict[str, dict[str, int]] = {}
+    for (_agent, topic), c in mission.network.counts.items():
+        total = counters.setdefault(topic, {"sent": 0, "received": 0, "dropped": 0})
+        total["sent"] += c.sent
+        total["received"] += c.received
+        total["dropped"] += c.dropped_loss + c.dropped_range + c.dropped_radio + c.dropped_queue
+    return ConsoleView(
+        now=now,
+        robots=tuple(robots),
+        tasks=tasks,
+        links=links,
+        events=tuple(events[-EVENTS_KEPT:]),
+        events_total=len(events),
+        counters=counters,
+        commands=tuple(operator.summary()["commands"]),
+    )
+
+
+def map_png(grid: OccupancyGrid) -> bytes:
+    """The map as a PNG, north up: walls dark, free space white (one pixel per cell)."""
+    pixels = np.where(grid.occupied, 60, 255).astype(np.uint8)[::-1]
+    out = io.BytesIO()
+    Image.fromarray(pixels, mode="L").save(out, format="PNG")
+    return out.getvalue()
+
+
+def _hex(color: tuple[float, float, float, float]) -> str:
+    return "#" + "".join(f"{round(c * 255):02x}" for c in color[:3])
+
+
+class Pixels:
+    """Map metres <-> image pixels (row 0 at the top)."""
+
+    def __init__(self, grid: OccupancyGrid) -> None:
+        self.x0, self.y0 = grid.origin
+        self.scale = 1.0 / grid.resolution
+        self.height = grid.height
+
+    def to_px(self, x: float, y: float) -> tuple[float, float]:
+        return (x - self.x0) * self.scale, self.height - (y - self.y0) * self.scale
+
+    def to_map(self, px: float, py: float) -> tuple[float, float]:
+        return px / self.scale + self.x0, (self.height - py) / self.scale + self.y0
+
+
+def svg(view: ConsoleView, pixels: Pixels, *, truth: bool, selected_task: str = "") -> str:
+    """The overlay: links, tasks, robots (as known; with ``truth`` also where they are)."""
+    parts: list[str] = []
+    where = {r.id: r.truth for r in view.robots}
+    if truth:
+        # Out-of-range pairs are drawn only in small teams: in a large one they hide
+        # the links that exist.
+        few = len(view.robots) <= SMALL_TEAM_LINKS
+        for pair, state in view.links.items():
+            if state == "disconnected" and not few:
+                continue
+            a, b = pair.split("-", 1)
+            (ax, ay), (bx, by) = pixels.to_px(*where[a]), pixels.to_px(*where[b])
+            colour = _hex(LINK_COLORS[state])
+            parts.append(
+                f'<line id="link-{pair}" data-state="{state}" x1="{ax:.1f}" y1="{ay:.1f}" '
+                f'x2="{bx:.1f}" y2="{by:.1f}" stroke="{colour}" stroke-width="2" '
+                'stroke-opacity="0.7" />'
+            )
+    for task in view.tasks:
+        px, py = pixels.to_px(task.x, task.y)
+        if truth:  # green: the assigner has it; yellow: done, status lost (so far)
+            ok, lost = task.received, task.done and not task.received
+        else:  # what the operator heard
+            ok, lost = task.heard, False
+        colour = "#1fa83a" if ok else ("#f0b400" if lost else "#888888")
+        stroke = ' stroke="#000" stroke-width="2"' if task.id == selected_task else ""
+        parts.append(
+            f'<rect id="task-{escape(task.id)}" pointer-events="all" '
+            f'data-heard="{str(task.heard).lower()}" data-done="{str(task.done).lower()}" '
+            f'data-received="{str(task.received).lower()}" '
+            f'x="{px - 7:.1f}" y="{py - 7:.1f}" width="14" height="14" fill="{colour}"{stroke} />'
+            f'<text x="{px + 9:.1f}" y="{py + 4:.1f}" font-size="12">{escape(task.id)}</text>'
+        )
+    for i, robot in enumerate(view.robots):
+        colour = _hex(ROBOT_COLORS[i % len(ROBOT_COLORS)])
+        if truth:
+            tx, ty = pixels.to_px(*robot.truth)
+            parts.append(
+                f'<circle id="truth-{robot.id}" cx="{tx:.1f}" cy="{ty:.1f}" r="6" '
+                f'fill="none" stroke="{colour}" stroke-dasharray="3 2" />'
+            )
+        if robot.known is None:
+            continue
+        kx, ky = pixels.to_px(robot.known[0], robot.known[1])
+        stale = robot.age is not None and robot.age > STALE_AFTER
+        opacity = "0.35" if stale else "1"
+        age = f"{robot.age:.1f}" if robot.age is not None else ""
+        parts.append(
+            f'<circle id="robot-{robot.id}" data-age="{age}" cx="{kx:.1f}" cy="{ky:.1f}" r="7" '
+            f'fill="{colour}" fill-opacity="{opacity}" />'
+            f'<text x="{kx + 9:.1f}" y="{ky - 8:.1f}" font-size="12" fill="{colour}" '
+            f'fill-opacity="{opacity}">{robot.id}{" (" + age + " s)" if stale else ""}</text>'
+        )
+    return "".join(parts)
