@@ -74,6 +74,9 @@ class VariantSpec:
     robot_metrics: Any = None
     #: Behaviours: whether task statuses travel with AON.
     uses_aon: bool = False
+    #: Behaviours: whether an operator may move tasks between its robots or add tasks
+    #: (reassign, add); sending a robot back (redo), pause and resume always apply.
+    accepts_reassignment: bool = True
     #: Behaviours: whether it acts on the threshold's warnings (False: the threshold
     #: only shapes the recorded link statistics; runs with other thresholds are alike).
     uses_threshold: bool = True

@@ -195,3 +195,49 @@ def test_the_cli_refuses_a_bad_operator_file_before_running(
     assert outcome.returncode == 2
     assert outcome.stderr.strip() == f"mrcomm: error: {bad}: commands[0]: unknown task '77'"
     assert list(out.iterdir()) == []
+
+
+@pytest.mark.parametrize("behaviour", ["nb", "lf", "lf-wait", "rps", "serried"])
+def test_every_behaviour_acts_on_the_operators_commands(
+    behaviour: str, s1_resources: ScenarioResources
+) -> None:
+    # Task 7 is robot_1's; the operator gives it to robot_3 and stops robot_2 for 20 s
+    # (WLAN: every status arrives, so each mission must succeed).
+    config = _config("wlan", behaviour, 0, 1, threshold="slt")
+    plan = _plan(
+        {"at": 15, "command": "reassign", "task": "7", "robot": "robot_3"},
+        {"at": 20, "command": "pause", "robot": "robot_2"},
+        {"at": 40, "command": "resume", "robot": "robot_2"},
+    )
+    mission = Mission(config, s1_resources, plan)
+    result = mission.run()
+    done = {rid: [e.data["task_id"] for e in tl.events if e.label == "task_completed"]
+            for rid, tl in result.timelines.items()}  # fmt: skip
+    assert "7" in done["robot_3"] and "7" not in done["robot_1"]
+    assert result.mission["successful"], result.mission["failed_tasks"]
+    assert all(c["finished_at"] is not None for c in result.operator["commands"])
+
+
+def test_a_behaviour_that_refuses_reassignment_refuses_it_before_the_run(
+    s1_resources: ScenarioResources, tmp_path: Path
+) -> None:
+    import dataclasses
+
+    from mrcomm.specs import REGISTRY, get_spec
+
+    fixed = dataclasses.replace(get_spec("behaviour", "nb"), name="nb-fixed",
+                                accepts_reassignment=False)  # fmt: skip
+    path = tmp_path / "operator.yaml"
+    path.write_text("commands: [{at: 5, command: reassign, task: '4', robot: robot_2}]\n")
+    with REGISTRY.registered(fixed):
+        with pytest.raises(InputError, match=r"commands\[0\]: the behaviour does not accept"):
+            load_operator_plan(path, s1_resources.scenario, reassignable=False)
+        # Sending a robot back and pausing still apply.
+        config = _config("wlan", "nb-fixed", 0, 1)
+        plan = _plan({"at": 5, "command": "pause", "robot": "robot_1"},
+                     {"at": 9, "command": "resume", "robot": "robot_1"})  # fmt: skip
+        mission = Mission(config, s1_resources, plan)
+        assert mission.operator is not None
+        with pytest.raises(ValueError, match="does not accept add"):
+            mission.operator.command("add", "robot_1", "x", (5.0, 5.7))
+        assert mission.run().mission["successful"]

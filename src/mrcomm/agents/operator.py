@@ -90,12 +90,16 @@ class Ownership:
     owner: dict[str, str]
     robots: tuple[str, ...]
     added: set[str] = field(default_factory=set)
+    #: The behaviour lets an operator move and add tasks (its spec says).
+    reassignable: bool = True
 
     @classmethod
-    def initial(cls, robots: Sequence[str], tasks: Sequence[TaskSpec]) -> Ownership:
+    def initial(
+        cls, robots: Sequence[str], tasks: Sequence[TaskSpec], reassignable: bool = True
+    ) -> Ownership:
         agenda = round_robin(tasks, robots)
         owner = {t.task_id: robot for robot, ts in agenda.items() for t in ts}
-        return cls({t.task_id: t for t in tasks}, owner, tuple(robots))
+        return cls({t.task_id: t for t in tasks}, owner, tuple(robots), reassignable=reassignable)
 
     def resolve(
         self,
@@ -114,6 +118,8 @@ class Ownership:
             raise ValueError(f"unknown command {kind!r}; choose from {names}") from None
         task: TaskSpec | None = None
         former = ""
+        if kind in (CommandKind.REASSIGN, CommandKind.ADD) and not self.reassignable:
+            raise ValueError(f"the behaviour does not accept {kind} (its spec says so)")
         if kind in TASK_COMMANDS and not task_id:
             raise ValueError(f"{kind} needs a task")
         if kind is CommandKind.ADD:
@@ -157,11 +163,13 @@ class Operator:
         tasks: Sequence[TaskSpec],
         *,
         incarnation: int = 1,
+        reassignable: bool = True,
     ) -> None:
+        """``reassignable``: the behaviour accepts reassign and add (its spec)."""
         self.bus = bus
         self.robots = tuple(robots)
         self.incarnation = incarnation
-        self.ownership = Ownership.initial(self.robots, tasks)
+        self.ownership = Ownership.initial(self.robots, tasks, reassignable)
         #: Each robot's last pose that reached the operator.
         self.poses: dict[str, KnownPose] = {}
         #: (task id, robot) -> when the operator first heard its SUCCESS.

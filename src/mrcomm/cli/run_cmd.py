@@ -101,7 +101,8 @@ def run(
         from mrcomm.run.resources import ScenarioResources
 
         resources = ScenarioResources.load(config.scenario)
-        plan = load_operator_plan(operator, resources.scenario)
+        reassignable = config.spec("behaviour").accepts_reassignment
+        plan = load_operator_plan(operator, resources.scenario, reassignable=reassignable)
     if console:
         result = _run_with_console(config, resources, plan, speed, port, record is not None)
     elif record is not None or foxglove or speed is not None:

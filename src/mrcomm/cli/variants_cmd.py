@@ -26,6 +26,7 @@ def describe(spec: VariantSpec) -> dict[str, Any]:
         "topics": list(spec.topics),
         "metrics": list(spec.metrics),
         "uses_aon": spec.uses_aon,
+        **({"accepts_reassignment": spec.accepts_reassignment} if spec.kind == "behaviour" else {}),
         "parameters": parameters(spec),
     }
 
@@ -96,6 +97,8 @@ def variants(
             needs.append(f"networks: {', '.join(row['network_types'])}")
         if row["uses_aon"]:
             needs.append("statuses with AON")
+        if row.get("accepts_reassignment") is False:
+            needs.append("an operator may not reassign or add tasks")
         if needs:
             console.print("  " + "; ".join(needs), markup=False)
         if row["parameters"]:

@@ -58,8 +58,11 @@ class OperatorPlan(BaseModel):
         return sorted(self.commands, key=lambda c: c.at)  # stable: file order at ties
 
 
-def load_operator_plan(path: Path, scenario: Scenario) -> OperatorPlan:
-    """Read and check an operator file against ``scenario`` (one-line InputError)."""
+def load_operator_plan(
+    path: Path, scenario: Scenario, *, reassignable: bool = True
+) -> OperatorPlan:
+    """Read and check an operator file against ``scenario`` and the behaviour
+    (``reassignable``: its spec's ``accepts_reassignment``); one-line InputError."""
     raw = read_yaml(path)
     if not isinstance(raw, dict):
         raise InputError("must be a mapping (placement, commands)", file=path)
@@ -71,7 +74,7 @@ def load_operator_plan(path: Path, scenario: Scenario) -> OperatorPlan:
     if plan.placement != BASE and plan.placement not in robots:
         choices = ", ".join((BASE, *robots))
         raise InputError(f"must be one of {choices}", file=path, field="placement")
-    ownership = Ownership.initial(robots, scenario.tasks)
+    ownership = Ownership.initial(robots, scenario.tasks, reassignable)
     order = sorted(range(len(plan.commands)), key=lambda i: plan.commands[i].at)
     for i in order:
         planned = plan.commands[i]

@@ -107,7 +107,10 @@ class Mission:
         self.script: ScriptedOperator | None = None
         if operator is not None:
             self.operator = Operator(
-                self.network.endpoint(OPERATOR_ID), self.robot_ids, scenario.tasks
+                self.network.endpoint(OPERATOR_ID),
+                self.robot_ids,
+                scenario.tasks,
+                reassignable=config.spec("behaviour").accepts_reassignment,
             )
             self.script = ScriptedOperator(self.operator, operator)
         self.trajectories: dict[str, list[tuple[float, float, float]]] = {
