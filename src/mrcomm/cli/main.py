@@ -60,6 +60,9 @@ COMMANDS: dict[str, Command] = {
         _CLI + "live_cmd", "collect_cmd", "Merge the records of a live run into one result"
     ),
     "replay": Command(_CLI + "replay_cmd", "replay", "Summarise a recorded mission (MCAP)"),
+    "console": Command(
+        _CLI + "console_cmd", "console", "Open a recorded mission in the operator console"
+    ),
     "pulse": Command(_CLI + "pulse_cmd", "pulse", "ESD pulse: publish the measured RSSI"),
     "signal": Command(_CLI + "signal_cmd", "signal_app", "SSD signal models: fit, show, plot"),
     "radio": Command(

@@ -19,6 +19,7 @@ from typing import Any
 
 from nicegui import app, ui
 
+from mrcomm.console.replay import Replay
 from mrcomm.console.session import SPEEDS, ConsoleSession
 from mrcomm.console.view import Pixels, map_png, svg
 
@@ -145,4 +146,48 @@ def serve(session: ConsoleSession, port: int, *, linger: float = 2.0) -> None:
 
     app.on_startup(lambda: threading.Thread(target=simulate, daemon=True).start())
     ui.run(host="127.0.0.1", port=port, reload=False, show=False, title="MRComm console",
+           show_welcome_message=False)  # fmt: skip
+
+
+def build_replay(replay: Replay) -> None:
+    """Register the replay page: the recording's frames under a time slider, played
+    at ×10 with the play switch."""
+    pixels = Pixels(replay.grid)
+    source = "data:image/png;base64," + base64.b64encode(map_png(replay.grid)).decode("ascii")
+
+    @ui.page("/")
+    def index() -> None:
+        ui.page_title(f"MRComm replay: {replay.label}")
+        with ui.row().classes("items-center w-full"):
+            clock = ui.label("").props('id="clock"').classes("text-lg font-mono")
+            ui.label(replay.label)
+            playing = ui.switch("play ×10", value=False).props('id="play"')
+        slider = ui.slider(min=0.0, max=replay.end, step=0.1, value=0.0).props(
+            'id="time" label-always'
+        )
+        image = ui.interactive_image(source, content="", sanitize=False).classes("w-3/4")
+        image.props('id="map"')
+        log = ui.log(max_lines=300).props('id="events"').classes("w-full h-48")
+
+        def show() -> None:
+            view = replay.at(float(slider.value))
+            image.content = svg(view, pixels, truth=True)
+            clock.text = f"t = {view.now:7.1f} s of {replay.end:.1f} s"
+            log.clear()
+            for line in view.events[-100:]:
+                log.push(line)
+
+        def advance() -> None:
+            if playing.value and slider.value < replay.end:
+                slider.value = min(replay.end, float(slider.value) + 10 * REFRESH)
+
+        slider.on_value_change(lambda _e: show())
+        ui.timer(REFRESH, advance)
+        show()
+
+
+def serve_replay(replay: Replay, port: int) -> None:
+    """Serve the replay page on ``port`` (localhost) until interrupted."""
+    build_replay(replay)
+    ui.run(host="127.0.0.1", port=port, reload=False, show=False, title="MRComm replay",
            show_welcome_message=False)  # fmt: skip

@@ -1,0 +1,32 @@
+"""``mrcomm console``: the operator console on a finished mission (``--replay``: an MCAP
+recording scrubbed with a time slider). A running simulated mission gets its console
+with ``mrcomm run --console``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from mrcomm.errors import InputError
+
+
+def console(
+    replay: Annotated[
+        Path, typer.Option(help="An MCAP recording (mrcomm run --record) to scrub through.")
+    ],
+    port: Annotated[int, typer.Option(min=1, max=65535, help="Port of the page.")] = 8080,
+) -> None:
+    """Open a recorded mission in the operator console (http://localhost:--port)."""
+    try:
+        from mrcomm.console.page import serve_replay
+        from mrcomm.console.replay import load_replay
+    except ImportError as err:
+        raise InputError(
+            f"needs the console extra: pip install 'mrcomm[console]' ({err.name} missing)",
+            field="--replay",
+        ) from None
+    loaded = load_replay(replay)
+    typer.echo(f"console: http://localhost:{port} ({loaded.label}, {loaded.end:.1f} s)", err=True)
+    serve_replay(loaded, port)
