@@ -59,9 +59,13 @@ class CommandRecord:
     acknowledged: tuple[str, ...] = ()
     finished_at: float | None = None
     left_out: tuple[str, ...] = ()
+    #: An added task's position.
+    where: tuple[float, float] | None = None
 
     def as_dict(self) -> dict[str, Any]:
+        where = {"x": self.where[0], "y": self.where[1]} if self.where is not None else {}
         return {
+            **where,
             "time": self.time,
             "command": str(self.command),
             "robot": self.robot,
@@ -233,6 +237,8 @@ class Operator:
             self._now, draft.command, draft.robot,
             draft.task.task_id if draft.task is not None else "", draft.former, msg_id,
             acknowledged=(OPERATOR_ID,),
+            where=(draft.task.x, draft.task.y) if draft.command is CommandKind.ADD and draft.task
+            else None,
         )  # fmt: skip
         self.log.append(record)
         self._by_id[msg_id] = record
@@ -248,6 +254,7 @@ class Operator:
         return {
             "commands": [r.as_dict() for r in self.log],
             "successes_heard": len(self.successes),
+            "robots_seen": sorted(self.poses),
         }
 
     # -- what reaches the operator -------------------------------------------------------
@@ -279,6 +286,26 @@ class Operator:
         record.left_out = report.left_out
         members = command_team(self.robots, ASSIGNER_ID)
         record.acknowledged = tuple(m for m in members if m not in report.left_out)
+
+
+def apply_commands(
+    agenda: dict[str, list[TaskSpec]], commands: Sequence[Mapping[str, Any]]
+) -> dict[str, list[TaskSpec]]:
+    """The task assigner's agenda after the operator's recorded commands (reassign
+    moves a task to its new owner, add gives one a new task): what a run's failed tasks
+    are counted against, rebuilt from the record (live mode's collection)."""
+    out = {robot: list(tasks) for robot, tasks in agenda.items()}
+    by_id = {t.task_id: t for tasks in out.values() for t in tasks}
+    for c in commands:
+        robot, task_id = c["robot"], c["task_id"]
+        if c["command"] == CommandKind.REASSIGN and task_id in by_id:
+            out[c["former"]] = [t for t in out[c["former"]] if t.task_id != task_id]
+            out[robot].append(by_id[task_id])
+        elif c["command"] == CommandKind.ADD and "x" in c:
+            task = TaskSpec(task_id=task_id, type="added", x=c["x"], y=c["y"])
+            by_id[task_id] = task
+            out[robot].append(task)
+    return out
 
 
 def known_ages(operator: Operator, now: float) -> Mapping[str, float]:

@@ -218,6 +218,10 @@ def agent(
             "on this host's monotonic clock from the first tick; the world at --speed 1)."
         ),
     ] = "shared",
+    operator: Annotated[
+        Path | None,
+        typer.Option(help="With --robot operator: the operator file (its commands)."),
+    ] = None,
 ) -> None:
     """Run one robot's agent (task executor, and the assigner it hosts) over Zenoh."""
     run.check_mode("live")
@@ -247,6 +251,7 @@ def agent(
         lease=lease,
         join_timeout=join_timeout,
         agent_clock=clock,
+        operator=operator,
     ).with_record_dir()
     warn_insecure(insecure)
     raise typer.Exit(run_agent(settings, robot))
@@ -282,6 +287,13 @@ def live(
             "host's monotonic clock, as on real robots; needs --speed 1)."
         ),
     ] = "shared",
+    operator: Annotated[
+        Path | None,
+        typer.Option(
+            help="An operator in the loop: its own process, with the task assigner, "
+            "sending the file's commands (README)."
+        ),
+    ] = None,
 ) -> None:
     """Run one mission live: world and every agent as separate processes over Zenoh;
     with --db, store it in a results database (mode live)."""
@@ -306,6 +318,14 @@ def live(
 
     scenario = load_scenario(run.scenario)
     members = live_members(scenario)
+    if operator is not None:
+        from mrcomm.agents.commands import OPERATOR_ID
+        from mrcomm.run.operator_plan import load_operator_plan
+
+        reassignable = run.spec("behaviour").accepts_reassignment
+        load_operator_plan(operator, scenario, reassignable=reassignable)  # before any process
+        operator = operator.resolve()
+        members = (*members, OPERATOR_ID)
     if team_dir is not None:
         if insecure:
             raise InputError("--insecure contradicts --team-dir", field="--insecure")
@@ -321,8 +341,9 @@ def live(
         else Path(tempfile.mkdtemp(prefix="mrcomm-live-"))
     )
     settings = LiveSettings(
-        run, zenoh, directory, speed=speed, lease=lease, agent_clock=agent_clock
-    )
+        run, zenoh, directory, speed=speed, lease=lease, agent_clock=agent_clock,
+        operator=operator,
+    )  # fmt: skip
     warn_ignored_settings(run)
     warn_insecure(insecure)
     display = LiveDisplay(directory, run.max_time, len(scenario.tasks), len(scenario.robots))

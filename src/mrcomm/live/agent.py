@@ -33,6 +33,7 @@ from typing import Any
 
 from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
 from mrcomm.agents.behaviours import behaviour_class
+from mrcomm.agents.commands import OPERATOR_ID
 from mrcomm.agents.executor import TaskExecutor
 from mrcomm.errors import InputError, did_you_mean
 from mrcomm.live.away import AwayWatch
@@ -44,6 +45,7 @@ from mrcomm.live.journal import (
     track_presence,
 )
 from mrcomm.live.mates import MateWatch
+from mrcomm.live.operator_host import OperatorHost, place_operator
 from mrcomm.live.protocol import (
     CH_AGENT_STATE,
     CH_BASE_CMD,
@@ -103,6 +105,8 @@ def team_processes(scenario: Scenario) -> tuple[str, ...]:
 def check_agent_id(scenario: Scenario, agent: str) -> None:
     """The id must be a robot of the scenario (or the stand-alone assigner)."""
     check_key_chunk(agent, "--robot")
+    if agent == OPERATOR_ID:
+        return
     robots = [r.id for r in scenario.robots]
     spec = scenario.assigner
     if agent == ASSIGNER_ID:
@@ -151,13 +155,14 @@ class AgentProcess:
             positions.aliases[ASSIGNER_ID] = spec.host
         elif spec.kind == "base_station" and spec.position is not None:
             positions.fixed[ASSIGNER_ID] = (spec.position[0], spec.position[1])
+        place_operator(positions, self.scenario)
         network = build_network(run, self.resources)
         radio = build_radio_links(run, self.resources, network)
         self.bus = ZenohBus(
             self.node,
             LinkRules(network=network, loss_percent=run.spl, radio=radio),
             positions,
-            members=frozenset((*self.robot_ids, ASSIGNER_ID)),
+            members=frozenset((*self.robot_ids, ASSIGNER_ID, OPERATOR_ID)),
             robots=self.robot_ids,
         )
         self.journal = Journal(journal_path(settings.record_dir, agent, incarnation))
@@ -169,7 +174,12 @@ class AgentProcess:
         #: ESD: the sensor this robot's pulse readings feed, and how many it took.
         self.measured: MeasuredSensor | None = None
         self.pulse_readings = 0
-        if agent != ASSIGNER_ID:
+        self.operator: OperatorHost | None = None
+        if agent == OPERATOR_ID:
+            self.operator = OperatorHost(
+                self.bus, run, self.resources, incarnation, settings.operator
+            )
+        elif agent != ASSIGNER_ID:
             start = next(r.pose for r in self.scenario.robots if r.id == agent)
             self.base = RemoteBase(
                 agent, incarnation, start, self._send_command, self.resources.planner
@@ -422,6 +432,8 @@ class AgentProcess:
             self.executor.step(now)
             absent = [a for a in self.team if a != self.agent and a not in alive]
             self.recorder.left_out(now, sorted(absent))
+        if self.operator is not None:
+            self.operator.step(now)
         if self.tail is not None:
             self.tail.flush(now)
 
@@ -430,6 +442,8 @@ class AgentProcess:
             self.executor.timeline.close_all(end)
             assert self.tail is not None
             self.tail.flush(end)
+        if self.operator is not None:
+            self.operator.journal(self.journal, end)
         self.journal.write("end", time=end, timed_out=timed_out, wall=time.time())
         self.ended = True
 
@@ -479,6 +493,8 @@ class AgentProcess:
         ready = all(self.present.get(a) for a in (*self.team, WORLD_ID))
         done = self.executor.done if self.executor is not None else True
         settled = self.assigner.settled if self.assigner is not None else True
+        if self.operator is not None:
+            done, settled = self.operator.done, self.operator.settled
         wall = time.monotonic()
         changed = (done, settled) != self._last_done or ready != self._ready
         if not changed and wall - self._last_beat < HEARTBEAT_PERIOD:

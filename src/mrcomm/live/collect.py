@@ -27,6 +27,8 @@ from typing import Any
 import numpy as np
 
 from mrcomm.agents.assignment import round_robin
+from mrcomm.agents.commands import OPERATOR_ID
+from mrcomm.agents.operator import apply_commands
 from mrcomm.errors import InputError
 from mrcomm.live.protocol import WORLD_ID
 from mrcomm.messaging.aon_state import AON_COUNTERS
@@ -140,6 +142,13 @@ def collect(record_dir: Path) -> tuple[MissionResult, dict[str, Any]]:
         for rid in robot_ids
         for tr in [truth_robots.get(rid, {})]
     }
+    operator_line = next(
+        (j.last("operator") for j in reversed(journals) if j.process == OPERATOR_ID), None
+    )
+    operator = dict(operator_line["summary"]) if operator_line else {}
+    # The assigner's round robin, as it assigned (assignment is not perturbed), then
+    # what the operator moved or added.
+    agenda = apply_commands(round_robin(scenario.tasks, robot_ids), operator.get("commands", []))
     result = assemble(
         RunFacts(
             config=run,
@@ -148,8 +157,7 @@ def collect(record_dir: Path) -> tuple[MissionResult, dict[str, Any]]:
             finished=not timed_out,
             wall_time_s=float(truth.get("wall_time", 0.0)),
             timelines=timelines,
-            # The assigner's round robin, as it assigned (assignment is not perturbed).
-            agenda=round_robin(scenario.tasks, robot_ids),
+            agenda=agenda,
             received=_assigner_receipts(journals),
             robots=robots,
             counts_by_agent=_counts_by_agent(journals),
@@ -171,6 +179,7 @@ def collect(record_dir: Path) -> tuple[MissionResult, dict[str, Any]]:
             config_extra={"mode": "live", "speed": start.get("speed")},
         )
     )
+    result.operator = operator
     report = _live_report(journals, world, by_process)
     report["record_fingerprint"] = record_fingerprint(record_dir)
     return result, report

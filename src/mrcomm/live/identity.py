@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from mrcomm.agents.assigner import ASSIGNER_ID
+from mrcomm.agents.commands import OPERATOR_ID
 from mrcomm.errors import InputError
 from mrcomm.live.protocol import WORLD_ID
 from mrcomm.net.pulse import pulse_id
@@ -48,14 +49,14 @@ def grants(members: Sequence[str], scenario: Scenario | None = None) -> dict[str
         spec = scenario.assigner
         host = spec.host if spec.kind == "robot" else None
     else:
-        robots = [m for m in members if m not in (WORLD_ID, ASSIGNER_ID)]
+        robots = [m for m in members if m not in (WORLD_ID, ASSIGNER_ID, OPERATOR_ID)]
         host = None
     out: dict[str, tuple[str, ...]] = {}
     for member in members:
         if member == WORLD_ID:
             out[member] = (WORLD_ID, *(pulse_id(r) for r in robots))
-        elif member == ASSIGNER_ID:
-            out[member] = (ASSIGNER_ID,)
+        elif member in (ASSIGNER_ID, OPERATOR_ID):
+            out[member] = (member,)
         else:
             out[member] = (member, pulse_id(member), *((ASSIGNER_ID,) if member == host else ()))
     return out

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from mrcomm.agents.assigner import ASSIGNER_ID
+from mrcomm.agents.commands import OPERATOR_ID
 from mrcomm.errors import InputError
 from mrcomm.live.collect import collect
 from mrcomm.live.protocol import WORLD_ID
@@ -86,7 +87,12 @@ class LiveTeam:
         scenario = load_scenario(settings.run.scenario)
         self.robots = tuple(r.id for r in scenario.robots)
         standalone = scenario.assigner.kind != "robot"
-        self.names = (WORLD_ID, *self.robots, *((ASSIGNER_ID,) if standalone else ()))
+        self.names = (
+            WORLD_ID,
+            *self.robots,
+            *((ASSIGNER_ID,) if standalone else ()),
+            *((OPERATOR_ID,) if settings.operator is not None else ()),
+        )
         #: ESD: one trace-replaying pulse process per robot that measured anything in the
         #: trace (pulse id -> robot); a robot without readings never warns, as in sim.
         self.pulses: dict[str, str] = {}
@@ -177,6 +183,8 @@ class LiveTeam:
                 args += ["--lease", f"{s.lease:g}"]
             if s.agent_clock != "shared":
                 args += ["--clock", s.agent_clock]
+            if name == OPERATOR_ID and s.operator is not None:
+                args += ["--operator", str(s.operator)]
         args += self.security_args()
         return args + self.extra_args.get(name, [])
 

@@ -12,10 +12,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from mrcomm.agents.assigner import ASSIGNER_ID
+from mrcomm.agents.commands import OPERATOR_ID
 from mrcomm.live.protocol import WORLD_ID
 
 #: Members of a live team that are not robots.
-NOT_ROBOTS = (WORLD_ID, ASSIGNER_ID)
+NOT_ROBOTS = (WORLD_ID, ASSIGNER_ID, OPERATOR_ID)
 
 
 @dataclass

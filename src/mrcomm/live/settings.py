@@ -39,6 +39,8 @@ class LiveSettings:
     start_timeout: float = 60.0
     #: One of :data:`AGENT_CLOCKS`; ``host`` needs ``speed`` 1 (host time is real time).
     agent_clock: str = "shared"
+    #: An operator in the loop: the operator file (its process: ``--robot operator``).
+    operator: Path | None = None
 
     def __post_init__(self) -> None:
         check_positive(self.speed, "--speed")
