@@ -16,7 +16,7 @@ from __future__ import annotations
 import shutil
 import tempfile
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -222,6 +222,17 @@ def agent(
         Path | None,
         typer.Option(help="With --robot operator: the operator file (its commands)."),
     ] = None,
+    console: Annotated[
+        bool,
+        typer.Option(
+            "--console",
+            help="With --robot operator: serve the operator console on --port "
+            "(http://localhost; needs mrcomm[console]).",
+        ),
+    ] = False,
+    port: Annotated[int, typer.Option(min=1, max=65535, help="Port of the --console page.")] = (
+        8080
+    ),
 ) -> None:
     """Run one robot's agent (task executor, and the assigner it hosts) over Zenoh."""
     run.check_mode("live")
@@ -254,7 +265,37 @@ def agent(
         operator=operator,
     ).with_record_dir()
     warn_insecure(insecure)
+    if console:
+        raise typer.Exit(_operator_console(settings, robot, port))
     raise typer.Exit(run_agent(settings, robot))
+
+
+def _operator_console(settings: Any, robot: str, port: int) -> int:
+    """The operator's process with its console page (the page in the main thread, the
+    process's loop in another)."""
+    from mrcomm.agents.commands import OPERATOR_ID
+
+    if robot != OPERATOR_ID:
+        raise InputError("only the operator's process serves a console", field="--console")
+    try:
+        from mrcomm.console.live_session import LiveConsole
+        from mrcomm.console.page import serve_live
+    except ImportError as err:
+        raise InputError(
+            f"needs the console extra: pip install 'mrcomm[console]' ({err.name} missing)",
+            field="--console",
+        ) from None
+    from mrcomm.live.agent import AgentProcess
+    from mrcomm.live.journal import new_incarnation
+
+    process = AgentProcess(settings, robot, new_incarnation(settings.record_dir, robot))
+    host = process.operator
+    assert host is not None
+    counts = process.bus.endpoints[OPERATOR_ID].counts
+    page = LiveConsole(host.operator, process.resources.scenario.grid, counts)  # type: ignore[arg-type]
+    host.on_step = page.on_step
+    typer.echo(f"console: http://localhost:{port}", err=True)
+    return serve_live(page, port, process.run)
 
 
 @with_run_options
@@ -294,6 +335,17 @@ def live(
             "sending the file's commands (README)."
         ),
     ] = None,
+    console: Annotated[
+        bool,
+        typer.Option(
+            "--console",
+            help="The operator console on http://localhost:--port, served by the "
+            "operator's process (a team member; needs mrcomm[console]).",
+        ),
+    ] = False,
+    port: Annotated[int, typer.Option(min=1, max=65535, help="Port of the --console page.")] = (
+        8080
+    ),
 ) -> None:
     """Run one mission live: world and every agent as separate processes over Zenoh;
     with --db, store it in a results database (mode live)."""
@@ -319,12 +371,14 @@ def live(
     scenario = load_scenario(run.scenario)
     members = live_members(scenario)
     if operator is not None:
-        from mrcomm.agents.commands import OPERATOR_ID
         from mrcomm.run.operator_plan import load_operator_plan
 
         reassignable = run.spec("behaviour").accepts_reassignment
         load_operator_plan(operator, scenario, reassignable=reassignable)  # before any process
         operator = operator.resolve()
+    if operator is not None or console:
+        from mrcomm.agents.commands import OPERATOR_ID
+
         members = (*members, OPERATOR_ID)
     if team_dir is not None:
         if insecure:
@@ -342,7 +396,7 @@ def live(
     )
     settings = LiveSettings(
         run, zenoh, directory, speed=speed, lease=lease, agent_clock=agent_clock,
-        operator=operator,
+        operator=operator, console_port=port if console else None,
     )  # fmt: skip
     warn_ignored_settings(run)
     warn_insecure(insecure)

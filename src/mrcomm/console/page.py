@@ -15,10 +15,12 @@ from __future__ import annotations
 
 import base64
 import threading
+from collections.abc import Callable
 from typing import Any
 
 from nicegui import app, ui
 
+from mrcomm.console.live_session import LiveConsole
 from mrcomm.console.replay import Replay
 from mrcomm.console.session import SPEEDS, ConsoleSession
 from mrcomm.console.view import Pixels, map_png, svg
@@ -26,12 +28,13 @@ from mrcomm.console.view import Pixels, map_png, svg
 REFRESH = 0.25  # s between page updates
 
 
-def build(session: ConsoleSession) -> None:
-    """Register the console page for ``session``."""
-    grid = session.mission.resources.scenario.grid
+def build(session: ConsoleSession | LiveConsole) -> None:
+    """Register the console page for ``session`` (a simulated mission's, with ground
+    truth and a pace to set; or a live operator's, with neither)."""
+    grid = session.grid
     pixels = Pixels(grid)
     source = "data:image/png;base64," + base64.b64encode(map_png(grid)).decode("ascii")
-    robots = session.mission.robot_ids
+    robots = session.robot_ids
 
     @ui.page("/")
     def index() -> None:
@@ -39,15 +42,17 @@ def build(session: ConsoleSession) -> None:
         ui.page_title("MRComm console")
         with ui.row().classes("items-center w-full"):
             clock = ui.label("").props('id="clock"').classes("text-lg font-mono")
-            speeds = dict(SPEEDS)
-            start = next((n for n, v in speeds.items() if v == session.speed), None)
-            if start is None:  # the pace the run was started with
-                start = f"x{session.speed:g}"
-                speeds[start] = session.speed
-            ui.toggle(list(speeds), value=start,
-                      on_change=lambda e: setattr(session, "speed", speeds[e.value])
-                      ).props('id="speed"')  # fmt: skip
-            truth = ui.switch("ground truth", value=True).props('id="truth"')
+            if session.speed is not None:
+                speeds = dict(SPEEDS)
+                start = next((n for n, v in speeds.items() if v == session.speed), None)
+                if start is None:  # the pace the run was started with
+                    start = f"x{session.speed:g}"
+                    speeds[start] = session.speed
+                ui.toggle(list(speeds), value=start,
+                          on_change=lambda e: setattr(session, "speed", speeds[e.value])
+                          ).props('id="speed"')  # fmt: skip
+            truth = ui.switch("ground truth", value=session.has_truth).props('id="truth"')
+            truth.set_visibility(session.has_truth)
             status = ui.label("").props('id="status"')
         with ui.row().classes("w-full no-wrap"):
             image = ui.interactive_image(source, content="", events=["click"],
@@ -114,7 +119,7 @@ def build(session: ConsoleSession) -> None:
             else:
                 heard = sum(t.heard for t in view.tasks)
                 waiting = " · robots done: send them back for lost statuses, or end" if (
-                    session.mission.finished) else ""  # fmt: skip
+                    session.waiting) else ""  # fmt: skip
                 status.text = f"{heard} of {len(view.tasks)} tasks heard{waiting}"
             notes.text = " · ".join(view.notes)
             commands.rows = [
@@ -191,3 +196,23 @@ def serve_replay(replay: Replay, port: int) -> None:
     build_replay(replay)
     ui.run(host="127.0.0.1", port=port, reload=False, show=False, title="MRComm replay",
            show_welcome_message=False)  # fmt: skip
+
+
+def serve_live(
+    console: LiveConsole, port: int, agent: Callable[[], int], *, linger: float = 2.0
+) -> int:
+    """Serve the live console page on ``port`` while ``agent`` (the operator's process
+    loop) runs in its own thread; stop ``linger`` s after it ends; its exit status."""
+    build(console)
+    status: list[int] = []
+
+    def run_agent() -> None:
+        try:
+            status.append(agent())
+        finally:
+            threading.Timer(linger, app.shutdown).start()
+
+    app.on_startup(lambda: threading.Thread(target=run_agent, daemon=True).start())
+    ui.run(host="127.0.0.1", port=port, reload=False, show=False, title="MRComm console",
+           show_welcome_message=False)  # fmt: skip
+    return status[0] if status else 1

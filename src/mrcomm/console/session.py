@@ -23,6 +23,7 @@ from mrcomm.run.operator_plan import OperatorPlan
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.result import MissionResult
 from mrcomm.sim.mission import Mission
+from mrcomm.world.occupancy import OccupancyGrid
 
 #: The speeds the console offers (× real time; 0: paused; inf: as fast as possible).
 SPEEDS = {"pause": 0.0, "x1": 1.0, "x10": 10.0, "max": math.inf}
@@ -57,6 +58,22 @@ class ConsoleSession:
         self.finished = threading.Event()
         self.view: ConsoleView = snapshot(self.mission, self.operator, self.events)
         self.steps_per_view = 0.0  # measured: steps between two snapshots
+
+    #: The simulation has ground truth for the page to show.
+    has_truth = True
+
+    @property
+    def grid(self) -> OccupancyGrid:
+        return self.mission.resources.scenario.grid
+
+    @property
+    def robot_ids(self) -> tuple[str, ...]:
+        return self.mission.robot_ids
+
+    @property
+    def waiting(self) -> bool:
+        """The robots are done and the mission stays open for the operator."""
+        return self.mission.finished
 
     def submit(
         self, kind: str, robot: str = "", task: str = "", where: tuple[float, float] | None = None

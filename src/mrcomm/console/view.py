@@ -12,6 +12,7 @@ lost status is visible: a task the robot has done whose status never arrived.
 from __future__ import annotations
 
 import io
+import math
 from dataclasses import dataclass, field
 from html import escape
 from typing import TYPE_CHECKING, Any
@@ -198,3 +199,32 @@ def svg(view: ConsoleView, pixels: Pixels, *, truth: bool, selected_task: str = 
             f'fill-opacity="{opacity}">{robot.id}{" (" + age + " s)" if stale else ""}</text>'
         )
     return "".join(parts)
+
+
+def operator_snapshot(
+    operator: Operator, now: float, events: list[str], counters: dict[str, dict[str, int]]
+) -> ConsoleView:
+    """The console's view where only the operator's knowledge exists (live mode: no
+    ground truth in the operator's process)."""
+    robots = tuple(
+        RobotMark(
+            rid,
+            (pose.x, pose.y, pose.theta) if pose is not None else None,
+            now - pose.stamp if pose is not None else None,
+            (pose.x, pose.y) if pose is not None else (math.nan, math.nan),
+            "",
+        )
+        for rid in operator.robots
+        for pose in [operator.poses.get(rid)]
+    )
+    own = operator.ownership
+    tasks = tuple(
+        TaskMark(task_id, task.x, task.y, own.owner[task_id],
+                 (task_id, own.owner[task_id]) in operator.successes, False, False)
+        for task_id, task in own.tasks.items()
+    )  # fmt: skip
+    return ConsoleView(
+        now=now, robots=robots, tasks=tasks, links={}, events=tuple(events[-EVENTS_KEPT:]),
+        events_total=len(events), counters=counters,
+        commands=tuple(operator.summary()["commands"]),
+    )  # fmt: skip

@@ -27,6 +27,7 @@ vanished or that fell silent are gone for the behaviour (``live.mates``).
 from __future__ import annotations
 
 import signal
+import threading
 import time
 from types import FrameType
 from typing import Any
@@ -562,6 +563,8 @@ def _install_stop_handlers() -> dict[int, Any]:
         raise _Stop()
 
     previous: dict[int, Any] = {}
+    if threading.current_thread() is not threading.main_thread():
+        return previous  # a console's page runs the main thread and its signals
     for sig in (signal.SIGTERM, signal.SIGINT):
         previous[sig] = signal.signal(sig, stop)
     return previous

@@ -91,7 +91,7 @@ class LiveTeam:
             WORLD_ID,
             *self.robots,
             *((ASSIGNER_ID,) if standalone else ()),
-            *((OPERATOR_ID,) if settings.operator is not None else ()),
+            *((OPERATOR_ID,) if settings.has_operator else ()),
         )
         #: ESD: one trace-replaying pulse process per robot that measured anything in the
         #: trace (pulse id -> robot); a robot without readings never warns, as in sim.
@@ -185,6 +185,8 @@ class LiveTeam:
                 args += ["--clock", s.agent_clock]
             if name == OPERATOR_ID and s.operator is not None:
                 args += ["--operator", str(s.operator)]
+            if name == OPERATOR_ID and s.console_port is not None:
+                args += ["--console", "--port", str(s.console_port)]
         args += self.security_args()
         return args + self.extra_args.get(name, [])
 

@@ -11,6 +11,7 @@ run's result by the collection.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 from mrcomm.agents.assigner import ASSIGNER_ID
@@ -66,9 +67,14 @@ class OperatorHost:
             reassignable=reassignable,
         )
         self.script = ScriptedOperator(self.operator, plan)
+        #: Called at each step before the operator steps (a console applies the
+        #: commands its page queued, and takes its snapshot).
+        self.on_step: Callable[[float], None] | None = None
 
     def step(self, now: float) -> None:
         self.operator.set_time(now)
+        if self.on_step is not None:
+            self.on_step(now)
         self.script.step(now)
         self.operator.step(now)
 

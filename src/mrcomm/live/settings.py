@@ -41,6 +41,12 @@ class LiveSettings:
     agent_clock: str = "shared"
     #: An operator in the loop: the operator file (its process: ``--robot operator``).
     operator: Path | None = None
+    #: Serve the operator console on this port (from the operator's process).
+    console_port: int | None = None
+
+    @property
+    def has_operator(self) -> bool:
+        return self.operator is not None or self.console_port is not None
 
     def __post_init__(self) -> None:
         check_positive(self.speed, "--speed")
