@@ -159,6 +159,17 @@ def world(
     start_timeout: Annotated[
         float, typer.Option(help="Wall s to wait for every agent to be ready.")
     ] = 60.0,
+    foxglove: Annotated[
+        bool,
+        typer.Option(
+            "--foxglove",
+            help="Stream the ground truth (map, robots, links) live to the Foxglove app "
+            "on --foxglove-port.",
+        ),
+    ] = False,
+    foxglove_port: Annotated[
+        int, typer.Option(min=0, max=65535, help="Port of the --foxglove server.")
+    ] = 8765,
 ) -> None:
     """Simulate every robot's base and publish the shared clock (live mode)."""
     run.check_mode("live")
@@ -178,7 +189,23 @@ def world(
         run, zenoh, record_dir.expanduser(), speed=speed, start_timeout=start_timeout
     ).with_record_dir()
     warn_insecure(insecure)
-    raise typer.Exit(run_world(settings))
+    if not foxglove:
+        raise typer.Exit(run_world(settings))
+    from mrcomm.experiment.recording import GroundTruthStream
+    from mrcomm.live.journal import new_incarnation
+    from mrcomm.live.world import WorldProcess
+
+    process = WorldProcess(settings, new_incarnation(settings.record_dir, WORLD_ID))
+    scenario = process.resources.scenario
+    stream = GroundTruthStream(scenario.grid, process.robot_ids, scenario.robot_radius)
+    port = stream.serve("127.0.0.1", foxglove_port)
+    typer.echo(f"Foxglove: open ws://localhost:{port} in the Foxglove app", err=True)
+    process.on_record = stream
+    try:
+        status = process.run()
+    finally:
+        stream.close()
+    raise typer.Exit(status)
 
 
 @with_run_options
@@ -343,6 +370,16 @@ def live(
             "operator's process (a team member; needs mrcomm[console]).",
         ),
     ] = False,
+    foxglove: Annotated[
+        bool,
+        typer.Option(
+            "--foxglove",
+            help="The world streams the ground truth live to the Foxglove app on --foxglove-port.",
+        ),
+    ] = False,
+    foxglove_port: Annotated[
+        int, typer.Option(min=1, max=65535, help="Port of the --foxglove server.")
+    ] = 8765,
     port: Annotated[int, typer.Option(min=1, max=65535, help="Port of the --console page.")] = (
         8080
     ),
@@ -403,7 +440,12 @@ def live(
     display = LiveDisplay(directory, run.max_time, len(scenario.tasks), len(scenario.robots))
     try:
         with display, throwaway_team(team_dir, insecure, members) as used_dir:
-            result, report = run_live(settings, team_dir=used_dir, on_progress=display.update)
+            world_args = ["--foxglove", "--foxglove-port", str(foxglove_port)]
+            extra = {"world": world_args}  # the world process streams its ground truth
+            result, report = run_live(
+                settings, team_dir=used_dir, on_progress=display.update,
+                extra_args=extra if foxglove else None,
+            )  # fmt: skip
     except InputError:
         # A process refused its input (its one line is the error): nothing was run, so
         # no records are worth keeping in a temporary directory.

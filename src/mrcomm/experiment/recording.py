@@ -51,12 +51,14 @@ from mrcomm.experiment import recording_scene as scene
 from mrcomm.fileio import atomic_write
 from mrcomm.messaging.messages import Message
 from mrcomm.metrics.timeline import ROLE
+from mrcomm.net.links import LinkState
 from mrcomm.run.config import RunConfig
 from mrcomm.run.operator_plan import OperatorPlan
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.result import MissionResult
 from mrcomm.sim.mission import Mission
 from mrcomm.world.geometry import Pose
+from mrcomm.world.occupancy import OccupancyGrid
 
 TOPIC_MAP = "/map"
 TOPIC_SCENE = "/scene"
@@ -356,6 +358,51 @@ class MissionRecorder:
                 state = "pending"
             views.append(scene.TaskView(task.task_id, task.x, task.y, state, robots))
         return views
+
+
+class GroundTruthStream:
+    """A live mission's ground truth on a Foxglove WebSocket server (``mrcomm world
+    --foxglove``): what the world process knows — the map, every robot's true pose and
+    the links between them — at the scene rate, with the channels and message types of
+    a recording (the task states are the agents' and are not in it)."""
+
+    def __init__(
+        self,
+        grid: OccupancyGrid,
+        robot_ids: tuple[str, ...],
+        robot_radius: float,
+        *,
+        scene_period: float = 0.2,
+    ) -> None:
+        self.out = RecordingSink(None, scene.RecordingClock(time.time_ns()))
+        self.robot_radius = robot_radius
+        self.scene_period = scene_period
+        self._colors = {rid: scene.robot_color(i) for i, rid in enumerate(robot_ids)}
+        self._next = 0.0
+        for topic, channel_class in ((TOPIC_MAP, GridChannel), (TOPIC_SCENE, SceneUpdateChannel)):
+            self.out.add_typed(topic, channel_class)
+        self.out.add_json(TOPIC_LINKS, scene.links_schema())
+        for rid in robot_ids:
+            self.out.add_typed(pose_topic(rid), PoseInFrameChannel)
+        self.out.latch(TOPIC_MAP, 0.0, scene.grid_message(grid, self.out.clock.timestamp(0.0)))
+
+    def serve(self, host: str, port: int) -> int:
+        return self.out.serve(host, port)
+
+    def __call__(self, now: float, poses: dict[str, Pose], links: LinkState) -> None:
+        if now < self._next - 1e-9:
+            return
+        self._next = now + self.scene_period
+        when = self.out.clock.timestamp(now)
+        robots = [scene.RobotView(rid, pose, self._colors[rid], "") for rid, pose in poses.items()]
+        update = scene.scene_update(when, robots, [], links, robot_radius=self.robot_radius)
+        self.out.write(TOPIC_SCENE, now, update)
+        for rid, pose in poses.items():
+            self.out.write(pose_topic(rid), now, scene.pose_message(when, pose))
+        self.out.write(TOPIC_LINKS, now, scene.links_message(now, links))
+
+    def close(self) -> None:
+        self.out.close()
 
 
 def run_and_record(

@@ -336,10 +336,12 @@ def run_live(
     *,
     team_dir: Path | None = None,
     on_progress: Callable[[], None] | None = None,
+    extra_args: dict[str, list[str]] | None = None,
 ) -> tuple[MissionResult, dict[str, Any]]:
     """Launch, wait for the end of the mission, collect: the live ``mrcomm run``. Any
-    exception (Ctrl-C too) stops every process first."""
-    with LiveTeam(settings, team_dir=team_dir) as team:
+    exception (Ctrl-C too) stops every process first. ``extra_args``: more command-line
+    arguments per process (e.g. the world's ``--foxglove``)."""
+    with LiveTeam(settings, team_dir=team_dir, extra_args=extra_args) as team:
         team.start()
         team.wait(on_progress=on_progress)
         return team.collect()

@@ -23,6 +23,7 @@ the agents have gone. It is not a team member: a crash of any agent leaves it ru
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import asdict
 
 from mrcomm.agents.assigner import ASSIGNER_ID
@@ -45,6 +46,7 @@ from mrcomm.live.pulse import PublishingEndpoint
 from mrcomm.live.settings import LiveSettings, config_crc
 from mrcomm.messaging.messages import TOPIC_RSSI, RssiMsg
 from mrcomm.messaging.topics import Lane
+from mrcomm.net.links import LinkState
 from mrcomm.net.pulse import pulse_id
 from mrcomm.net.zenoh_node import Incoming, ZenohNode
 from mrcomm.run.bodies import RobotBodies
@@ -57,6 +59,7 @@ from mrcomm.run.wiring import (
     make_links,
     measures_radio,
 )
+from mrcomm.world.geometry import Pose
 
 END_GRACE_SIM = 1.0  # simulated s everyone must stay done before the mission ends ...
 END_GRACE_WALL = 0.3  # ... and wall s, for messages still in flight
@@ -101,6 +104,9 @@ class WorldProcess:
         self._done_since: tuple[float, float] | None = None
         self.wall_start = 0.0
         self.wall_time = 0.0
+        #: Called with the mission time, the robots' true poses and the link state of
+        #: every tick (``mrcomm world --foxglove`` streams them to the Foxglove app).
+        self.on_record: Callable[[float, dict[str, Pose], LinkState], None] | None = None
 
     # -- life cycle --------------------------------------------------------------------
     def run(self) -> int:
@@ -291,6 +297,8 @@ class WorldProcess:
     def _record(self) -> None:
         positions = self.bodies.node_positions(self.bodies.true_xy())
         links = self.links.update(positions, self.now)
+        if self.on_record is not None:
+            self.on_record(self.now, {r: b.true_pose for r, b in self.bases.items()}, links)
         if self.radio_pulse is not None:
             self._publish_readings(self.radio_pulse.readings(self.now, links))
         # The RSSI of every robot pair at the pulse rate (the threshold's: ESD's trace,
