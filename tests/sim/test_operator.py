@@ -241,3 +241,16 @@ def test_a_behaviour_that_refuses_reassignment_refuses_it_before_the_run(
         with pytest.raises(ValueError, match="does not accept add"):
             mission.operator.command("add", "robot_1", "x", (5.0, 5.7))
         assert mission.run().mission["successful"]
+
+
+def test_a_confirmed_task_is_known_done_but_still_counted_as_a_lost_status(
+    s1_resources: ScenarioResources,
+) -> None:
+    # WLAN · NB · SPL 50, seed 3 loses the statuses of tasks 1, 3, 4 and 7.
+    plan = _plan({"at": 200, "command": "confirm", "task": "4"})
+    mission = Mission(_config("wlan", "nb", 50, 3), s1_resources, plan)
+    result = mission.run()
+    assert result.operator["confirmed"] == ["4"]
+    assert ("4", "robot_1") in mission.assigner.confirmed
+    assert "4" in result.mission["failed_tasks"]  # communication still lost it
+    assert all("4" in e.known_done for e in mission.executors.values())

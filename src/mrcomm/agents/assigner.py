@@ -57,6 +57,8 @@ class TaskAssigner:
         # (task_id, robot) -> time the SUCCESS status first arrived
         self.success_received: dict[tuple[str, str], float] = {}
         self.status_log: list[tuple[float, TaskStatus]] = []
+        #: (task_id, robot) -> when an operator's confirmation arrived.
+        self.confirmed: dict[tuple[str, str], float] = {}
         self._seq = 0
         self._now = 0.0
         self._next_heartbeat = 0.0
@@ -134,6 +136,11 @@ class TaskAssigner:
         assigner expects (what failed tasks are counted against)."""
         task = command.task
         if task is None or command.robot not in self.agenda:
+            return
+        if command.command is CommandKind.CONFIRM:
+            # Known done by the operator's word, not by the robot's status: kept apart,
+            # so failed tasks still count what communication lost.
+            self.confirmed.setdefault((task.task_id, command.robot), self._now)
             return
         if command.command is CommandKind.REASSIGN and command.former in self.agenda:
             former = self.agenda[command.former]

@@ -538,7 +538,7 @@ class TaskExecutor:
         given, added or to do again joins it (an idle robot plans again), pause stops
         the robot where it is and resume sends it on to where it was going."""
         kind, task, me = command.command, command.task, self.robot_id
-        if me not in (command.robot, command.former):
+        if me not in (command.robot, command.former) and kind is not CommandKind.CONFIRM:
             return
         self.timeline.event(L.OPERATOR_COMMAND, self._now, command=str(kind))
         if kind is CommandKind.REASSIGN and task is not None and command.former == me:
@@ -551,6 +551,8 @@ class TaskExecutor:
                 self._agenda_reported = False
                 if self.leaf() == "idle":
                     self.trigger("new_tasks")
+        elif kind is CommandKind.CONFIRM and task is not None:
+            self.known_done.add(task.task_id)  # its dependants may start
         elif kind is CommandKind.PAUSE and not self.paused:
             self.paused = True
             self.base.cancel()

@@ -7,7 +7,8 @@ sent, the task statuses it hears (plain, or read from the team's AON traffic it
 overhears) — and nothing else, and it acts through commands
 (:class:`~mrcomm.messaging.messages.OperatorCommand`) sent with AON to the robots and
 the task assigner (:mod:`mrcomm.agents.commands`): reassign a task, send a robot back to
-do a task again (its status was lost), add a task, pause or resume a robot.
+do a task again (its status was lost), confirm a task it saw done (its status never
+arrived), add a task, pause or resume a robot.
 
 :meth:`Operator.command` is what a console (or a script) calls; every command is
 logged with its time, the members known to have it (its acknowledgements) and when AON
@@ -42,7 +43,9 @@ from mrcomm.messaging.messages import (
 from mrcomm.ports import Bus
 
 #: The commands that need a task, and those that need none.
-TASK_COMMANDS = frozenset({CommandKind.REASSIGN, CommandKind.REDO, CommandKind.ADD})
+TASK_COMMANDS = frozenset(
+    {CommandKind.REASSIGN, CommandKind.REDO, CommandKind.ADD, CommandKind.CONFIRM}
+)
 
 
 @dataclass
@@ -149,7 +152,7 @@ class Ownership:
             self.tasks[task_id] = task
             self.owner[task_id] = robot
             self.added.add(task_id)
-        elif kind is CommandKind.REDO:
+        elif kind in (CommandKind.REDO, CommandKind.CONFIRM):
             former = ""  # nothing is taken from anyone
         return OperatorCommand(
             sender=OPERATOR_ID, incarnation=0, seq=0, stamp=0.0,

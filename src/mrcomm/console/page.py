@@ -66,7 +66,8 @@ def build(session: ConsoleSession | LiveConsole) -> None:
                             f'id="pick-{rid}" dense outline'
                         )
                 with ui.row():
-                    for kind in ("reassign", "redo", "add", "pause", "resume", "end"):
+                    for kind in ("reassign", "redo", "confirm", "add", "pause", "resume",
+                                 "end"):  # fmt: skip
                         ui.button(kind, on_click=lambda _e, k=kind: send(k)).props(
                             f'id="cmd-{kind}" dense'
                         )
@@ -90,10 +91,10 @@ def build(session: ConsoleSession | LiveConsole) -> None:
             selection.text = f"task {picked['task'] or '-'} · robot {picked['robot']} · at {place}"
 
         def send(kind: str) -> None:
-            task = picked["task"] if kind in ("reassign", "redo") else ""
+            task = picked["task"] if kind in ("reassign", "redo", "confirm") else ""
             if kind == "add":
                 task = f"op{len(session.view.commands) + 1}"
-            robot = "" if kind == "redo" else picked["robot"]
+            robot = "" if kind in ("redo", "confirm") else picked["robot"]
             where = picked["where"] if kind == "add" else None
             session.submit(kind, robot, task, where)
 

@@ -86,6 +86,7 @@ class CommandKind(StrEnum):
     ADD = "add"  # a new task for ``robot``
     PAUSE = "pause"  # ``robot`` stops where it is ...
     RESUME = "resume"  # ... and carries on
+    CONFIRM = "confirm"  # the operator saw the task done (its status never arrived)
 
 
 class OperatorCommand(Message, frozen=True, tag="command"):

@@ -228,7 +228,8 @@ class Mission:
             )
         )
         if self.operator is not None:
-            result.operator = self.operator.summary()
+            confirmed = sorted({task for task, _ in self.assigner.confirmed})
+            result.operator = {**self.operator.summary(), "confirmed": confirmed}
         return result
 
 
