@@ -134,7 +134,7 @@ def test_an_operator_out_of_range_hears_nothing_until_a_robot_comes_close(
 @pytest.mark.parametrize(
     ("plan", "message"),
     [
-        ("placement: nowhere\n", "placement: must be one of base, robot_1"),
+        ("placement: nowhere\n", "placement: must be one of base, virtual, robot_1"),
         ("commands: [{at: 5, command: fly, robot: robot_1}]\n", "commands[0]: unknown command"),
         ("commands: [{at: 5, command: reassign, task: '99', robot: robot_2}]\n",
          "commands[0]: unknown task '99'"),
@@ -254,3 +254,20 @@ def test_a_confirmed_task_is_known_done_but_still_counted_as_a_lost_status(
     assert ("4", "robot_1") in mission.assigner.confirmed
     assert "4" in result.mission["failed_tasks"]  # communication still lost it
     assert all("4" in e.known_done for e in mission.executors.values())
+
+
+@pytest.mark.parametrize(("placement", "heard_all_along"), [("virtual", True), ("base", False)])
+def test_a_virtual_operator_is_never_out_of_range(
+    placement: str, heard_all_along: bool, s1_resources: ScenarioResources
+) -> None:
+    # AH: the robots drive out of each other's (and the base's) range; a virtual
+    # operator still hears every pose, one with the task assigner does not.
+    mission = Mission(_config("ah", "nb", 0, 1), s1_resources, _plan(placement=placement))
+    operator = mission.operator
+    assert operator is not None
+    oldest = 0.0
+    while mission.now < 120:
+        mission.step()
+        if mission.now > 5:
+            oldest = max(oldest, *(mission.now - p.stamp for p in operator.poses.values()))
+    assert (oldest < 1.0) is heard_all_along

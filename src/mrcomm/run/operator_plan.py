@@ -4,7 +4,8 @@ study reproduces exactly.
 
 The file::
 
-    placement: base          # with the task assigner (its base station), or a robot id
+    placement: base          # with the task assigner (its base station), a robot id, or
+                             # virtual (no position: never out of range)
     commands:
       - {at: 60, command: reassign, task: "4", robot: robot_2}
       - {at: 90, command: pause, robot: robot_3}
@@ -32,6 +33,8 @@ from mrcomm.world.yamlfile import read_yaml, validation_error
 
 #: Where the operator sits when the file says ``base``: with the task assigner.
 BASE = "base"
+#: An operator with no position: never out of range (simulation).
+VIRTUAL = "virtual"
 
 
 class PlannedCommand(BaseModel):
@@ -71,8 +74,8 @@ def load_operator_plan(
     except pydantic.ValidationError as err:
         raise validation_error(err, file=path, root=OperatorPlan) from None
     robots = tuple(r.id for r in scenario.robots)
-    if plan.placement != BASE and plan.placement not in robots:
-        choices = ", ".join((BASE, *robots))
+    if plan.placement not in (BASE, VIRTUAL) and plan.placement not in robots:
+        choices = ", ".join((BASE, VIRTUAL, *robots))
         raise InputError(f"must be one of {choices}", file=path, field="placement")
     ownership = Ownership.initial(robots, scenario.tasks, reassignable)
     order = sorted(range(len(plan.commands)), key=lambda i: plan.commands[i].at)

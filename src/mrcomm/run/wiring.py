@@ -256,12 +256,14 @@ def link_nodes(
     """The nodes of the link model in its order (the robots, the task assigner, then
     the operator when ``operator`` places one) and the aliases among them (an assigner
     hosted on a robot shares its position; an operator shares the position of the
-    robot it is on, or of the task assigner at "base")."""
+    robot it is on, or of the task assigner at "base"; a "virtual" one has none)."""
     host = scenario.assigner.host
     aliases = {ASSIGNER_ID: host} if host else {}
     if operator is None:
         return (*(r.id for r in scenario.robots), ASSIGNER_ID), aliases
-    aliases[OPERATOR_ID] = aliases.get(ASSIGNER_ID, ASSIGNER_ID) if operator == "base" else operator
+    if operator != "virtual":  # virtual: no position, never out of range
+        host_of_base = aliases.get(ASSIGNER_ID, ASSIGNER_ID)
+        aliases[OPERATOR_ID] = host_of_base if operator == "base" else operator
     return (*(r.id for r in scenario.robots), ASSIGNER_ID, OPERATOR_ID), aliases
 
 
