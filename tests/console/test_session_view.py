@@ -88,3 +88,17 @@ def test_a_console_keeps_a_mission_with_lost_statuses_open_until_the_limit() -> 
     result = session.run()
     assert result.sim_time_s == pytest.approx(400.0)  # robots done at ~180 s
     assert result.mission["failed_tasks"] == ["1", "3", "4", "7"]
+
+
+def test_lf_groups_are_drawn_as_their_poses_tell_the_operator() -> None:
+    config = make_config(None, scenario=S1_PATH, network="ah", behaviour="lf",
+                         threshold="slt", seed=1)  # fmt: skip
+    session = ConsoleSession(config, ScenarioResources.load(S1_PATH), None, speed=math.inf)
+    mission, operator = session.mission, session.operator
+    while not any(p.role == "follower" for p in operator.poses.values()):
+        mission.step()
+        assert mission.now < 300, "no LF group formed"
+    view = snapshot(mission, operator, [])
+    follower = next(r for r in view.robots if r.role == "follower")
+    drawn = svg(view, Pixels(mission.resources.scenario.grid), truth=False)
+    assert f'id="follows-{follower.id}"' in drawn and "· follower" in drawn

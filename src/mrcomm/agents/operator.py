@@ -86,6 +86,8 @@ class KnownPose:
     y: float
     theta: float
     stamp: float  # when the robot sent it (mission clock)
+    role: str = ""  # its team role, as its pose says (LF: leader, follower, ...)
+    leader: str = ""  # the robot it follows
 
 
 @dataclass
@@ -263,7 +265,9 @@ class Operator:
     # -- what reaches the operator -------------------------------------------------------
     def _on_pose(self, message: Message) -> None:
         assert isinstance(message, PoseMsg)
-        self.poses[message.sender] = KnownPose(message.x, message.y, message.theta, message.stamp)
+        self.poses[message.sender] = KnownPose(
+            message.x, message.y, message.theta, message.stamp, message.role, message.leader
+        )
         self.aon.heard_from(message.sender, self._now)
 
     def _on_status(self, message: Message) -> None:

@@ -70,7 +70,7 @@ def _frame(t: float, scene: Any) -> ConsoleView:
             x, y = body.position.x, body.position.y
             robots.append(RobotMark(entity.id.removeprefix("robot/"),
                                     (x, y, _yaw(arrow.orientation)), 0.0, (x, y),
-                                    meta.get("state", "")))  # fmt: skip
+                                    meta.get("state", ""), meta.get("role", "")))  # fmt: skip
         elif entity.id.startswith("task/"):
             state = meta.get("state", "")
             cube = entity.cubes[0].pose.position

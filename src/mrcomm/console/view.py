@@ -42,6 +42,8 @@ class RobotMark:
     age: float | None  # s since the known pose was sent
     truth: tuple[float, float]
     state: str
+    role: str = ""  # as its last pose said (LF roles)
+    leader: str = ""  # the robot it follows, as its last pose said
 
 
 @dataclass(frozen=True)
@@ -84,6 +86,8 @@ def snapshot(mission: Mission, operator: Operator, events: list[str]) -> Console
                 now - pose.stamp if pose is not None else None,
                 (true.x, true.y),
                 str(mission.executors[rid].state),
+                pose.role if pose is not None else "",
+                pose.leader if pose is not None else "",
             )
         )
     own = operator.ownership
@@ -178,6 +182,14 @@ def svg(view: ConsoleView, pixels: Pixels, *, truth: bool, selected_task: str = 
             f'x="{px - 7:.1f}" y="{py - 7:.1f}" width="14" height="14" fill="{colour}"{stroke} />'
             f'<text x="{px + 9:.1f}" y="{py + 4:.1f}" font-size="12">{escape(task.id)}</text>'
         )
+    known = {r.id: r.known for r in view.robots if r.known is not None}
+    for robot in view.robots:  # LF groups: each follower to its leader, as they said
+        if robot.leader in known and robot.id in known:
+            (fx, fy), (lx, ly) = (pixels.to_px(*known[r][:2]) for r in (robot.id, robot.leader))
+            parts.append(
+                f'<line id="follows-{robot.id}" x1="{fx:.1f}" y1="{fy:.1f}" x2="{lx:.1f}" '
+                f'y2="{ly:.1f}" stroke="#6a3d9a" stroke-width="2" stroke-dasharray="6 3" />'
+            )
     for i, robot in enumerate(view.robots):
         colour = _hex(ROBOT_COLORS[i % len(ROBOT_COLORS)])
         if truth:
@@ -192,11 +204,12 @@ def svg(view: ConsoleView, pixels: Pixels, *, truth: bool, selected_task: str = 
         stale = robot.age is not None and robot.age > STALE_AFTER
         opacity = "0.35" if stale else "1"
         age = f"{robot.age:.1f}" if robot.age is not None else ""
+        role = f" · {escape(robot.role)}" if robot.role not in ("", "na") else ""
         parts.append(
             f'<circle id="robot-{robot.id}" data-age="{age}" cx="{kx:.1f}" cy="{ky:.1f}" r="7" '
             f'fill="{colour}" fill-opacity="{opacity}" />'
             f'<text x="{kx + 9:.1f}" y="{ky - 8:.1f}" font-size="12" fill="{colour}" '
-            f'fill-opacity="{opacity}">{robot.id}{" (" + age + " s)" if stale else ""}</text>'
+            f'fill-opacity="{opacity}">{robot.id}{role}{" (" + age + " s)" if stale else ""}</text>'
         )
     return "".join(parts)
 
@@ -213,6 +226,8 @@ def operator_snapshot(
             now - pose.stamp if pose is not None else None,
             (pose.x, pose.y) if pose is not None else (math.nan, math.nan),
             "",
+            pose.role if pose is not None else "",
+            pose.leader if pose is not None else "",
         )
         for rid in operator.robots
         for pose in [operator.poses.get(rid)]
