@@ -28,7 +28,7 @@ from mrcomm.world.occupancy import OccupancyGrid
 #: The speeds the console offers (× real time; 0: paused; inf: as fast as possible).
 SPEEDS = {"pause": 0.0, "x1": 1.0, "x10": 10.0, "max": math.inf}
 #: Wall time between two snapshots.
-VIEW_PERIOD = 0.1
+VIEW_PERIOD = 0.25  # the page refreshes four times a second: no need for more
 
 Command = tuple[str, str, str, tuple[float, float] | None]
 
