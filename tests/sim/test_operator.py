@@ -271,3 +271,28 @@ def test_a_virtual_operator_is_never_out_of_range(
         if mission.now > 5:
             oldest = max(oldest, *(mission.now - p.stamp for p in operator.poses.values()))
     assert (oldest < 1.0) is heard_all_along
+
+
+def test_the_operators_commands_are_stored_with_the_run(
+    s1_resources: ScenarioResources, tmp_path: Path
+) -> None:
+    import json
+
+    import duckdb
+
+    from mrcomm.experiment.adhoc import store_result
+
+    plan = _plan({"at": 15, "command": "reassign", "task": "7", "robot": "robot_3"})
+    result = run_mission(_config("wlan", "nb", 0, 1), s1_resources, plan)
+    db = tmp_path / "runs.duckdb"
+    store_result(db, result, experiment="operator")
+    with duckdb.connect(str(db), read_only=True) as con:
+        rows = con.execute(
+            "SELECT robot, t, label, data FROM events WHERE label IN "
+            "('command_sent', 'operator_command') ORDER BY t, robot"
+        ).fetchall()
+    sent = [r for r in rows if r[0] == "operator"]
+    assert len(sent) == 1 and sent[0][1] == 15.0
+    data = json.loads(sent[0][3])
+    assert data["command"] == "reassign" and data["task_id"] == "7" and data["finished_at"]
+    assert {r[0] for r in rows if r[2] == "operator_command"} == {"robot_1", "robot_3"}

@@ -155,6 +155,13 @@ def result_rows(
         for robot, timeline in result.timelines.items()
         for e in timeline.events
     ]
+    # The operator's commands, as events of the agent "operator" (label command_sent;
+    # what became of each in data: acknowledgements, when AON finished it).
+    rows["events"] += [
+        (rid, "operator", c["time"], "command_sent",
+         json.dumps({k: v for k, v in c.items() if k != "time"}, sort_keys=True))
+        for c in result.operator.get("commands", [])
+    ]  # fmt: skip
     rows["rssi"] = [(rid, t, src, dst, rssi) for t, src, dst, rssi in result.rssi_series]
     rows["link_states"] = [(rid, *interval) for interval in result.link_states]
     every = TRAJECTORY_STORE_PERIOD
