@@ -296,3 +296,19 @@ def test_the_operators_commands_are_stored_with_the_run(
     data = json.loads(sent[0][3])
     assert data["command"] == "reassign" and data["task_id"] == "7" and data["finished_at"]
     assert {r[0] for r in rows if r[2] == "operator_command"} == {"robot_1", "robot_3"}
+
+
+def test_runs_with_other_operator_commands_are_not_the_same_run(
+    s1_resources: ScenarioResources, tmp_path: Path
+) -> None:
+    from mrcomm.experiment.adhoc import store_result
+
+    db = tmp_path / "runs.duckdb"
+    config = _config("wlan", "nb", 0, 1)
+    plain = store_result(db, run_mission(config, s1_resources))
+    plan = _plan({"at": 15, "command": "pause", "robot": "robot_3"},
+                 {"at": 25, "command": "resume", "robot": "robot_3"})  # fmt: skip
+    steered = store_result(db, run_mission(config, s1_resources, plan))
+    again = store_result(db, run_mission(config, s1_resources, plan))
+    assert plain.new and steered.new and steered.run_id != plain.run_id
+    assert not again.new and again.run_id == steered.run_id  # the same plan: the same run

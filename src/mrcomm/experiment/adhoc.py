@@ -22,6 +22,8 @@ table of the run in one transaction.
 
 from __future__ import annotations
 
+import hashlib
+import json
 import re
 import shlex
 from dataclasses import dataclass
@@ -150,9 +152,11 @@ def store_result(
         raise ValueError("a live run is stored with the fingerprint of its record")
     store = ResultStore.open(db_path)
     try:
-        run_fingerprint = run_fingerprint or fingerprint(
-            config_id, config.seed, input_hashes(config)
-        )
+        hashes = input_hashes(config)
+        if result.operator:  # an operator's commands change the run: part of what it is
+            commands = json.dumps(result.operator.get("commands", []), sort_keys=True)
+            hashes = {**hashes, "operator": hashlib.sha256(commands.encode()).hexdigest()}
+        run_fingerprint = run_fingerprint or fingerprint(config_id, config.seed, hashes)
         earlier = store.run_with_fingerprint(run_fingerprint)
         if earlier is not None and not keep_duplicate:
             run_id, repetition = earlier
