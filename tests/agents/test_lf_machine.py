@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
 import msgspec
 import pytest
@@ -297,14 +298,16 @@ def test_the_role_round_decides_by_utility_then_rank() -> None:
 # -- a hold that ends on geometry ----------------------------------------------------------
 
 
-def _hold_then_lose_the_followers_poses(hold_prediction: float) -> tuple[Harness, float]:
+def _hold_then_lose_the_followers_poses(
+    hold_prediction: float, **params: Any
+) -> tuple[Harness, float]:
     """robot_1 leads; its follower robot_2 is heard once 5 m behind (warning at 4 m),
     driving towards it at 0.3 m/s, and then never again. Returns the harness and the
     time the pose was sent."""
     h = Harness(
         LeaderFollowerExecutor,
         link_sensor=DistanceSensor(4.0),
-        params=LfParams(hold_prediction=hold_prediction),
+        params=LfParams(hold_prediction=hold_prediction, **params),
     )
     lead(h)
     sent = h.now
@@ -322,6 +325,19 @@ def test_a_holding_leader_resumes_when_its_follower_should_be_back_inside() -> N
     # at the pose rate (0.2 s).
     assert h.agent.state == "leader_navigating"
     assert 3.3 <= h.now - sent <= 3.8
+
+
+def test_a_hold_no_follower_ends_gives_way_after_the_hold_timeout() -> None:
+    h, sent = _hold_then_lose_the_followers_poses(hold_prediction=0.0, hold_timeout=5.0)
+    while h.agent.state == "leader_holding":
+        h.step()
+    assert 4.99 <= h.now - sent <= 5.5  # the follower never came back: it gave way
+    released = h.now
+    # ... and drives as long before holding again, the follower still out.
+    while h.agent.state == "leader_navigating" and h.now < released + 20:
+        h.step()
+    assert h.agent.state == "leader_holding"
+    assert 4.99 <= h.now - released <= 5.5
 
 
 def test_without_prediction_the_hold_waits_for_a_pose() -> None:

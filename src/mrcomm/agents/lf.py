@@ -94,6 +94,7 @@ class LeaderFollowerExecutor(AonStatuses):
         self._state_since_role = 0.0
         self._followers_were_out = False
         self._out_since: float | None = None  # since when a follower has been in warning
+        self._no_hold_until = 0.0  # hold_timeout: no new hold before this time
         super().__init__(*args, **kwargs)
         self.role_round = RoleRound(self.robot_id)
         self.bus.subscribe(TOPIC_UTILITY, self._on_utility)
@@ -383,14 +384,22 @@ class LeaderFollowerExecutor(AonStatuses):
         return role == L.ROLE_ASSIGNING and confirmed is not None
 
     def _step_leader_navigating(self) -> None:
-        if self.base.status is NavStatus.ACTIVE and self._followers_out():
+        may_hold = self._now >= self._no_hold_until
+        if may_hold and self.base.status is NavStatus.ACTIVE and self._followers_out():
             self.base.cancel()
             self.trigger("hold")
             return
         self._step_navigating()
 
     def _step_leader_holding(self) -> None:
-        if not self._followers_out():
+        # hold_timeout: a hold no follower can end gives way, and the leader drives as
+        # long before holding again, so the group moves on (serried does the same).
+        timeout = self.lf.hold_timeout
+        timed_out = timeout is not None and self._now - self._state_since >= timeout
+        if timed_out:
+            assert timeout is not None
+            self._no_hold_until = self._now + timeout
+        if timed_out or not self._followers_out():
             assert self.goal is not None
             self.base.navigate_to(self.goal.x, self.goal.y)
             self.trigger("release")

@@ -141,6 +141,14 @@ class LfParams(ExecutorParams):
         ge=1,
         le=32,
     )
+    hold_timeout: float | None = parameter(
+        None,
+        "a hold that no follower ends gives way after this long, and the leader then "
+        "drives as long before holding again (None: a hold lasts until the followers are "
+        "back, as the original; behind walls a predicted signal may warn for ever)",
+        "s",
+        gt=0,
+    )
     route_check_step: float = parameter(
         0.5, "spacing of the route points a follower checks against the threshold", "m", gt=0
     )
