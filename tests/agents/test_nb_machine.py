@@ -115,6 +115,20 @@ def test_an_idle_robot_in_a_mates_way_steps_aside(nb: Harness) -> None:
     assert [e.label for e in nb.timeline.events].count(L.MADE_WAY) == 1
 
 
+def test_a_task_given_while_making_way_is_planned_once_idle(nb: Harness) -> None:
+    nb.assign([])
+    assert nb.step() == "idle"
+    nb.hear(pose_of("robot_2", -1.0, 0.0, 0.0, v=0.3, goal_dist=5.0))
+    assert nb.step() == "clearing"
+    nb.agent.on_command(command(CommandKind.ADD, task=task("x", 5.0, 5.0)))
+    assert nb.step() == "clearing"  # it finishes stepping aside first
+    nb.base.arrive()
+    nb.hear(pose_of("robot_2", -9.0, 0.0, 0.0))  # the mate has gone by
+    assert nb.step() == "idle"
+    assert nb.step() == "unassigned"
+    assert nb.step() == "navigating" and nb.base.goal == (5.0, 5.0)
+
+
 def test_poses_go_out_at_five_hertz_with_the_goal_distance(nb: Harness) -> None:
     nb.assign([task("t", 3.0, 4.0)])
     nb.step(times=10)

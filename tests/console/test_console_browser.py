@@ -137,24 +137,36 @@ def test_robots_sent_back_for_lost_statuses_end_the_mission_successful(browser: 
     proc, url = _console("--network", "wlan", "--spl", "50", "--seed", "3", "--speed", "20")
     try:
         _open(browser, url, proc)
-        wait = WebDriverWait(browser, 120, poll_frequency=0.2)
-        lost = '[data-done="true"][data-received="false"]'
+        wait = WebDriverWait(browser, 120, poll_frequency=0.2,
+                             ignored_exceptions=(StaleElementReferenceException,))  # fmt: skip
+        lost = 'rect[data-done="true"][data-received="false"]'
+
+        def ids(d: Any, css: str) -> list[str]:
+            # Read in one script: the map is redrawn four times a second, so elements
+            # found in one call may be gone by the next.
+            script = "return Array.from(document.querySelectorAll(arguments[0])).map(e => e.id)"
+            return list(d.execute_script(script, css))
+
+        def finished_redos(d: Any) -> int:
+            rows = d.find_element(By.ID, "commands").text.splitlines()
+            return sum(" redo " in f" {r} " and not r.rstrip().endswith("-") for r in rows)
+
+        def lost_or_ended(d: Any) -> list[str] | bool:
+            return True if proc.poll() is not None else (ids(d, lost) or False)
+
         redone = 0
         while proc.poll() is None:
-            try:
-                wait.until(lambda d: proc.poll() is not None or d.find_elements(
-                    By.CSS_SELECTOR, f"rect{lost}"))  # fmt: skip
-                tasks = [e.get_attribute("id") for e in
-                         browser.find_elements(By.CSS_SELECTOR, f"rect{lost}")]  # fmt: skip
-            except Exception:  # the page went away: the mission ended
-                break
-            for task in tasks:
+            found = wait.until(lost_or_ended)
+            if found is True:
+                break  # the mission ended
+            for task in found:
                 _click(browser, f"#{task}")
                 _click(browser, "#cmd-redo")
                 redone += 1
-                # Sent back: the robot no longer counts it done until it is there again.
-                wait.until(lambda d, t=task: proc.poll() is not None
-                           or _attr(d, f"#{t}", "data-done") != "true")  # fmt: skip
+                # Until every command sent has finished (AON: every member has it): the
+                # robot may do the task again within a step, so "not done" may never show.
+                wait.until(lambda d, n=redone: proc.poll() is not None
+                           or finished_redos(d) >= n)  # fmt: skip
         result = _result(proc)
     finally:
         proc.kill()

@@ -224,6 +224,7 @@ class TaskExecutor:
         bus.subscribe(TOPIC_POSE, self._on_pose)
         bus.subscribe(TOPIC_TASK_STATUS, self._on_status)
         self.paused = False  # by the operator
+        self._new_tasks = False  # the operator gave tasks: plan again once idle
         self._assigner_id = ""
         self.commands = CommandInbox(bus, incarnation, self._command_team, self.on_command)
 
@@ -334,7 +335,14 @@ class TaskExecutor:
         params = self.params
         return self.team_view.known(self._now, params.mate_max_age, params.mate_extrapolation)
 
+    def _plan_new_tasks(self) -> None:
+        self._new_tasks = False
+        self.trigger("new_tasks")
+
     def _step_idle(self) -> None:
+        if self._new_tasks and self.agenda:  # given tasks while making way, say
+            self._plan_new_tasks()
+            return
         for mate in self.known_mates().values():
             if self.in_way_of(mate):
                 self.step_aside(mate)
@@ -549,8 +557,9 @@ class TaskExecutor:
             if task not in self.agenda and task.task_id not in self.completed:
                 self.agenda.append(task)
                 self._agenda_reported = False
+                self._new_tasks = True  # an idle robot plans again (now or once idle)
                 if self.leaf() == "idle":
-                    self.trigger("new_tasks")
+                    self._plan_new_tasks()
         elif kind is CommandKind.CONFIRM and task is not None:
             self.known_done.add(task.task_id)  # its dependants may start
         elif kind is CommandKind.PAUSE and not self.paused:
