@@ -18,6 +18,8 @@ from mrcomm.messaging.messages import (
     TOPIC_ROLE,
     TOPIC_TASK_STATUS,
     TOPIC_UTILITY,
+    CommandKind,
+    OperatorCommand,
     RoleMsg,
     TaskState,
     TaskStatus,
@@ -354,3 +356,19 @@ def test_the_prediction_stops_at_the_follow_distance_and_not_for_a_stopped_follo
     assert math.hypot(x - pose.x, y - pose.y) == pytest.approx(h.agent.lf.follow_distance)
     stopped = moving._replace(v=0.0)
     assert h.agent._predicted_follower(stopped, pose) == (moving.x, moving.y)
+
+
+def test_a_leader_whose_task_is_reassigned_dissolves_its_group() -> None:
+    h = lf()
+    lead(h)
+    for mate in ("robot_2", "robot_3"):  # both followers close: no hold
+        h.hear(pose_of(mate, 1.0, 0.5, role=L.ROLE_FOLLOWER, leader="robot_1"))
+    assert h.step(times=3) == "leader_navigating" and h.base.goal == (10.0, 0.0)
+    led = next(t for t in h.agent.agenda if t.task_id == "t")
+    h.agent.on_command(OperatorCommand(sender="operator", incarnation=1, seq=1, stamp=0.0,
+                                       command=CommandKind.REASSIGN, robot="robot_2", task=led,
+                                       former="robot_1"))  # fmt: skip
+    h.step(times=30)
+    assert not h.agent._in("leader") and h.agent.leader is None
+    assert "t" not in [t.task_id for t in h.agent.agenda]
+    assert L.ROLES_DISSOLVED in [e.label for e in h.timeline.events]

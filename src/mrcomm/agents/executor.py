@@ -281,11 +281,8 @@ class TaskExecutor:
 
     # -- state handlers --------------------------------------------------------------
     def _step_navigating(self) -> None:
-        if self.goal is not None and self.goal not in self.agenda and self._t0 is not None:
-            # The operator reassigned the task it was driving to: choose again.
-            self.base.cancel()
-            self.goal = None
-            self.trigger("nav_fail")
+        if self.goal is not None and self.goal not in self.agenda:
+            self.drop_goal()  # the operator reassigned the task it was driving to
             return
         status = self.base.status
         if not self._moved_once and self.base.speed > 1e-3:
@@ -536,15 +533,19 @@ class TaskExecutor:
 
     # -- the operator's commands (agents/commands.py) --------------------------------
     def _command_team(self) -> tuple[str, ...] | None:
-        if self._t0 is None:
-            return None
-        return command_team(tuple(sorted((*self.team, self.robot_id))), self._assigner_id)
+        team = (*self.team, self.robot_id)  # AON orders members itself
+        return None if self._t0 is None else command_team(team, self._assigner_id)
+
+    def drop_goal(self) -> None:
+        """Its goal was reassigned: stop and choose again (LF's leader dissolves)."""
+        self.base.cancel()
+        self.goal = None
+        self.trigger("nav_fail")
 
     def on_command(self, command: OperatorCommand) -> None:
-        """Act on the part of an operator's command that concerns this robot: a task
-        taken away leaves the agenda (a robot driving to it chooses again), a task
-        given, added or to do again joins it (an idle robot plans again), pause stops
-        the robot where it is and resume sends it on to where it was going."""
+        """Act on the part of an operator's command that concerns this robot: a task taken
+        away leaves the agenda (a robot driving to it chooses again), one given, added or
+        to do again joins it (an idle robot plans again); pause stops it, resume goes on."""
         kind, task, me = command.command, command.task, self.robot_id
         if me not in (command.robot, command.former) and kind is not CommandKind.CONFIRM:
             return

@@ -404,6 +404,13 @@ class LeaderFollowerExecutor(AonStatuses):
             self.base.navigate_to(self.goal.x, self.goal.y)
             self.trigger("release")
 
+    def drop_goal(self) -> None:
+        if self._in("leader"):  # no task to lead to: the group dissolves
+            self.goal = None
+            self._dissolve("its task was reassigned")
+            return
+        super().drop_goal()
+
     def _step_leader_retrying(self) -> None:
         if self._now - self._state_since >= self.params.nav_retry_delay:
             assert self.goal is not None
