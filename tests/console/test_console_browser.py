@@ -8,94 +8,46 @@ Loopback only. Waits are Selenium's explicit waits on what the page shows."""
 from __future__ import annotations
 
 import json
-import os
-import shutil
-import socket
 import subprocess
-import sys
 from collections.abc import Iterator
 from typing import Any
 
 import pytest
 
-from tests.conftest import ROOT, S1_PATH
+from tests.conftest import S1_PATH
 
-webdriver = pytest.importorskip("selenium.webdriver", reason="selenium not installed")
+pytest.importorskip("selenium.webdriver", reason="selenium not installed")
 pytest.importorskip("nicegui", reason="the console extra (nicegui) is not installed")
-CHROMIUM = shutil.which("chromium")
-DRIVER = shutil.which("chromedriver")
-if CHROMIUM is None or DRIVER is None:
-    pytest.skip("chromium and chromium-driver are not installed (make system-deps)",
-                allow_module_level=True)  # fmt: skip
 
-from selenium.common.exceptions import StaleElementReferenceException  # noqa: E402
-from selenium.webdriver.common.by import By  # noqa: E402
-from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
+from selenium.common.exceptions import StaleElementReferenceException
+from selenium.webdriver.common.by import By
+from selenium.webdriver.support.ui import WebDriverWait
 
-MRCOMM = [sys.executable, "-c", "from mrcomm.cli.main import app; app()"]
+from tests.console.chromium import (
+    MISSING,
+    attr,
+    click,
+    free_port,
+    mrcomm_process,
+    open_page,
+    start_browser,
+)
 
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
+if MISSING is not None:
+    pytest.skip(MISSING, allow_module_level=True)
 
 
 @pytest.fixture
 def browser() -> Iterator[Any]:
-    options = webdriver.ChromeOptions()
-    options.binary_location = CHROMIUM
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1600,1000"):
-        options.add_argument(arg)
-    driver = webdriver.Chrome(service=webdriver.ChromeService(DRIVER), options=options)
+    driver = start_browser()
     yield driver
     driver.quit()
 
 
 def _console(*options: str) -> tuple[subprocess.Popen[str], str]:
-    port = _free_port()
-    args = [*MRCOMM, "run", str(S1_PATH), "--console", "--port", str(port), "--json", *options]
-    # Without pytest's marker: NiceGUI would take the run for its own screen tests.
-    env = {k: v for k, v in os.environ.items() if k != "PYTEST_CURRENT_TEST"}
-    proc = subprocess.Popen(args, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env=env)  # fmt: skip
-    return proc, f"http://127.0.0.1:{port}/"
-
-
-def _open(driver: Any, url: str, proc: subprocess.Popen[str]) -> None:
-    """Load the page once the server answers (it starts within seconds)."""
-
-    def loaded(d: Any) -> bool:
-        assert proc.poll() is None, proc.stderr.read() if proc.stderr else ""
-        try:
-            d.get(url)
-        except Exception:
-            return False
-        return bool(d.find_elements(By.ID, "clock"))
-
-    WebDriverWait(driver, 60, poll_frequency=0.5).until(loaded)
-
-
-def _attr(driver: Any, css: str, name: str) -> str | None:
-    try:
-        found = driver.find_elements(By.CSS_SELECTOR, css)
-        return found[0].get_attribute(name) if found else None
-    except StaleElementReferenceException:  # redrawn meanwhile
-        return None
-
-
-def _click(driver: Any, css: str) -> None:
-    """Click an element of the map, which the page redraws four times a second: found
-    and clicked again if it was replaced in between."""
-
-    def clicked(d: Any) -> bool:
-        try:
-            d.find_element(By.CSS_SELECTOR, css).click()
-        except StaleElementReferenceException:
-            return False
-        return True
-
-    WebDriverWait(driver, 10, poll_frequency=0.05).until(clicked)
+    port = free_port("127.0.0.1")
+    args = ["run", str(S1_PATH), "--console", "--port", str(port), "--json", *options]
+    return mrcomm_process(*args), f"http://127.0.0.1:{port}/"
 
 
 def _result(proc: subprocess.Popen[str]) -> dict[str, Any]:
@@ -107,17 +59,17 @@ def _result(proc: subprocess.Popen[str]) -> dict[str, Any]:
 def test_robots_move_and_a_clicked_task_is_reassigned(browser: Any) -> None:
     proc, url = _console("--network", "wlan", "--speed", "10")
     try:
-        _open(browser, url, proc)
+        open_page(browser, url, proc)
         wait = WebDriverWait(browser, 60, poll_frequency=0.2)
-        wait.until(lambda d: _attr(d, "#robot-robot_1", "cx"))
-        first = (_attr(browser, "#robot-robot_1", "cx"), _attr(browser, "#robot-robot_1", "cy"))
-        wait.until(lambda d: (_attr(d, "#robot-robot_1", "cx"),
-                              _attr(d, "#robot-robot_1", "cy")) != first)  # fmt: skip
+        wait.until(lambda d: attr(d, "#robot-robot_1", "cx"))
+        first = (attr(browser, "#robot-robot_1", "cx"), attr(browser, "#robot-robot_1", "cy"))
+        wait.until(lambda d: (attr(d, "#robot-robot_1", "cx"),
+                              attr(d, "#robot-robot_1", "cy")) != first)  # fmt: skip
         # Task 7 is robot_1's last; click it on the map, pick robot_3, reassign.
-        _click(browser, "#task-7")
+        click(browser, "#task-7")
         wait.until(lambda d: "task 7" in d.find_element(By.ID, "selection").text)
-        _click(browser, "#pick-robot_3")
-        _click(browser, "#cmd-reassign")
+        click(browser, "#pick-robot_3")
+        click(browser, "#cmd-reassign")
         wait.until(lambda d: "reassign" in d.find_element(By.ID, "commands").text)
         result = _result(proc)
     finally:
@@ -136,7 +88,7 @@ def test_robots_sent_back_for_lost_statuses_end_the_mission_successful(browser: 
     # shown done but not received, until every status has arrived.
     proc, url = _console("--network", "wlan", "--spl", "50", "--seed", "3", "--speed", "20")
     try:
-        _open(browser, url, proc)
+        open_page(browser, url, proc)
         wait = WebDriverWait(browser, 120, poll_frequency=0.2,
                              ignored_exceptions=(StaleElementReferenceException,))  # fmt: skip
         lost = 'rect[data-done="true"][data-received="false"]'
@@ -160,8 +112,8 @@ def test_robots_sent_back_for_lost_statuses_end_the_mission_successful(browser: 
             if found is True:
                 break  # the mission ended
             for task in found:
-                _click(browser, f"#{task}")
-                _click(browser, "#cmd-redo")
+                click(browser, f"#{task}")
+                click(browser, "#cmd-redo")
                 redone += 1
                 # Until every command sent has finished (AON: every member has it): the
                 # robot may do the task again within a step, so "not done" may never show.

@@ -4,10 +4,6 @@ in headless Chromium, played forward."""
 
 from __future__ import annotations
 
-import os
-import shutil
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -18,7 +14,7 @@ from mrcomm.errors import InputError
 from mrcomm.experiment.recording import run_and_record
 from mrcomm.run.config import make_config
 from mrcomm.run.resources import ScenarioResources
-from tests.conftest import ROOT, S1_PATH
+from tests.conftest import S1_PATH
 
 pytest.importorskip("mcap_protobuf", reason="the console extra is not installed")
 
@@ -61,32 +57,20 @@ def test_a_file_that_is_not_a_recording_is_one_line(tmp_path: Path) -> None:
         load_replay(bad)
 
 
-@pytest.mark.skipif(
-    shutil.which("chromium") is None or shutil.which("chromedriver") is None,
-    reason="chromium and chromium-driver are not installed (make system-deps)",
-)
 def test_the_replay_page_plays_the_mission(recording: tuple[Path, Any]) -> None:
-    webdriver = pytest.importorskip("selenium.webdriver", reason="selenium not installed")
+    pytest.importorskip("selenium.webdriver", reason="selenium not installed")
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support.ui import WebDriverWait
 
-    from tests.console.test_console_browser import _free_port, _open
+    from tests.console.chromium import MISSING, free_port, mrcomm_process, open_page, start_browser
 
-    port = _free_port()
-    env = {k: v for k, v in os.environ.items() if k != "PYTEST_CURRENT_TEST"}
-    proc = subprocess.Popen(
-        [sys.executable, "-c", "from mrcomm.cli.main import app; app()", "console",
-         "--replay", str(recording[0]), "--port", str(port)],
-        cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
-    options = webdriver.ChromeOptions()
-    options.binary_location = shutil.which("chromium")
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1600,1000"):
-        options.add_argument(arg)
-    driver = webdriver.Chrome(service=webdriver.ChromeService(shutil.which("chromedriver")),
-                              options=options)  # fmt: skip
+    if MISSING is not None:
+        pytest.skip(MISSING)
+    port = free_port("127.0.0.1")
+    proc = mrcomm_process("console", "--replay", str(recording[0]), "--port", str(port))
+    driver = start_browser()
     try:
-        _open(driver, f"http://127.0.0.1:{port}/", proc)
+        open_page(driver, f"http://127.0.0.1:{port}/", proc)
         wait = WebDriverWait(driver, 30, poll_frequency=0.2)
         wait.until(lambda d: d.find_elements(By.CSS_SELECTOR, "#robot-robot_1"))
         assert driver.find_element(By.ID, "clock").text.startswith("t = 0.0 s")  # spaces collapse

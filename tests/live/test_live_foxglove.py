@@ -15,17 +15,12 @@ from foxglove import messages as fg
 from mcap.records import Schema
 from mcap_protobuf.decoder import DecoderFactory
 
+from mrcomm.live.launcher import free_port
 from tests.experiment.test_foxglove_live import Client
 
 from .helpers import ROOT
 
 pytestmark = pytest.mark.slow
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def _listening(port: int, proc: subprocess.Popen[str], seconds: float = 60.0) -> None:
@@ -42,7 +37,7 @@ def _listening(port: int, proc: subprocess.Popen[str], seconds: float = 60.0) ->
 
 
 def test_a_live_mission_streams_its_ground_truth_to_foxglove(tmp_path: Path) -> None:
-    port = _free_port()
+    port = free_port("127.0.0.1")
     args = [
         "live", str(ROOT / "data" / "scenarios" / "s1.yaml"), "--network", "ah",
         "--behaviour", "nb", "--seed", "1", "--speed", "10", "--insecure",

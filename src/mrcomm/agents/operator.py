@@ -22,6 +22,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+import msgspec
+
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.agents.assignment import round_robin
 from mrcomm.agents.commands import COMMAND_LEASE, OPERATOR_ID, command_team
@@ -233,10 +235,9 @@ class Operator:
         sense to the operator: unknown task or robot, a task reassigned to its owner)."""
         draft = self.ownership.resolve(kind, robot, task_id, where)
         self._seq += 1
-        message = OperatorCommand(
-            sender=OPERATOR_ID, incarnation=self.incarnation, seq=self._seq, stamp=self._now,
-            command=draft.command, robot=draft.robot, task=draft.task, former=draft.former,
-        )  # fmt: skip
+        message = msgspec.structs.replace(
+            draft, incarnation=self.incarnation, seq=self._seq, stamp=self._now
+        )
         msg_id = self.aon.send(message, self._now)
         record = CommandRecord(
             self._now, draft.command, draft.robot,
@@ -313,8 +314,3 @@ def apply_commands(
             by_id[task_id] = task
             out[robot].append(task)
     return out
-
-
-def known_ages(operator: Operator, now: float) -> Mapping[str, float]:
-    """How old each robot's pose is at the operator (what a console fades by)."""
-    return {robot: now - pose.stamp for robot, pose in operator.poses.items()}

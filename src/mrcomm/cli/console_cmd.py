@@ -4,12 +4,24 @@ with ``mrcomm run --console``."""
 
 from __future__ import annotations
 
+import importlib.util
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from mrcomm.errors import InputError
+
+
+def need_console_extra(field: str, *modules: str) -> None:
+    """One line (exit status 2) when the console extra is not installed: NiceGUI, and
+    ``modules`` besides."""
+    for module in ("nicegui", *modules):
+        if importlib.util.find_spec(module) is None:
+            raise InputError(
+                f"needs the console extra: pip install 'mrcomm[console]' ({module} missing)",
+                field=field,
+            )
 
 
 def console(
@@ -19,14 +31,10 @@ def console(
     port: Annotated[int, typer.Option(min=1, max=65535, help="Port of the page.")] = 8080,
 ) -> None:
     """Open a recorded mission in the operator console (http://localhost:--port)."""
-    try:
-        from mrcomm.console.page import serve_replay
-        from mrcomm.console.replay import load_replay
-    except ImportError as err:
-        raise InputError(
-            f"needs the console extra: pip install 'mrcomm[console]' ({err.name} missing)",
-            field="--replay",
-        ) from None
+    need_console_extra("--replay", "mcap_protobuf")
+    from mrcomm.console.page import serve_replay
+    from mrcomm.console.replay import load_replay
+
     loaded = load_replay(replay)
     typer.echo(f"console: http://localhost:{port} ({loaded.label}, {loaded.end:.1f} s)", err=True)
     serve_replay(loaded, port)

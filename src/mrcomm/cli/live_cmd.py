@@ -304,14 +304,11 @@ def _operator_console(settings: Any, robot: str, port: int) -> int:
 
     if robot != OPERATOR_ID:
         raise InputError("only the operator's process serves a console", field="--console")
-    try:
-        from mrcomm.console.live_session import LiveConsole
-        from mrcomm.console.page import serve_live
-    except ImportError as err:
-        raise InputError(
-            f"needs the console extra: pip install 'mrcomm[console]' ({err.name} missing)",
-            field="--console",
-        ) from None
+    from mrcomm.cli.console_cmd import need_console_extra
+
+    need_console_extra("--console")
+    from mrcomm.console.live_session import LiveConsole
+    from mrcomm.console.page import serve
     from mrcomm.live.agent import AgentProcess
     from mrcomm.live.journal import new_incarnation
 
@@ -319,10 +316,11 @@ def _operator_console(settings: Any, robot: str, port: int) -> int:
     host = process.operator
     assert host is not None
     counts = process.bus.endpoints[OPERATOR_ID].counts
-    page = LiveConsole(host.operator, process.resources.scenario.grid, counts)  # type: ignore[arg-type]
+    page = LiveConsole(host.operator, process.resources.scenario.grid, counts)
     host.on_step = page.on_step
     typer.echo(f"console: http://localhost:{port}", err=True)
-    return serve_live(page, port, process.run)
+    status = serve(page, port, process.run)
+    return 1 if status is None else status
 
 
 @with_run_options
@@ -413,6 +411,10 @@ def live(
         reassignable = run.spec("behaviour").accepts_reassignment
         load_operator_plan(operator, scenario, reassignable=reassignable)  # before any process
         operator = operator.resolve()
+    if console:
+        from mrcomm.cli.console_cmd import need_console_extra
+
+        need_console_extra("--console")  # before any process
     if operator is not None or console:
         from mrcomm.agents.commands import OPERATOR_ID
 

@@ -145,17 +145,15 @@ def _run_with_console(
 
     if recording:
         raise InputError("--console and --record cannot be combined yet", field="--console")
-    try:
-        from mrcomm.console.page import serve
-        from mrcomm.console.session import ConsoleSession
-    except ImportError as err:
-        raise InputError(
-            f"needs the console extra: pip install 'mrcomm[console]' ({err.name} missing)",
-            field="--console",
-        ) from None
+    from mrcomm.cli.console_cmd import need_console_extra
+
+    need_console_extra("--console")
+    from mrcomm.console.page import serve
+    from mrcomm.console.session import ConsoleSession
+
     session = ConsoleSession(config, resources, plan, speed if speed is not None else 1.0)
     typer.echo(f"console: http://localhost:{port}", err=True)
-    serve(session, port)
+    serve(session, port, session.run)
     if session.result is None:
         raise InputError("the console stopped before the mission ended", field="--console")
     return session.result

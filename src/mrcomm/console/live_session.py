@@ -11,12 +11,15 @@ page reads.
 
 from __future__ import annotations
 
-import queue
 import time
+from collections.abc import Mapping
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from mrcomm.console.session import VIEW_PERIOD, Command
-from mrcomm.console.view import ConsoleView, operator_snapshot
+from mrcomm.console.desk import OperatorDesk
+from mrcomm.console.session import VIEW_PERIOD
+from mrcomm.console.view import ConsoleView, counters_of, operator_snapshot
+from mrcomm.net.delivery import TopicCounts
 
 if TYPE_CHECKING:
     from mrcomm.agents.operator import Operator
@@ -28,57 +31,31 @@ class LiveConsole:
     waiting = False
     has_truth = False
 
-    def __init__(self, operator: Operator, grid: OccupancyGrid, counts: dict[str, object]) -> None:
+    def __init__(
+        self, operator: Operator, grid: OccupancyGrid, counts: Mapping[str, TopicCounts]
+    ) -> None:
+        """``counts``: the operator's endpoint counts per topic (updated as it runs)."""
         self.operator = operator
         self.grid = grid
         self.robot_ids = operator.robots
-        self.notes: list[str] = []
-        self.events: list[str] = []
-        self._counts = counts  # the operator's endpoint counts, per topic (live)
-        self._commands: queue.Queue[Command] = queue.Queue()
-        self._logged = 0
+        self.desk = OperatorDesk(operator)
+        self.submit = self.desk.submit
+        self._counts = counts
         self._heard = 0
         self._next_view = 0.0
         self.view: ConsoleView = operator_snapshot(operator, 0.0, [], {})
 
-    def submit(
-        self, kind: str, robot: str = "", task: str = "", where: tuple[float, float] | None = None
-    ) -> None:
-        self._commands.put((kind, robot, task, where))
-
     def on_step(self, now: float) -> None:
         """Called by the operator's process at each step, before the operator steps."""
-        while True:
-            try:
-                kind, robot, task, where = self._commands.get_nowait()
-            except queue.Empty:
-                break
-            try:
-                self.operator.command(kind, robot, task, where)
-            except ValueError as err:
-                self.notes.append(f"{now:.1f} s: {kind} refused: {err}")
-        for record in self.operator.log[self._logged :]:
-            what = " ".join(p for p in (str(record.command), record.robot, record.task_id) if p)
-            self.events.append(f"{record.time:7.1f} operator sent {what}")
-        self._logged = len(self.operator.log)
+        self.desk.apply(now)
+        self.desk.log_commands()
         heard = list(self.operator.successes.items())
         for (task_id, robot), when in heard[self._heard :]:
-            self.events.append(f"{when:7.1f} operator heard task {task_id} done by {robot}")
+            self.desk.events.append(f"{when:7.1f} operator heard task {task_id} done by {robot}")
         self._heard = len(heard)
         wall = time.monotonic()
         if wall >= self._next_view:
             self._next_view = wall + VIEW_PERIOD
-            self.publish(now)
-
-    def publish(self, now: float, *, ended: bool = False) -> None:
-        counters = {
-            topic: {"sent": c.sent, "received": c.received,  # type: ignore[attr-defined]
-                    "dropped": c.dropped_loss + c.dropped_range}  # type: ignore[attr-defined]
-            for topic, c in sorted(self._counts.items())
-        }  # fmt: skip
-        view = operator_snapshot(self.operator, now, self.events, counters)
-        if ended:
-            from dataclasses import replace
-
-            view = replace(view, ended=True)
-        self.view = view
+            counters = counters_of(self._counts.items())
+            view = operator_snapshot(self.operator, now, self.desk.events, counters)
+            self.view = replace(view, notes=tuple(self.desk.notes[-5:]))

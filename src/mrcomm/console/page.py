@@ -16,7 +16,7 @@ from __future__ import annotations
 import base64
 import threading
 from collections.abc import Callable
-from typing import Any
+from typing import Any, TypeVar
 
 from nicegui import app, ui
 
@@ -26,6 +26,7 @@ from mrcomm.console.session import SPEEDS, ConsoleSession
 from mrcomm.console.view import Pixels, map_png, svg
 
 REFRESH = 0.25  # s between page updates
+T = TypeVar("T")
 
 
 def build(session: ConsoleSession | LiveConsole) -> None:
@@ -139,19 +140,32 @@ def build(session: ConsoleSession | LiveConsole) -> None:
         ui.timer(REFRESH, refresh)
 
 
-def serve(session: ConsoleSession, port: int, *, linger: float = 2.0) -> None:
-    """Run the page on ``port`` (localhost) while the session steps the mission in its
-    own thread; stop the server ``linger`` s after the mission ended."""
-    build(session)
+def serve(
+    console: ConsoleSession | LiveConsole,
+    port: int,
+    work: Callable[[], T],
+    *,
+    linger: float = 2.0,
+) -> T | None:
+    """Serve the console page on ``port`` (localhost) while ``work`` — what steps the
+    mission: a session's run, a live operator process's loop — runs in its own thread;
+    stop the server ``linger`` s after it ends. Its return value (None if it raised)."""
+    build(console)
+    done: list[T] = []
 
-    def simulate() -> None:
+    def run() -> None:
         try:
-            session.run()
+            done.append(work())
         finally:
             threading.Timer(linger, app.shutdown).start()
 
-    app.on_startup(lambda: threading.Thread(target=simulate, daemon=True).start())
-    ui.run(host="127.0.0.1", port=port, reload=False, show=False, title="MRComm console",
+    app.on_startup(lambda: threading.Thread(target=run, daemon=True).start())
+    _run_server(port, "MRComm console")
+    return done[0] if done else None
+
+
+def _run_server(port: int, title: str) -> None:
+    ui.run(host="127.0.0.1", port=port, reload=False, show=False, title=title,
            show_welcome_message=False)  # fmt: skip
 
 
@@ -195,25 +209,4 @@ def build_replay(replay: Replay) -> None:
 def serve_replay(replay: Replay, port: int) -> None:
     """Serve the replay page on ``port`` (localhost) until interrupted."""
     build_replay(replay)
-    ui.run(host="127.0.0.1", port=port, reload=False, show=False, title="MRComm replay",
-           show_welcome_message=False)  # fmt: skip
-
-
-def serve_live(
-    console: LiveConsole, port: int, agent: Callable[[], int], *, linger: float = 2.0
-) -> int:
-    """Serve the live console page on ``port`` while ``agent`` (the operator's process
-    loop) runs in its own thread; stop ``linger`` s after it ends; its exit status."""
-    build(console)
-    status: list[int] = []
-
-    def run_agent() -> None:
-        try:
-            status.append(agent())
-        finally:
-            threading.Timer(linger, app.shutdown).start()
-
-    app.on_startup(lambda: threading.Thread(target=run_agent, daemon=True).start())
-    ui.run(host="127.0.0.1", port=port, reload=False, show=False, title="MRComm console",
-           show_welcome_message=False)  # fmt: skip
-    return status[0] if status else 1
+    _run_server(port, "MRComm replay")

@@ -12,11 +12,11 @@ recorded with that time.
 from __future__ import annotations
 
 import math
-import queue
 import threading
 import time
 from dataclasses import replace
 
+from mrcomm.console.desk import OperatorDesk
 from mrcomm.console.view import ConsoleView, snapshot
 from mrcomm.run.config import RunConfig
 from mrcomm.run.operator_plan import OperatorPlan
@@ -29,8 +29,6 @@ from mrcomm.world.occupancy import OccupancyGrid
 SPEEDS = {"pause": 0.0, "x1": 1.0, "x10": 10.0, "max": math.inf}
 #: Wall time between two snapshots.
 VIEW_PERIOD = 0.25  # the page refreshes four times a second: no need for more
-
-Command = tuple[str, str, str, tuple[float, float] | None]
 
 
 class ConsoleSession:
@@ -46,18 +44,16 @@ class ConsoleSession:
         self.operator = self.mission.operator
         self.speed = speed
         self.result: MissionResult | None = None
-        self.notes: list[str] = []  # replies to the console (refused commands)
-        self.events: list[str] = []
-        self._commands: queue.Queue[Command] = queue.Queue()
+        self.desk = OperatorDesk(self.operator, on_end=self._end)
+        self.events = self.desk.events
+        self.notes = self.desk.notes  # replies to the console (refused commands)
         self._indices = dict.fromkeys(self.mission.robot_ids, 0)
-        self._logged = 0
         self._stop = threading.Event()
         #: The operator ends the mission (a console keeps a mission whose statuses did
         #: not all arrive open, so that robots can be sent back for them).
         self.end_requested = False
         self.finished = threading.Event()
         self.view: ConsoleView = snapshot(self.mission, self.operator, self.events)
-        self.steps_per_view = 0.0  # measured: steps between two snapshots
 
     #: The simulation has ground truth for the page to show.
     has_truth = True
@@ -79,7 +75,10 @@ class ConsoleSession:
         self, kind: str, robot: str = "", task: str = "", where: tuple[float, float] | None = None
     ) -> None:
         """Queue an operator command; it is sent at the next step."""
-        self._commands.put((kind, robot, task, where))
+        self.desk.submit(kind, robot, task, where)
+
+    def _end(self) -> None:
+        self.end_requested = True
 
     def stop(self) -> None:
         self._stop.set()
@@ -89,7 +88,7 @@ class ConsoleSession:
         mission = self.mission
         started = time.perf_counter()
         wall0, sim0 = started, mission.now
-        last_speed, next_view, steps = self.speed, 0.0, 0
+        last_speed, next_view = self.speed, 0.0
         while not self._over() and not self._stop.is_set():
             speed = self.speed
             if speed != last_speed:  # a new pace counts from now
@@ -99,9 +98,8 @@ class ConsoleSession:
                 wall0, sim0 = time.perf_counter(), mission.now
                 self._publish_view()
                 continue
-            self._apply_commands()
+            self.desk.apply(mission.now)
             mission.step()
-            steps += 1
             self._collect_events()
             wall = time.perf_counter()
             if math.isfinite(speed):
@@ -110,8 +108,6 @@ class ConsoleSession:
                     self._stop.wait(ahead)
             if wall >= next_view:
                 next_view = wall + VIEW_PERIOD
-                self.steps_per_view = steps
-                steps = 0
                 self._publish_view()
         result = mission.result()
         self.result = replace(result, wall_time_s=time.perf_counter() - started)
@@ -127,33 +123,17 @@ class ConsoleSession:
             return True
         return m.finished and (self.end_requested or not m.assigner.failed())
 
-    def _apply_commands(self) -> None:
-        while True:
-            try:
-                kind, robot, task, where = self._commands.get_nowait()
-            except queue.Empty:
-                return
-            if kind == "end":
-                self.end_requested = True
-                continue
-            try:
-                self.operator.set_time(self.mission.now)
-                self.operator.command(kind, robot, task, where)
-            except ValueError as err:
-                self.notes.append(f"{self.mission.now:.1f} s: {kind} refused: {err}")
-
     def _collect_events(self) -> None:
         for rid, timeline in self.mission.timelines.items():
             for event in timeline.events[self._indices[rid] :]:
                 details = " ".join(f"{k}={v}" for k, v in event.data.items())
                 self.events.append(f"{event.time:7.1f} {rid} {event.label} {details}".rstrip())
             self._indices[rid] = len(timeline.events)
-        for record in self.operator.log[self._logged :]:
-            what = " ".join(p for p in (str(record.command), record.robot, record.task_id) if p)
-            self.events.append(f"{record.time:7.1f} operator sent {what}")
-        self._logged = len(self.operator.log)
+        self.desk.log_commands()
 
     def _publish_view(self, *, ended: bool = False) -> None:
         view = snapshot(self.mission, self.operator, self.events)
         successful = self.result.mission["successful"] if self.result is not None else None
-        self.view = replace(view, ended=ended, successful=successful, notes=tuple(self.notes[-5:]))
+        self.view = replace(
+            view, ended=ended, successful=successful, notes=tuple(self.desk.notes[-5:])
+        )

@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import io
 import math
-from dataclasses import dataclass, field
+from collections.abc import Iterable
+from dataclasses import dataclass, field, replace
 from html import escape
 from typing import TYPE_CHECKING, Any
 
@@ -21,6 +22,7 @@ import numpy as np
 from PIL import Image
 
 from mrcomm.experiment.recording_scene import LINK_COLORS, ROBOT_COLORS, link_states
+from mrcomm.net.delivery import TopicCounts
 
 if TYPE_CHECKING:
     from mrcomm.agents.operator import Operator
@@ -73,52 +75,34 @@ class ConsoleView:
 
 
 def snapshot(mission: Mission, operator: Operator, events: list[str]) -> ConsoleView:
-    """The console's view of ``mission`` now (call from the thread that steps it)."""
-    now = mission.now
-    robots = []
-    for rid in mission.robot_ids:
-        pose = operator.poses.get(rid)
-        true = mission.bases[rid].true_pose
-        robots.append(
-            RobotMark(
-                rid,
-                (pose.x, pose.y, pose.theta) if pose is not None else None,
-                now - pose.stamp if pose is not None else None,
-                (true.x, true.y),
-                str(mission.executors[rid].state),
-                pose.role if pose is not None else "",
-                pose.leader if pose is not None else "",
-            )
-        )
-    own = operator.ownership
+    """The console's view of ``mission`` now (call from the thread that steps it): the
+    operator's view (:func:`operator_snapshot`) with the simulation's ground truth."""
+    counters = counters_of((topic, c) for (_agent, topic), c in mission.network.counts.items())
+    view = operator_snapshot(operator, mission.now, events, counters)
+    robots = tuple(
+        replace(r, truth=(true.x, true.y), state=str(mission.executors[r.id].state))
+        for r in view.robots
+        for true in [mission.bases[r.id].true_pose]
+    )
+    received = mission.assigner.success_received
     tasks = tuple(
-        TaskMark(
-            task_id, task.x, task.y, own.owner[task_id],
-            (task_id, own.owner[task_id]) in operator.successes,
-            task_id in mission.executors[own.owner[task_id]].completed,
-            (task_id, own.owner[task_id]) in mission.assigner.success_received,
-        )
-        for task_id, task in own.tasks.items()
+        replace(t, done=t.id in mission.executors[t.owner].completed,
+                received=(t.id, t.owner) in received)
+        for t in view.tasks
     )  # fmt: skip
-    links: dict[str, str] = {}
-    if mission.last_links is not None:
-        links = link_states(robots, mission.last_links)
-    counters: dict[str, dict[str, int]] = {}
-    for (_agent, topic), c in mission.network.counts.items():
-        total = counters.setdefault(topic, {"sent": 0, "received": 0, "dropped": 0})
+    links = link_states(robots, mission.last_links) if mission.last_links is not None else {}
+    return replace(view, robots=robots, tasks=tasks, links=links)
+
+
+def counters_of(counts: Iterable[tuple[str, TopicCounts]]) -> dict[str, dict[str, int]]:
+    """Sent, received and dropped (every cause) per topic, summed over the counts."""
+    out: dict[str, dict[str, int]] = {}
+    for topic, c in counts:
+        total = out.setdefault(topic, {"sent": 0, "received": 0, "dropped": 0})
         total["sent"] += c.sent
         total["received"] += c.received
         total["dropped"] += c.dropped_loss + c.dropped_range + c.dropped_radio + c.dropped_queue
-    return ConsoleView(
-        now=now,
-        robots=tuple(robots),
-        tasks=tasks,
-        links=links,
-        events=tuple(events[-EVENTS_KEPT:]),
-        events_total=len(events),
-        counters=counters,
-        commands=tuple(operator.summary()["commands"]),
-    )
+    return dict(sorted(out.items()))
 
 
 def map_png(grid: OccupancyGrid) -> bytes:

@@ -131,6 +131,23 @@ class RecordingSink:
             message = self._encode(message)
         self._channels[topic].log(message, log_time=self.clock.ns(t))
 
+    def write_scene(
+        self,
+        t: float,
+        robots: list[scene.RobotView],
+        tasks: list[scene.TaskView],
+        links: LinkState | None,
+        robot_radius: float,
+    ) -> None:
+        """The scene at mission time ``t``, each robot's pose and the link matrices."""
+        when = self.clock.timestamp(t)
+        update = scene.scene_update(when, robots, tasks, links, robot_radius=robot_radius)
+        self.write(TOPIC_SCENE, t, update)
+        for robot in robots:
+            self.write(pose_topic(robot.id), t, scene.pose_message(when, robot.pose))
+        if links is not None:
+            self.write(TOPIC_LINKS, t, scene.links_message(t, links))
+
     def metadata(self, name: str, data: dict[str, str]) -> None:
         if self._mcap is not None:
             self._mcap.write_metadata(name, data)
@@ -329,15 +346,7 @@ class MissionRecorder:
             )
             for rid in m.robot_ids
         ]
-        when = self.out.clock.timestamp(t)
-        update = scene.scene_update(
-            when, robots, self._tasks(final), m.last_links, robot_radius=self._robot_radius
-        )
-        self.out.write(TOPIC_SCENE, t, update)
-        for rid in m.robot_ids:
-            self.out.write(pose_topic(rid), t, scene.pose_message(when, poses[rid]))
-        if m.last_links is not None:
-            self.out.write(TOPIC_LINKS, t, scene.links_message(t, m.last_links))
+        self.out.write_scene(t, robots, self._tasks(final), m.last_links, self._robot_radius)
 
     def _tasks(self, final: bool) -> list[scene.TaskView]:
         m = self.mission
@@ -393,13 +402,8 @@ class GroundTruthStream:
         if now < self._next - 1e-9:
             return
         self._next = now + self.scene_period
-        when = self.out.clock.timestamp(now)
         robots = [scene.RobotView(rid, pose, self._colors[rid], "") for rid, pose in poses.items()]
-        update = scene.scene_update(when, robots, [], links, robot_radius=self.robot_radius)
-        self.out.write(TOPIC_SCENE, now, update)
-        for rid, pose in poses.items():
-            self.out.write(pose_topic(rid), now, scene.pose_message(when, pose))
-        self.out.write(TOPIC_LINKS, now, scene.links_message(now, links))
+        self.out.write_scene(now, robots, [], links, self.robot_radius)
 
     def close(self) -> None:
         self.out.close()

@@ -20,7 +20,6 @@ a bad file is one line naming the file and the command, and nothing runs.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import pydantic
@@ -108,7 +107,3 @@ class ScriptedOperator:
         while self._queue and self._queue[0].at <= now + 1e-9:
             planned = self._queue.pop(0)
             self.operator.command(planned.command, planned.robot, planned.task, planned.where())
-
-    @property
-    def next_time(self) -> float:
-        return self._queue[0].at if self._queue else math.inf
