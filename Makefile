@@ -4,6 +4,9 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
+ROS_VENV := $(VENV)-ros2
+ROS_STAMP := $(ROS_VENV)/.attempted
+
 .PHONY: demo test lint bench ns3-validation system-deps clean
 
 $(STAMP): pyproject.toml examples/mrcomm-repeat/pyproject.toml
@@ -17,9 +20,10 @@ $(STAMP): pyproject.toml examples/mrcomm-repeat/pyproject.toml
 # (mrcomm fsm; without it: Mermaid text), chromium renders the HTML report in the browser
 # test and, driven by chromium-driver, runs the operator console's browser test,
 # nftables and iproute2 build the network-namespace tests of live mode (certificates
-# are made in Python, by the cryptography package). Installed as root with apt-get when
+# are made in Python, by the cryptography package), cmake and the C/C++ compilers build
+# nav2_msgs' NavigateToPose for the ROS 2 tests. Installed as root with apt-get when
 # missing; otherwise the tests that need them are skipped with their reason.
-SYSTEM_PACKAGES := graphviz:dot chromium:chromium chromium-driver:chromedriver nftables:nft iproute2:ip
+SYSTEM_PACKAGES := graphviz:dot chromium:chromium chromium-driver:chromedriver nftables:nft iproute2:ip cmake:cmake gcc:gcc g++:g++
 system-deps:
 	@for entry in $(SYSTEM_PACKAGES); do \
 	  pkg=$${entry%%:*}; cmd=$${entry##*:}; \
@@ -42,11 +46,23 @@ demo: $(STAMP) system-deps
 	$(BIN)/mrcomm report --db demo.duckdb --out demo-report
 	@echo "demo: figure demo-s1.png, results demo.duckdb, report demo-report/report.html"
 
+# The ROS 2 extra in an environment of its own (its wheels re-execute every Python of
+# their environment with LD_LIBRARY_PATH set): rclpy and the messages from PyPI, and
+# nav2_msgs' NavigateToPose built from ros2/nav2_msgs. Where it cannot be built, the
+# reason is in $(ROS_VENV)/.skipped and the ROS 2 tests are skipped with it.
+$(ROS_STAMP): pyproject.toml scripts/ros2_env.sh ros2/nav2_msgs/CMakeLists.txt ros2/nav2_msgs/package.xml ros2/nav2_msgs/action/NavigateToPose.action
+	PYTHON=$(PYTHON) sh scripts/ros2_env.sh $(ROS_VENV)
+	touch $@
+
 # Live-mode tests run processes against a wall clock: they run after the others, alone,
-# so that the simulation tests do not starve them of CPU on a 2-core machine.
-test: $(STAMP) system-deps
+# so that the simulation tests do not starve them of CPU on a 2-core machine. The ROS 2
+# tests (in tests/ros2 the core environment runs only those that need no ROS) last.
+test: $(STAMP) system-deps $(ROS_STAMP)
 	MPLBACKEND=Agg $(BIN)/pytest -q -n 2 --ignore=tests/live tests examples/mrcomm-repeat/tests
 	MPLBACKEND=Agg $(BIN)/pytest -q tests/live
+	@if [ -f $(ROS_VENV)/.installed ]; then \
+	  MPLBACKEND=Agg $(ROS_VENV)/bin/pytest -q tests/ros2; \
+	else echo "ROS 2 tests skipped: $$(cat $(ROS_VENV)/.skipped)"; fi
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks scripts examples
@@ -62,4 +78,4 @@ ns3-validation: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python benchmarks/ns3_validation.py --out benchmarks/results --figure docs/figures/ns3_validation.png
 
 clean:
-	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) $(ROS_VENV) .pytest_cache .mypy_cache .ruff_cache

@@ -32,6 +32,7 @@ RANKS = {
     "run": 4,
     "sim": 5,
     "live": 5,
+    "ros2": 3,  # the Nav2 base and the world's ROS 2 robots (optional extra)
     "experiment": 6,
     "analysis": 6,
     "testing": 6,

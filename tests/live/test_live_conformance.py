@@ -33,10 +33,11 @@ def mrcomm(*args: str, timeout: float) -> subprocess.CompletedProcess[str]:
     )
 
 
-def live_run(options: dict[str, Any], record_dir: Path) -> dict[str, Any]:
+def live_run(options: dict[str, Any], record_dir: Path, *extra: str) -> dict[str, Any]:
     args = ["live", str(S1), "--speed", "10", "--json", "--record-dir", str(record_dir)]
     for key, value in options.items():
         args += [f"--{key}", str(value)]
+    args += extra
     done = mrcomm(*args, timeout=240)
     assert done.returncode == 0, done.stderr[-2000:]
     return json.loads(done.stdout)
@@ -49,10 +50,15 @@ def ratio(a: float, b: float) -> float:
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_live_matches_simulation(name: str, tmp_path: Path) -> None:
     options = CASES[name]
+    live = live_run(options, tmp_path)
+    assert_matches_simulation(live, options)
+
+
+def assert_matches_simulation(live: dict[str, Any], options: dict[str, Any]) -> None:
+    """The live run's summary against the same mission simulated (S1, seeds 1-4)."""
     # A few seeds show what the random loss varies and what distance decides.
     sims = [run_mission(make_config(None, scenario=S1, seed=k, **options)) for k in (1, 2, 3, 4)]
     sim = sims[0].summary()
-    live = live_run(options, tmp_path)
     assert live["config"]["mode"] == "live" and live["config"]["label"] == sim["config"]["label"]
     s, lv = sim["mission"], live["mission"]
     # Same verdict, same way: success in both, or failure in both where the tasks

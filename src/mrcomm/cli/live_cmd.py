@@ -74,6 +74,13 @@ ZenohConfigOpt = Annotated[Path | None, typer.Option(help="Zenoh JSON5 config fi
 LinkLeaseOpt = Annotated[float, typer.Option(help="Zenoh link lease, wall s.")]
 RecordDirOpt = Annotated[Path, typer.Option(help="Directory of this run's records.")]
 SpeedOpt = Annotated[float, typer.Option(help="Simulated seconds per wall-clock second.")]
+BaseOpt = Annotated[
+    str,
+    typer.Option(
+        help="The robot's base: native (the world's simulated base over Zenoh) | nav2 "
+        "(a Nav2 robot over ROS 2; needs mrcomm[ros2], docs/PHYSICAL.md)."
+    ),
+]
 LeaseOpt = Annotated[
     float | None, typer.Option(help="AON lease, simulated s: silent members are left out.")
 ]
@@ -170,9 +177,34 @@ def world(
     foxglove_port: Annotated[
         int, typer.Option(min=0, max=65535, help="Port of the --foxglove server.")
     ] = 8765,
+    ros2: Annotated[
+        bool,
+        typer.Option(
+            "--ros2",
+            help="Also serve every robot as a Nav2 robot over ROS 2 (NavigateToPose, "
+            "amcl_pose, odom in /<robot id>), for agents run with --base nav2; needs "
+            "mrcomm[ros2].",
+        ),
+    ] = False,
+    emulate: Annotated[
+        Path | None,
+        typer.Option(
+            help="Emulation file (written by mrcomm live --emulate): set the per-pair "
+            "kernel packet drops of the team's namespaces from the network model."
+        ),
+    ] = None,
 ) -> None:
     """Simulate every robot's base and publish the shared clock (live mode)."""
     run.check_mode("live")
+    if ros2:
+        from mrcomm.ros2.runtime import need_ros2
+
+        need_ros2("--ros2")
+    emulation = None
+    if emulate is not None:
+        from mrcomm.live.kernel_links import Emulation
+
+        emulation = Emulation.read(emulate)
     from mrcomm.live.protocol import WORLD_ID
     from mrcomm.live.settings import LiveSettings
     from mrcomm.live.world import run_world
@@ -189,13 +221,24 @@ def world(
         run, zenoh, record_dir.expanduser(), speed=speed, start_timeout=start_timeout
     ).with_record_dir()
     warn_insecure(insecure)
-    if not foxglove:
+    if not foxglove and not ros2 and emulation is None:
         raise typer.Exit(run_world(settings))
-    from mrcomm.experiment.recording import GroundTruthStream
     from mrcomm.live.journal import new_incarnation
     from mrcomm.live.world import WorldProcess
 
     process = WorldProcess(settings, new_incarnation(settings.record_dir, WORLD_ID))
+    if ros2:
+        from mrcomm.ros2.nav2_server import Nav2Server
+
+        process.base_server = Nav2Server(process.robot_ids)
+    if emulation is not None:
+        from mrcomm.live.kernel_links import KernelLinks
+
+        process.kernel_links = KernelLinks(emulation, run.spl, process.journal.write)
+    if not foxglove:
+        raise typer.Exit(process.run())
+    from mrcomm.experiment.recording import GroundTruthStream
+
     scenario = process.resources.scenario
     stream = GroundTruthStream(scenario.grid, process.robot_ids, scenario.robot_radius)
     port = stream.serve("127.0.0.1", foxglove_port)
@@ -260,14 +303,43 @@ def agent(
     port: Annotated[int, typer.Option(min=1, max=65535, help="Port of the --console page.")] = (
         8080
     ),
+    emulated: Annotated[
+        bool,
+        typer.Option(
+            "--emulated",
+            help="The kernel applies the network model to this agent's traffic (mrcomm "
+            "live --emulate): its bus filters nothing.",
+        ),
+    ] = False,
+    base: BaseOpt = "native",
+    ros_namespace: Annotated[
+        str | None,
+        typer.Option(help="With --base nav2: the robot's ROS namespace (default /<robot id>)."),
+    ] = None,
+    ros_frame: Annotated[
+        str, typer.Option(help="With --base nav2: the map frame of goals and poses.")
+    ] = "map",
+    ros_qos: Annotated[
+        str,
+        typer.Option(
+            help="With --base nav2: reliability of the pose and odometry subscriptions "
+            "(best_effort matches any publisher | reliable)."
+        ),
+    ] = "best_effort",
 ) -> None:
     """Run one robot's agent (task executor, and the assigner it hosts) over Zenoh."""
     run.check_mode("live")
     from mrcomm.live.agent import check_agent_id, run_agent
-    from mrcomm.live.settings import LiveSettings, check_agent_clock
+    from mrcomm.live.settings import BaseOptions, LiveSettings, check_agent_clock
     from mrcomm.world.scenario import load_scenario
 
     check_agent_clock(clock, "--clock")
+    base_options = BaseOptions(base, ros_namespace, ros_frame, ros_qos)
+    if base_options.kind == "nav2":
+        from mrcomm.ros2.runtime import Nav2Names, need_ros2
+
+        need_ros2("--base")
+        Nav2Names.of(robot, ros_namespace, frame=ros_frame, qos=ros_qos)  # names checked
     scenario = load_scenario(run.scenario)
     check_agent_id(scenario, robot)
     security = resolve_security(
@@ -290,6 +362,8 @@ def agent(
         join_timeout=join_timeout,
         agent_clock=clock,
         operator=operator,
+        base=base_options,
+        emulated=emulated,
     ).with_record_dir()
     warn_insecure(insecure)
     if console:
@@ -381,10 +455,35 @@ def live(
     port: Annotated[int, typer.Option(min=1, max=65535, help="Port of the --console page.")] = (
         8080
     ),
+    base: Annotated[
+        str,
+        typer.Option(
+            help="native | nav2: every agent drives its robot through ROS 2 Nav2 "
+            "interfaces, served by the world (mrcomm world --ros2; needs mrcomm[ros2])."
+        ),
+    ] = "native",
+    emulate: Annotated[
+        bool,
+        typer.Option(
+            "--emulate",
+            help="Every process in its own network namespace; the world sets each pair's "
+            "kernel packet drops from the network model (range, SPL) at 2 Hz and the "
+            "agents filter nothing themselves (needs root, ip and nft).",
+        ),
+    ] = False,
 ) -> None:
     """Run one mission live: world and every agent as separate processes over Zenoh;
     with --db, store it in a results database (mode live)."""
     run.check_mode("live")
+    from mrcomm.live.settings import BaseOptions
+
+    base_options = BaseOptions(base)
+    if base_options.kind == "nav2":
+        from mrcomm.ros2.runtime import need_ros2
+
+        need_ros2("--base")  # before any process
+    if emulate:
+        check_emulation(run, operator is not None or console)
     from mrcomm.live.collect import live_summary
     from mrcomm.live.identity import check_team_members, live_members, throwaway_team
     from mrcomm.live.launcher import run_live
@@ -435,7 +534,8 @@ def live(
     )
     settings = LiveSettings(
         run, zenoh, directory, speed=speed, lease=lease, agent_clock=agent_clock,
-        operator=operator, console_port=port if console else None,
+        operator=operator, console_port=port if console else None, base=base_options,
+        emulated=emulate,
     )  # fmt: skip
     warn_ignored_settings(run)
     warn_insecure(insecure)
@@ -470,6 +570,8 @@ def live(
         "team_dir": team_dir,
         "insecure": insecure,
         "agent_clock": agent_clock,
+        "base": base,
+        "emulate": emulate,
     }
     stored = store_run(
         db,
@@ -492,6 +594,23 @@ def live(
         # the run that was asked for.
         typer.echo(f"mrcomm: error: {report['died'][0]}", err=True)
         raise typer.Exit(1)
+
+
+def check_emulation(run: RunConfig, operator: bool) -> None:
+    """What ``--emulate`` can do here, checked before any process (one line, exit 2)."""
+    from mrcomm.live.netns import netns_missing
+
+    if run.network == "radio":
+        raise InputError(
+            "the radio model's packet errors are not emulated in the kernel yet: use "
+            "--network ah or wlan with --emulate",
+            field="--emulate",
+        )
+    if operator:
+        raise InputError("an operator cannot join an emulated team yet", field="--emulate")
+    missing = netns_missing()
+    if missing is not None:
+        raise InputError(missing, field="--emulate")
 
 
 def collect_cmd(

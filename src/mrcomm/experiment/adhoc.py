@@ -55,6 +55,8 @@ LIVE_DEFAULTS: dict[str, Any] = {
     "team_dir": None,
     "insecure": False,
     "agent_clock": "shared",
+    "base": "native",
+    "emulate": False,
 }
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 _HEADER = (

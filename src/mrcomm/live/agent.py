@@ -63,8 +63,8 @@ from mrcomm.live.protocol import (
     encoder,
 )
 from mrcomm.live.recorder import AgentRecorder
-from mrcomm.live.remote_base import RemoteBase
 from mrcomm.live.resync import Resync, reply_for
+from mrcomm.live.robot_base import AgentBase, open_base
 from mrcomm.live.settings import LiveSettings, config_crc
 from mrcomm.live.tick_guard import IMPLAUSIBLE_TICK, TickGuard, tick_limit
 from mrcomm.messaging.messages import TOPIC_RSSI, RssiMsg, decode
@@ -159,9 +159,10 @@ class AgentProcess:
         place_operator(positions, self.scenario)
         network = build_network(run, self.resources)
         radio = build_radio_links(run, self.resources, network)
+        rules = LinkRules(network=network, loss_percent=run.spl, radio=radio)
         self.bus = ZenohBus(
             self.node,
-            LinkRules(network=network, loss_percent=run.spl, radio=radio),
+            LinkRules() if settings.emulated else rules,  # emulated: the kernel drops
             positions,
             members=frozenset((*self.robot_ids, ASSIGNER_ID, OPERATOR_ID)),
             robots=self.robot_ids,
@@ -169,7 +170,7 @@ class AgentProcess:
         self.journal = Journal(journal_path(settings.record_dir, agent, incarnation))
         executor_class = behaviour_class(run.behaviour)
         self.executor: TaskExecutor | None = None
-        self.base: RemoteBase | None = None
+        self.base: AgentBase | None = None
         self.tail: TimelineTail | None = None
         self.resync: Resync | None = None
         #: ESD: the sensor this robot's pulse readings feed, and how many it took.
@@ -182,9 +183,10 @@ class AgentProcess:
             )
         elif agent != ASSIGNER_ID:
             start = next(r.pose for r in self.scenario.robots if r.id == agent)
-            self.base = RemoteBase(
-                agent, incarnation, start, self._send_command, self.resources.planner
-            )
+            self.base = open_base(
+                settings.base, agent, incarnation, start, self._send_command,
+                self.resources.planner,
+            )  # fmt: skip
             base = self.base
             positions.own[agent] = lambda: (base.pose.x, base.pose.y)
             ranks = stream(run.seed, "tie-break").permutation(len(self.robot_ids))
@@ -292,6 +294,7 @@ class AgentProcess:
             item = self.node.poll(min(remaining, 0.2))
             if item is not None and item.channel == "presence":
                 self._on_presence(item.value)
+        self._wait_for_base(deadline)
         for agent in self.hosted:
             others = [i for i in self.node.present(agent) if i != self.incarnation]
             if others:
@@ -310,6 +313,16 @@ class AgentProcess:
             self.node.declare_alive(agent, self.incarnation)
             if self.infra is not self.node:
                 self.infra.declare_alive(agent, self.incarnation)  # for the world
+
+    def _wait_for_base(self, deadline: float) -> None:
+        """A robot's own base (Nav2) must be up before the agent joins the team."""
+        while self.base is not None and (missing := self.base.waiting_for()) is not None:
+            if time.monotonic() > deadline:
+                message = f"robot not ready within {self.settings.join_timeout:g} s: {missing}"
+                raise InputError(message, field="--base")
+            item = self.node.poll(0.05)  # as while joining: only presence matters yet
+            if item is not None and item.channel == "presence":
+                self._on_presence(item.value)
 
     def _loop(self) -> None:
         while not self.ended:
@@ -385,8 +398,8 @@ class AgentProcess:
         self._notice_away(tick.time)
         self.tick_time = tick.time
         mine = next((state for state in tick.states if state.robot == self.agent), None)
-        if self.base is not None and mine is not None:
-            self.base.update(mine)
+        if self.base is not None:
+            self.base.take(mine)
         return tick
 
     def _notice_away(self, now: float) -> None:
@@ -550,6 +563,8 @@ class AgentProcess:
             self.journal.write("pulse", time=self.now, readings=self.pulse_readings, latest=latest)
 
     def _finish(self) -> None:
+        if self.base is not None:
+            self.base.close()
         self.recorder.final(self.max_lag)
         self._record_pulse()
         self.journal.close()

@@ -33,6 +33,8 @@ from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.agents.commands import OPERATOR_ID
 from mrcomm.errors import InputError
 from mrcomm.live.collect import collect
+from mrcomm.live.kernel_links import Emulation
+from mrcomm.live.netns import Netns
 from mrcomm.live.protocol import WORLD_ID
 from mrcomm.live.settings import LiveSettings
 from mrcomm.net.pulse import pulse_id
@@ -134,6 +136,9 @@ class LiveTeam:
         args = [*self.wrappers.get(host, []), sys.executable, "-c", _CLI, *self.command(name)]
         env = dict(os.environ)
         env.setdefault("PYTHONUNBUFFERED", "1")
+        if self.settings.base.kind == "nav2":
+            # One host: ROS 2 discovery stays on it unless the user said otherwise.
+            env.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
         process = subprocess.Popen(args, stdout=handle, stderr=subprocess.STDOUT, env=env)
         child = Child(name, self.ports.get(name, 0), process, log, handle)
         self.children[name] = child
@@ -175,9 +180,14 @@ class LiveTeam:
             args += ["--protocol", "udp"]
         if s.zenoh.multicast:
             args += ["--multicast"]
+        nav2 = s.base.kind == "nav2"  # the robots' bases over ROS 2, served by the world
         if name == WORLD_ID:
             args += ["--speed", f"{s.speed:g}", "--start-timeout", f"{s.start_timeout:g}"]
+            args += ["--ros2"] if nav2 else []
+            args += ["--emulate", str(emulation_path(s))] if s.emulated else []
         else:
+            args += ["--base", "nav2"] if nav2 and name in self.robots else []
+            args += ["--emulated"] if s.emulated else []
             args += ["--join-timeout", f"{s.join_timeout:g}"]
             if s.lease is not None:
                 args += ["--lease", f"{s.lease:g}"]
@@ -341,7 +351,39 @@ def run_live(
     """Launch, wait for the end of the mission, collect: the live ``mrcomm run``. Any
     exception (Ctrl-C too) stops every process first. ``extra_args``: more command-line
     arguments per process (e.g. the world's ``--foxglove``)."""
+    if settings.emulated:
+        return _run_emulated(settings, team_dir, on_progress, extra_args)
     with LiveTeam(settings, team_dir=team_dir, extra_args=extra_args) as team:
         team.start()
         team.wait(on_progress=on_progress)
         return team.collect()
+
+
+def emulation_path(settings: LiveSettings) -> Path:
+    return settings.record_dir / "emulation.json"
+
+
+def _run_emulated(
+    settings: LiveSettings,
+    team_dir: Path | None,
+    on_progress: Callable[[], None] | None,
+    extra_args: dict[str, list[str]] | None,
+) -> tuple[MissionResult, dict[str, Any]]:
+    """The team in network namespaces (``live.netns``), one per process, the world
+    told where every link node is (``live.kernel_links``)."""
+    names = LiveTeam(settings, team_dir=team_dir).names
+    scenario = load_scenario(settings.run.scenario)
+    with Netns(names, spared=(WORLD_ID,)) as net:
+        addresses = {r.id: net.ip[r.id] for r in scenario.robots}
+        host = scenario.assigner.host if scenario.assigner.kind == "robot" else ASSIGNER_ID
+        addresses[ASSIGNER_ID] = net.ip[host or ASSIGNER_ID]
+        settings.record_dir.mkdir(parents=True, exist_ok=True)
+        Emulation(net.hub, addresses).write(emulation_path(settings))
+        wrappers = {name: net.wrapper(name) for name in names}
+        with LiveTeam(
+            settings, team_dir=team_dir, extra_args=extra_args, addresses=net.ip,
+            wrappers=wrappers,
+        ) as team:  # fmt: skip
+            team.start()
+            team.wait(on_progress=on_progress)
+            return team.collect()

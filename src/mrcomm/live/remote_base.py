@@ -97,6 +97,18 @@ class RemoteBase:
     def has_state(self) -> bool:
         return self._state is not None
 
+    def take(self, state: BaseState | None) -> None:
+        """A clock tick's state of this robot's base (None: the tick had none)."""
+        if state is not None:
+            self.update(state)
+
+    def waiting_for(self) -> str | None:
+        """Nothing to wait for: the state comes with the world's ticks."""
+        return None
+
+    def close(self) -> None:
+        """Nothing to release."""
+
     def update(self, state: BaseState) -> None:
         self._state = state
         self._pose = Pose(state.x, state.y, state.theta)

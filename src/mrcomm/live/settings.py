@@ -18,6 +18,26 @@ from mrcomm.run.config import RunConfig
 #: What steps an agent: the world's ticks (``shared``, as Stage's ``use_sim_time``) or
 #: its own host's monotonic clock (``host``, as on a real robot; ``live.host_clock``).
 AGENT_CLOCKS = ("shared", "host")
+#: What an agent drives: the world's simulated base over Zenoh (``native``), or a
+#: robot's Nav2 stack over ROS 2 (``nav2``: a real robot, or ``mrcomm world --ros2``).
+BASES = ("native", "nav2")
+
+
+@dataclass(frozen=True)
+class BaseOptions:
+    """An agent's robot base and, for ``nav2``, its ROS names (``ros2.runtime``)."""
+
+    kind: str = "native"
+    #: ROS namespace of the robot's Nav2 interfaces; None: ``/<robot id>``.
+    namespace: str | None = None
+    frame: str = "map"
+    qos: str = "best_effort"
+
+    def __post_init__(self) -> None:
+        if self.kind not in BASES:
+            hint = did_you_mean(self.kind, BASES)
+            message = f"unknown base {self.kind!r}{hint}; choose native or nav2"
+            raise InputError(message, field="--base")
 
 
 @dataclass(frozen=True)
@@ -43,6 +63,11 @@ class LiveSettings:
     operator: Path | None = None
     #: Serve the operator console on this port (from the operator's process).
     console_port: int | None = None
+    #: The robots' bases: the world's simulated ones over Zenoh, or Nav2 over ROS 2.
+    base: BaseOptions = BaseOptions()
+    #: Agents: the kernel applies the network model (``--emulate``), so their buses
+    #: filter nothing. Launcher: run the team in network namespaces with kernel links.
+    emulated: bool = False
 
     @property
     def has_operator(self) -> bool:

@@ -23,13 +23,15 @@ the agents have gone. It is not a team member: a crash of any agent leaves it ru
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import asdict
+from typing import Protocol
 
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.errors import InputError
 from mrcomm.live.agent import team_processes
 from mrcomm.live.journal import Journal, journal_path, new_incarnation, track_presence
+from mrcomm.live.kernel_links import KernelLinks
 from mrcomm.live.protocol import (
     CH_AGENT_STATE,
     CH_BASE_CMD,
@@ -49,6 +51,7 @@ from mrcomm.messaging.topics import Lane
 from mrcomm.net.links import LinkState
 from mrcomm.net.pulse import pulse_id
 from mrcomm.net.zenoh_node import Incoming, ZenohNode
+from mrcomm.ports import Base
 from mrcomm.run.bodies import RobotBodies
 from mrcomm.run.proximity import make_proximity
 from mrcomm.run.resources import ScenarioResources
@@ -64,6 +67,21 @@ from mrcomm.world.geometry import Pose
 END_GRACE_SIM = 1.0  # simulated s everyone must stay done before the mission ends ...
 END_GRACE_WALL = 0.3  # ... and wall s, for messages still in flight
 END_LINGER = 3.0  # wall s the end is announced while agents are still present
+
+
+class BaseServer(Protocol):
+    """Another way for agents to reach the simulated bases (``mrcomm world --ros2``:
+    ``ros2.nav2_server``): goals taken before each step, state published after."""
+
+    def apply(self, bases: Mapping[str, Base]) -> None: ...
+
+    def publish(self, now: float, bases: Mapping[str, Base]) -> None: ...
+
+    def summary(self) -> dict[str, object]:
+        """What it served (recorded in the world's journal at the end)."""
+        ...
+
+    def close(self) -> None: ...
 
 
 class WorldProcess:
@@ -98,6 +116,7 @@ class WorldProcess:
         self.journal = Journal(journal_path(settings.record_dir, WORLD_ID, incarnation))
         self._enc = encoder()
         self._applied: dict[str, tuple[int, int]] = {}  # robot -> (incarnation, seq)
+        self.base_commands = 0  # base commands applied from agents over Zenoh
         self.states: dict[str, AgentState] = {}
         self.present: dict[str, set[int]] = {}
         self.now = 0.0
@@ -107,6 +126,10 @@ class WorldProcess:
         #: Called with the mission time, the robots' true poses and the link state of
         #: every tick (``mrcomm world --foxglove`` streams them to the Foxglove app).
         self.on_record: Callable[[float, dict[str, Pose], LinkState], None] | None = None
+        #: The bases' ROS 2 face, when agents drive them through Nav2 (``--ros2``).
+        self.base_server: BaseServer | None = None
+        #: The model's links applied by the kernel to the agents' traffic (``--emulate``).
+        self.kernel_links: KernelLinks | None = None
 
     # -- life cycle --------------------------------------------------------------------
     def run(self) -> int:
@@ -138,9 +161,13 @@ class WorldProcess:
             )
             self._wait_for_team()
             end, timed_out = self._tick_loop()
+            if self.kernel_links is not None:
+                self.kernel_links.close(self.now)  # every link open for the last words
             self._announce_end(end, timed_out)
             self._write_truth(end, timed_out)
         finally:
+            if self.base_server is not None:
+                self.base_server.close()
             self.journal.close()
             self.node.close()
         return 0
@@ -168,6 +195,9 @@ class WorldProcess:
                     f"missing {', '.join(missing)}",
                     field="--start-timeout",
                 )
+            if self.base_server is not None:
+                # Robots report their pose before the mission, as real ones would.
+                self.base_server.publish(0.0, self.bases)
             item = self.node.poll(min(remaining, 0.1))
             if item is not None:
                 self._on_item(item)
@@ -180,8 +210,12 @@ class WorldProcess:
         self.journal.write("started", wall=time.time())
         k = 0
         self._publish_tick(Tick(0.0, self.settings.speed, self._base_states()))
+        if self.base_server is not None:
+            self.base_server.publish(0.0, self.bases)
         while True:
             self._drain(None)
+            if self.base_server is not None:
+                self.base_server.apply(self.bases)
             self._advance(dt)
             k += 1
             self.now = round(k * dt, 9)
@@ -190,6 +224,8 @@ class WorldProcess:
             if end is not None or timed_out:
                 self.wall_time = time.monotonic() - start
                 return (end if end is not None else self.now), timed_out
+            if self.base_server is not None:
+                self.base_server.publish(self.now, self.bases)
             self._publish_tick(Tick(self.now, self.settings.speed, self._base_states()))
             self._record()
             target = start + k * period
@@ -222,6 +258,7 @@ class WorldProcess:
         if applied is not None and applied[0] == command.incarnation and command.seq <= applied[1]:
             return  # duplicate or stale
         self._applied[command.robot] = (command.incarnation, command.seq)
+        self.base_commands += 1
         if command.kind == "goto":
             base.navigate_to(command.x, command.y)
         elif command.kind == "cancel":
@@ -284,7 +321,15 @@ class WorldProcess:
 
     def _announce_end(self, end: float, timed_out: bool) -> None:
         tick = Tick(self.now, self.settings.speed, self._base_states(), True, end, timed_out)
-        self.journal.write("end", time=end, timed_out=timed_out, wall_time=self.wall_time)
+        self.journal.write(
+            "end",
+            time=end,
+            timed_out=timed_out,
+            wall_time=self.wall_time,
+            base_commands=self.base_commands,
+        )
+        if self.base_server is not None:
+            self.journal.write("base_server", **self.base_server.summary())
         deadline = time.monotonic() + END_LINGER
         while time.monotonic() < deadline:
             self._publish_tick(tick)
@@ -297,6 +342,8 @@ class WorldProcess:
     def _record(self) -> None:
         positions = self.bodies.node_positions(self.bodies.true_xy())
         links = self.links.update(positions, self.now)
+        if self.kernel_links is not None and self.kernel_links.due(self.now):
+            self.kernel_links.update(links, self.now)
         if self.on_record is not None:
             self.on_record(self.now, {r: b.true_pose for r, b in self.bases.items()}, links)
         if self.radio_pulse is not None:
