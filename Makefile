@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 ROS_VENV := $(VENV)-ros2
 ROS_STAMP := $(ROS_VENV)/.attempted
 
-.PHONY: demo test lint bench ns3-validation system-deps clean
+.PHONY: demo test lint bench ns3-validation system-deps clean ros2
 
 $(STAMP): pyproject.toml examples/mrcomm-repeat/pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -50,6 +50,8 @@ demo: $(STAMP) system-deps
 # their environment with LD_LIBRARY_PATH set): rclpy and the messages from PyPI, and
 # nav2_msgs' NavigateToPose built from ros2/nav2_msgs. Where it cannot be built, the
 # reason is in $(ROS_VENV)/.skipped and the ROS 2 tests are skipped with it.
+ros2: $(ROS_STAMP)
+
 $(ROS_STAMP): pyproject.toml scripts/ros2_env.sh ros2/nav2_msgs/CMakeLists.txt ros2/nav2_msgs/package.xml ros2/nav2_msgs/action/NavigateToPose.action
 	PYTHON=$(PYTHON) sh scripts/ros2_env.sh $(ROS_VENV)
 	touch $@

@@ -50,9 +50,9 @@ COMMANDS: dict[str, Command] = {
     ),
     "live": Command(_CLI + "live_cmd", "live", "Run one mission live over Zenoh"),
     "world": Command(
-        _CLI + "live_cmd", "world", "Simulate every robot's base and publish the clock (live)"
+        _CLI + "process_cmd", "world", "Simulate every robot's base and publish the clock (live)"
     ),
-    "agent": Command(_CLI + "live_cmd", "agent", "Run one robot's agent over Zenoh"),
+    "agent": Command(_CLI + "process_cmd", "agent", "Run one robot's agent over Zenoh"),
     "team": Command(
         _CLI + "team_cmd", "team_app", "Team certificates for live mode: init, add, show"
     ),

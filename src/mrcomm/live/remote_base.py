@@ -7,9 +7,7 @@ clock tick; :meth:`update` takes it. Until the state acknowledges the latest com
 the status is what that command implies (ACTIVE after ``navigate_to``, IDLE after
 ``cancel``), so an agent never mistakes the previous goal's SUCCEEDED for the new one.
 
-``make_plan`` plans on the robot's own copy of the map with the same global planner
-as the base (as move_base's ``make_plan`` service does on the robot), from the latest
-pose estimate; without a planner it cannot tell (None).
+Pose, odometer, speed and ``make_plan`` are :class:`~mrcomm.robot.reported.ReportedBase`'s.
 """
 
 from __future__ import annotations
@@ -19,13 +17,13 @@ from collections.abc import Callable
 from mrcomm.live.protocol import BaseCommand, BaseState
 from mrcomm.ports import NavStatus
 from mrcomm.robot.planner import GridPlanner
+from mrcomm.robot.reported import ReportedBase
 from mrcomm.world.geometry import Pose
 
 SendFn = Callable[[BaseCommand], None]
-Point = tuple[float, float]
 
 
-class RemoteBase:
+class RemoteBase(ReportedBase):
     """Implements the Base port from commands sent and states received."""
 
     def __init__(
@@ -36,16 +34,13 @@ class RemoteBase:
         send: SendFn,
         planner: GridPlanner | None = None,
     ) -> None:
+        super().__init__(start, planner)
         self.robot = robot
-        self._planner = planner
         self.incarnation = incarnation
         self._send = send
         self._seq = 0
         self._pending_status = NavStatus.IDLE
         self._state: BaseState | None = None
-        self._pose = start
-        self._odometry = 0.0
-        self._speed = 0.0
 
     # -- Base port -------------------------------------------------------------------
     def navigate_to(self, x: float, y: float) -> None:
@@ -56,31 +51,12 @@ class RemoteBase:
         self._command("cancel", 0.0, 0.0)
         self._pending_status = NavStatus.IDLE
 
-    def make_plan(self, x: float, y: float) -> tuple[Point, ...] | None:
-        if self._planner is None:
-            return None
-        pose = self._pose
-        path = self._planner.plan((pose.x, pose.y), (float(x), float(y)))
-        return None if path is None else path.waypoints
-
     @property
     def status(self) -> NavStatus:
         if not self.acknowledged:
             return self._pending_status
         assert self._state is not None
         return NavStatus(self._state.status)
-
-    @property
-    def pose(self) -> Pose:
-        return self._pose
-
-    @property
-    def odometry_distance(self) -> float:
-        return self._odometry
-
-    @property
-    def speed(self) -> float:
-        return self._speed
 
     # -- state from the world / the robot ----------------------------------------------
     @property

@@ -8,7 +8,7 @@
 * ``pose`` is the latest ``amcl_pose``; ``odometry_distance`` the running sum of
   ``‖Δposition‖`` of ``odom``; ``speed`` its ``twist.linear.x``;
 * ``make_plan`` plans on the robot's copy of the scenario's map with MRComm's planner
-  (as RemoteBase does), from the latest pose.
+  (as RemoteBase does), from the latest pose (:class:`~mrcomm.robot.reported.ReportedBase`).
 
 Every ROS call happens on the :class:`~mrcomm.ros2.runtime.RosThread`; the methods of
 the port never block. What arrives from ROS is kept under a lock and taken by
@@ -23,13 +23,14 @@ from typing import Any
 
 from mrcomm.ports import NavStatus
 from mrcomm.robot.planner import GridPlanner
+from mrcomm.robot.reported import ReportedBase
 from mrcomm.ros2.runtime import Nav2Names, RosThread, set_yaw, subscription_qos, yaw_of
 from mrcomm.world.geometry import Pose
 
 Point = tuple[float, float]
 
 
-class Nav2Base:
+class Nav2Base(ReportedBase):
     """Implements the Base port with a NavigateToPose action client."""
 
     def __init__(
@@ -45,11 +46,11 @@ class Nav2Base:
         from nav_msgs.msg import Odometry
         from rclpy.action import ActionClient
 
+        super().__init__(start, planner)
         self.robot = robot
         self.names = names
         self._ros = ros
         self._owns_ros = False
-        self._planner = planner
         self._action_type = NavigateToPose
         node = ros.node
         self._client = ActionClient(node, NavigateToPose, names.name(names.action))
@@ -66,10 +67,7 @@ class Nav2Base:
         self._last_odom_xy: Point | None = None
         self._goal_status: dict[int, NavStatus] = {}  # goal token -> outcome
         self._cancel_wanted: set[int] = set()  # goal tokens the agent cancelled
-        # The agent thread's view, taken by sync():
-        self._pose = start
-        self._odometry = 0.0
-        self._speed = 0.0
+        # The agent thread's view (pose, odometer, speed: ReportedBase's), taken by sync():
         self._token = 0  # the current goal's; 0: none
         self._status = NavStatus.IDLE
         self._handles: dict[int, Any] = {}  # goal token -> ClientGoalHandle (ROS thread)
@@ -106,24 +104,6 @@ class Nav2Base:
     @property
     def status(self) -> NavStatus:
         return self._status
-
-    @property
-    def pose(self) -> Pose:
-        return self._pose
-
-    @property
-    def odometry_distance(self) -> float:
-        return self._odometry
-
-    @property
-    def speed(self) -> float:
-        return self._speed
-
-    def make_plan(self, x: float, y: float) -> tuple[Point, ...] | None:
-        if self._planner is None:
-            return None
-        path = self._planner.plan((self._pose.x, self._pose.y), (float(x), float(y)))
-        return None if path is None else path.waypoints
 
     # -- the agent's step --------------------------------------------------------------
     def sync(self) -> None:

@@ -21,7 +21,7 @@ from mrcomm.errors import InputError
 
 #: How the ROS 2 pieces are installed here (and on a robot: its own ROS 2).
 INSTALL_HINT = (
-    "install the extra (make .venv-ros2: mrcomm[ros2] and nav2_msgs built locally) "
+    "install the extra (make ros2: mrcomm[ros2] and nav2_msgs built locally) "
     "or run in a sourced ROS 2 environment with nav2_msgs"
 )
 QOS_CHOICES = ("best_effort", "reliable")
