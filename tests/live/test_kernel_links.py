@@ -79,3 +79,39 @@ def test_counts_are_read_and_journalled() -> None:
     assert lines[0]["t0"] == 1.0 and lines[0]["t1"] == 1.5
     assert ["robot_1", "robot_3", 1000, 40, 40] in lines[0]["pairs"]
     assert all(call[:4] == ("ip", "netns", "exec", "hub") for call in calls)
+
+
+def test_radio_packet_error_adds_to_spl() -> None:
+    """With the radio, a link in range drops its packet error on top of the SPL (as
+    independent losses); below the sensitivity everything."""
+    links = KernelLinks(
+        EMULATION, spl=10.0, write=lambda *a, **k: None, packet_error=lambda dbm: 0.5
+    )
+    connected = [[True, True, False], [True, True, True], [False, True, True]]
+    linked = state(connected)
+    radio = LinkState(
+        linked.ids, linked.distance, None, None, linked.warning, linked.connected,
+        np.full((3, 3), -80.0),
+    )  # fmt: skip
+    decided = links.permille(radio)
+    assert decided[("robot_1", "robot_2")] == 550  # 1 - 0.9 * 0.5
+    assert decided[("robot_1", "robot_3")] == 1000
+
+
+def test_radio_packet_error_follows_power() -> None:
+    from mrcomm.live.kernel_links import PACKET_BYTES
+    from mrcomm.net.radio.model import RadioNetwork
+    from mrcomm.run.config import make_config
+    from mrcomm.run.resources import ScenarioResources
+    from mrcomm.run.wiring import build_network
+
+    from .helpers import S1
+
+    config = make_config(None, scenario=S1, network="radio")
+    network = build_network(config, ScenarioResources.load(S1))
+    assert isinstance(network, RadioNetwork)
+    channel = network.channel(("robot_1", "robot_2"))
+    bits = channel.bits_of(PACKET_BYTES)
+    errors = [channel.mean_error(dbm, bits) for dbm in (-60.0, -80.0, -88.0, -92.0)]
+    assert errors == sorted(errors) and errors[0] < 0.01 and errors[-1] > errors[0]
+    assert channel.mean_error(float("nan"), bits) == 0.0

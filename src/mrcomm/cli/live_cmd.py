@@ -346,12 +346,6 @@ def check_emulation(run: RunConfig, operator: bool) -> None:
     """What ``--emulate`` can do here, checked before any process (one line, exit 2)."""
     from mrcomm.live.netns import netns_missing
 
-    if run.network == "radio":
-        raise InputError(
-            "the radio model's packet errors are not emulated in the kernel yet: use "
-            "--network ah or wlan with --emulate",
-            field="--emulate",
-        )
     if operator:
         raise InputError("an operator cannot join an emulated team yet", field="--emulate")
     missing = netns_missing()

@@ -137,7 +137,9 @@ def world(
     if emulation is not None:
         from mrcomm.live.kernel_links import KernelLinks
 
-        process.kernel_links = KernelLinks(emulation, run.spl, process.journal.write)
+        process.kernel_links = KernelLinks(
+            emulation, run.spl, process.journal.write, packet_error=radio_packet_error(process)
+        )
     if not foxglove:
         raise typer.Exit(process.run())
     from mrcomm.experiment.recording import GroundTruthStream
@@ -298,3 +300,17 @@ def _operator_console(settings: Any, robot: str, port: int) -> int:
     typer.echo(f"console: http://localhost:{port}", err=True)
     status = serve(page, port, process.run)
     return 1 if status is None else status
+
+
+def radio_packet_error(process: Any) -> Any:
+    """With the ``radio`` network model: a packet's loss probability at a received
+    power, for the kernel's drop rules (None with the other models)."""
+    from mrcomm.live.kernel_links import PACKET_BYTES
+    from mrcomm.net.radio.model import RadioNetwork
+
+    network = process.links.network
+    if not isinstance(network, RadioNetwork):
+        return None
+    channel = network.channel(process.node_ids)
+    bits = channel.bits_of(PACKET_BYTES)
+    return lambda power: channel.mean_error(power, bits)

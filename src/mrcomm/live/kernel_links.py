@@ -8,9 +8,12 @@ on that bridge (one nftables table in the hub, ``bridge`` family, forward hook),
 fixed rate of mission time (2 Hz by default, as the pulse; at ``--speed`` 10 that is
 20 updates per wall second, a few milliseconds of ``nft`` each):
 
-* out of range (the network model's ``connected`` is false: AH beyond its range) —
-  every packet dropped;
-* in range — the run's SPL (static packet loss, %) at random (``numgen random``);
+* out of range (the network model's ``connected`` is false: AH beyond its range, the
+  radio below its sensitivity) — every packet dropped;
+* in range — the run's SPL (static packet loss, %) at random (``numgen random``) and,
+  with the ``radio`` network model, the link's packet error for a packet of
+  :data:`PACKET_BYTES` at its mean received power (no fast fading: one rate per
+  period), combined as independent losses;
 * between two nodes of one process (an assigner hosted on its robot) — nothing to do.
 
 The world's own traffic (the robots' bodies: local on a real robot) is never touched.
@@ -34,6 +37,9 @@ from mrcomm.net.links import LinkState
 
 TABLE = "mrcomm_links"
 PERMILLE = 1000
+#: The packet the radio's packet error is computed for: a pose message in one Zenoh
+#: frame with its TCP/IP headers (~150 B); the profile adds its own header.
+PACKET_BYTES = 150
 
 
 @dataclass(frozen=True)
@@ -69,10 +75,15 @@ class KernelLinks:
         spl: float,
         write: Callable[..., None],
         tool: Callable[..., str] = run_tool,
+        packet_error: Callable[[float], float] | None = None,
     ) -> None:
-        """``write(kind, **data)``: the world's journal; ``tool``: runs ``ip``/``nft``."""
+        """``write(kind, **data)``: the world's journal; ``tool``: runs ``ip``/``nft``;
+        ``packet_error``: a packet's loss probability at a received power (dBm), with
+        the ``radio`` network model."""
         self.emulation = emulation
+        self.spl = spl / 100.0
         self.spl_permille = round(spl * PERMILLE / 100.0)
+        self._packet_error = packet_error
         self._write = write
         self._tool = tool
         self._in_force: dict[tuple[str, str], int] = {}  # (from, to) -> drop permille
@@ -117,8 +128,14 @@ class KernelLinks:
             for j, b in enumerate(links.ids):
                 if i == j or a not in speaking or b not in speaking:
                     continue
-                connected = bool(links.connected[i, j])
-                out[(a, b)] = self.spl_permille if connected else PERMILLE
+                if not bool(links.connected[i, j]):
+                    out[(a, b)] = PERMILLE
+                elif self._packet_error is None or links.power is None:
+                    out[(a, b)] = self.spl_permille
+                else:
+                    error = self._packet_error(float(links.power[i, j]))
+                    loss = 1.0 - (1.0 - self.spl) * (1.0 - error)
+                    out[(a, b)] = min(PERMILLE, round(loss * PERMILLE))
         return out
 
     def script(self, permille: Mapping[tuple[str, str], int]) -> str:

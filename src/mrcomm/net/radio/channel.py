@@ -113,6 +113,14 @@ class RadioChannel:
         in_sight = self._sight is None or self._sight[sender][receiver]
         return self.error_at(receiver, self._power[sender][receiver], in_sight, bits)
 
+    def mean_error(self, power_dbm: float, bits: int) -> float:
+        """Probability that a packet of ``bits`` is lost over a link of mean power
+        ``power_dbm`` without fast fading (NaN: no position, never lost); the kernel's
+        drop rate of an emulated link (``live.kernel_links``)."""
+        if power_dbm != power_dbm:
+            return 0.0
+        return _per(_ber(power_dbm, self._noise), bits)
+
     def error_at(self, receiver: int, power_dbm: float, in_sight: bool, bits: int) -> float:
         """Probability that one message of ``bits`` is lost at ``receiver`` over a link
         of mean power ``power_dbm`` (NaN: a node without a position, never lost), with
