@@ -17,6 +17,24 @@ import math
 from mrcomm.agents.collision import MateState
 from mrcomm.messaging.messages import PoseMsg
 
+#: The last pose message turned into a mate's state, and that state: a pose reaches
+#: every mate in turn, so each builds the same immutable state once, not once per
+#: receiver. One tuple, replaced whole, so runs in threads never see half an update.
+_last_state: tuple[PoseMsg | None, MateState | None] = (None, None)
+
+
+def mate_state(message: PoseMsg) -> MateState:
+    """The state of the mate that sent ``message``, as collision avoidance reads it."""
+    global _last_state
+    last, state = _last_state
+    if last is message and state is not None:
+        return state
+    state = MateState(
+        message.sender, message.x, message.y, message.theta, message.v, message.goal_dist
+    )
+    _last_state = (message, state)
+    return state
+
 
 class TeamView:
     """Each mate's last received pose, with the time it was received."""
@@ -36,9 +54,7 @@ class TeamView:
 
     def hear(self, message: PoseMsg, now: float) -> None:
         mate = message.sender
-        self.poses[mate] = MateState(
-            mate, message.x, message.y, message.theta, message.v, message.goal_dist
-        )
+        self.poses[mate] = mate_state(message)
         self.heard[mate] = now
         self.stamps[mate] = message.stamp
         self.roles[mate] = message.role

@@ -65,20 +65,41 @@ _UNIFORM_BATCH = 1024
 
 class LossStream:
     """A receiver's stream of uniform draws, refilled in batches (one draw per lossy
-    message that was in range)."""
+    message that was in range). :meth:`draw` takes the next value, :meth:`take` the next
+    ``k`` as an array: the same values in the same order whichever is used, so a bus may
+    decide one message at a time or a batch of messages at once."""
 
     def __init__(self, rng: np.random.Generator) -> None:
         self._rng = rng
-        self._buffer: list[float] = []
+        self._array = np.empty(0)
+        self._buffer: list[float] = []  # the same batch as a list: a faster scalar read
+        self._next = 0
+
+    def _refill(self) -> None:
+        self._array = self._rng.random(_UNIFORM_BATCH)
+        self._buffer = self._array.tolist()
         self._next = 0
 
     def draw(self) -> float:
         if self._next >= len(self._buffer):
-            self._buffer = self._rng.random(_UNIFORM_BATCH).tolist()
-            self._next = 0
+            self._refill()
         value = self._buffer[self._next]
         self._next += 1
         return value
+
+    def take(self, k: int) -> np.ndarray:
+        """The next ``k`` draws (as ``k`` calls of :meth:`draw` would give them)."""
+        parts = []
+        while k > 0:
+            if self._next >= len(self._buffer):
+                self._refill()
+            end = min(len(self._buffer), self._next + k)
+            parts.append(self._array[self._next : end])
+            k -= end - self._next
+            self._next = end
+        if len(parts) == 1:
+            return parts[0]
+        return np.concatenate(parts) if parts else np.empty(0)
 
 
 @dataclass

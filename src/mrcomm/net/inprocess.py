@@ -15,6 +15,13 @@ each receiver may lose it to packet error.
 With relaying on (:mod:`mrcomm.net.relay`), a robot that receives a task status or AON
 message first passes a copy on at the next delivery; copies are counted by the relay,
 not as publications.
+
+In a large team most messages are poses, each reaching every mate. A run of consecutive
+messages on one topic is then decided as a batch — the step's link matrix gathered for
+all of them at once, each receiver's loss draws taken as an array from its own stream
+(the same values in the same order as one draw per message), the counts added per
+receiver — and the handlers are called in the same order as one message at a time
+would call them, so the results are the same either way.
 """
 
 from __future__ import annotations
@@ -47,6 +54,10 @@ DeliveryObserver = Callable[[float, str, str, str, Message, str], None]
 
 #: Observer of every publication: (stamp, topic, sender, message).
 PublishObserver = Callable[[float, str, str, Message], None]
+
+#: Messages on one topic are decided as a batch when they have at least this many
+#: receivers (below it, numpy's per-call cost exceeds what a batch saves).
+BATCH_FROM = 8
 
 
 class InProcessEndpoint:
@@ -89,7 +100,10 @@ class InProcessNetwork:
         self._subs: dict[str, dict[int, list[Handler]]] = {}
         self._outbox: list[_Queued] = []
         n = len(self.ids)
-        self._connected: list[list[bool]] = [[True] * n for _ in range(n)]
+        self._links = np.ones((n, n), dtype=bool)
+        self._rows: list[list[bool]] | None = None  # the same matrix as lists, on demand
+        #: Receivers from which a topic's messages are decided as a batch.
+        self.batch_from = BATCH_FROM
         self.counts: dict[tuple[str, str], TopicCounts] = {}
         # The same counts by topic and receiver index, for the delivery loop (created on
         # first use, as in ``counts``: an agent never reached on a topic has no entry).
@@ -101,15 +115,24 @@ class InProcessNetwork:
     def endpoint(self, agent_id: str) -> InProcessEndpoint:
         return InProcessEndpoint(self, agent_id, self.ids.index(agent_id))
 
-    def set_connected(self, connected: list[list[bool]]) -> None:
+    def set_connected(self, connected: np.ndarray | list[list[bool]]) -> None:
         """Link matrix for this step: ``connected[s][r]`` (sender s can reach receiver r).
         With store and forward, a robot that gains a neighbour sends its stored statuses
         again (delivered with this step's messages)."""
+        links = np.array(connected, dtype=bool)
         relay = self.relay
         if relay is not None and relay.store is not None:
-            for relayer, topic, message, crossed in relay.on_links(self._connected, connected):
+            before, now = self._connected(), links.tolist()
+            for relayer, topic, message, crossed in relay.on_links(before, now):
                 self._enqueue(relayer, topic, message, crossed, copy=True)
-        self._connected = connected
+        self._links = links
+        self._rows = None
+
+    def _connected(self) -> list[list[bool]]:
+        """This step's link matrix as lists (a faster read one element at a time)."""
+        if self._rows is None:
+            self._rows = self._links.tolist()
+        return self._rows
 
     def subscribers(self, topic: str) -> list[str]:
         """The agents subscribed to ``topic``, in subscription order."""
@@ -136,15 +159,28 @@ class InProcessNetwork:
         observer = self.observer
         relay = self.relay
         copies: list[tuple[int, str, Message, int]] = []
-        for sender, topic, message, _, delay, bits, crossed, copy in outbox:
+        batching = channel is None and observer is None
+        position = 0
+        while position < len(outbox):
+            sender, topic, message, _, delay, bits, crossed, copy = outbox[position]
+            position += 1
             receivers = self._subs.get(topic)
             if not receivers:
+                continue
+            relayed = relay is not None and relay.relays(topic)
+            if batching and not relayed and len(receivers) >= self.batch_from:
+                end = position
+                while end < len(outbox) and outbox[end][1] == topic:
+                    end += 1
+                batch = [sender] + [queued[0] for queued in outbox[position:end]]
+                messages = [message] + [queued[2] for queued in outbox[position:end]]
+                self._deliver_batch(topic, batch, messages, receivers)
+                position = end
                 continue
             counts = self._counts_by_index.get(topic)
             if counts is None:
                 counts = self._counts_by_index[topic] = [None] * len(self.ids)
-            relayed = relay is not None and relay.relays(topic)
-            links = self._connected[sender]
+            links = self._connected()[sender]
             # Per message, not per receiver: lost to the sender's queue, and its delay.
             queued_out = delay is None and not exempt(topic)
             delay_s = delay or 0.0
@@ -179,6 +215,57 @@ class InProcessNetwork:
                         handler(message)
         for relayer, topic, message, crossed in copies:
             self._enqueue(relayer, topic, message, crossed, copy=True)
+
+    def _deliver_batch(
+        self,
+        topic: str,
+        senders: list[int],
+        messages: list[Message],
+        receivers: dict[int, list[Handler]],
+    ) -> None:
+        """Decide and deliver consecutive messages on ``topic`` (none relayed, no radio,
+        no observer) together: the same decisions, counts and handler calls, in the same
+        order, as one message at a time (see the module docstring)."""
+        targets = list(receivers)
+        columns = np.array(targets)
+        rows = np.array(senders)
+        others = rows[:, None] != columns[None, :]  # a sender does not hear itself
+        if self.policy.exempt(topic):
+            received = others
+            in_range = others
+        else:
+            in_range = self._links[rows[:, None], columns[None, :]] & others
+            received = in_range
+            loss = self.policy.loss_percent / 100.0
+            if loss > 0.0 and topic in self.policy.lossy_topics:
+                received = in_range.copy()
+                for column, receiver in enumerate(targets):
+                    reached = in_range[:, column]
+                    k = int(np.count_nonzero(reached))
+                    if k:
+                        kept = self._streams[receiver].take(k) >= loss
+                        received[reached, column] = kept
+        decided = others.sum(axis=0).tolist()
+        reached_n = in_range.sum(axis=0).tolist()
+        received_n = received.sum(axis=0).tolist()
+        counts = self._counts_by_index.get(topic)
+        if counts is None:
+            counts = self._counts_by_index[topic] = [None] * len(self.ids)
+        for column, receiver in enumerate(targets):
+            if not decided[column]:
+                continue
+            entry = counts[receiver]
+            if entry is None:
+                entry = counts[receiver] = self._count(receiver, topic)
+            entry.received += received_n[column]
+            entry.dropped_loss += reached_n[column] - received_n[column]
+            entry.dropped_range += decided[column] - reached_n[column]
+        handlers = [receivers[r] for r in targets]
+        heard_rows, heard_columns = np.nonzero(received)  # message by message, in order
+        for row, column in zip(heard_rows.tolist(), heard_columns.tolist(), strict=True):
+            message = messages[row]
+            for handler in handlers[column]:
+                handler(message)
 
     # -- endpoint plumbing ---------------------------------------------------------
     def _publish(self, sender: int, topic: str, message: Message) -> None:

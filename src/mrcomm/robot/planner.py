@@ -12,6 +12,16 @@ Simplification keeps the clearance the A* path had: a shortcut from waypoint ``i
 path between them (capped at the comfortable clearance, minus half a cell). Shortcuts
 therefore do not hug corners that the wall cost kept the raw path away from, which is
 what lets a simple path follower cut corners a little without touching walls.
+
+A search runs on a window of the grid around start and goal, not on the whole map, so
+its cost follows the route and not the map's area. The result is the whole-grid
+search's, exactly: with weights of at least 1 per move and pyastar2d's Chebyshev
+heuristic (consistent), every cell A* expands has ``cheb(start, c) + cheb(c, goal)`` at
+most the found path's cost ``C``; when that region (plus a cell) lies inside the window,
+no expanded cell touches the window's edge, so every expansion sees the same neighbours
+in the same order as on the whole grid, and the search pushes and pops exactly the same
+entries. A window too small for its path's cost is searched again as large as that cost
+requires (at most twice; the whole grid when no path is found in the window).
 """
 
 from __future__ import annotations
@@ -29,6 +39,12 @@ from mrcomm.world.geometry import polyline_length
 from mrcomm.world.occupancy import OccupancyGrid
 
 Point = tuple[float, float]
+#: (y0, y1, x0, x1): the rows and columns of the planning grid a search runs on.
+Window = tuple[int, int, int, int]
+
+#: A window is tried when it is smaller than this fraction of the grid (else the whole
+#: grid is searched: the result is the same, and a window would save little).
+WINDOW_FRACTION = 0.5
 
 
 @dataclass(frozen=True)
@@ -154,19 +170,48 @@ class GridPlanner:
             return None
         return y0 + best // (x1 - x0), x0 + best % (x1 - x0)
 
+    def _window_for(self, s_cell: tuple[int, int], g_cell: tuple[int, int], cost: float) -> Window:
+        """The smallest window holding every cell a search whose path costs ``cost`` can
+        expand (see the module docstring), a cell beyond it, and the margin float
+        rounding of the costs could need; clipped to the grid."""
+        hc, wc = self.shape
+        dy, dx = abs(s_cell[0] - g_cell[0]), abs(s_cell[1] - g_cell[1])
+        slack = cost * 1.001 + 2.0
+        my = max(0, math.ceil((slack - dy) / 2)) + 1
+        mx = max(0, math.ceil((slack - dx) / 2)) + 1
+        return (
+            max(0, min(s_cell[0], g_cell[0]) - my),
+            min(hc, max(s_cell[0], g_cell[0]) + my + 1),
+            max(0, min(s_cell[1], g_cell[1]) - mx),
+            min(wc, max(s_cell[1], g_cell[1]) + mx + 1),
+        )
+
+    def _first_window(self, s_cell: tuple[int, int], g_cell: tuple[int, int]) -> Window:
+        """A first guess, for a path half as long again as the straight line."""
+        chebyshev = max(abs(s_cell[0] - g_cell[0]), abs(s_cell[1] - g_cell[1]))
+        return self._window_for(s_cell, g_cell, 1.5 * chebyshev + 8)
+
+    def _whole(self) -> Window:
+        return (0, self.shape[0], 0, self.shape[1])
+
+    def _worth_it(self, window: Window) -> bool:
+        y0, y1, x0, x1 = window
+        return (y1 - y0) * (x1 - x0) < WINDOW_FRACTION * self.shape[0] * self.shape[1]
+
     def _with_obstacles(
         self,
         obstacles: Sequence[Point],
         radius: float,
         start: Point,
         base: NDArray[np.float32],
+        window: Window,
     ) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
-        """Copies of (``base`` weights, clearance) with discs around ``obstacles``
-        blocked. A disc never covers the start, or the robot could not leave its own
-        cell."""
-        weights = base.copy()
-        clear = self._clear.copy()
-        hc, wc = self.shape
+        """Copies of the ``window`` of (``base`` weights, clearance) with discs around
+        ``obstacles`` blocked. A disc never covers the start, or the robot could not
+        leave its own cell."""
+        wy0, wy1, wx0, wx1 = window
+        weights = base[wy0:wy1, wx0:wx1].copy()
+        clear = self._clear[wy0:wy1, wx0:wx1].copy()
         res = self.resolution
         for ox, oy in obstacles:
             r = min(radius, math.hypot(start[0] - ox, start[1] - oy) - res)
@@ -174,16 +219,66 @@ class GridPlanner:
                 continue
             iy, ix = self.cell_of(ox, oy)
             m = math.ceil(r / res) + 1
-            y0, y1 = max(iy - m, 0), min(iy + m + 1, hc)
-            x0, x1 = max(ix - m, 0), min(ix + m + 1, wc)
+            y0, y1 = max(iy - m, wy0), min(iy + m + 1, wy1)
+            x0, x1 = max(ix - m, wx0), min(ix + m + 1, wx1)
             if y0 >= y1 or x0 >= x1:
                 continue
             yy, xx = np.ogrid[y0:y1, x0:x1]
             cx, cy = self.cell_centre(0, 0)
             inside = ((cx + xx * res - ox) ** 2 + (cy + yy * res - oy) ** 2) <= r * r
-            weights[y0:y1, x0:x1][inside] = np.inf
-            clear[y0:y1, x0:x1][inside] = -1.0
+            weights[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0][inside] = np.inf
+            clear[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0][inside] = -1.0
         return weights, clear
+
+    def _search(
+        self,
+        s_cell: tuple[int, int],
+        g_cell: tuple[int, int],
+        weights: NDArray[np.float32],
+        obstacles: Sequence[Point],
+        obstacle_radius: float,
+        start: Point,
+    ) -> tuple[NDArray[np.int32], NDArray[np.float32], Window] | None:
+        """A* from ``s_cell`` to ``g_cell`` (the whole grid's result, searched on a
+        window): the path's cells (whole-grid indices), the clearance it was planned
+        on (of the window) and the window; None when there is no path."""
+        window = self._first_window(s_cell, g_cell)
+        if not self._worth_it(window):
+            window = self._whole()
+        while True:
+            y0, y1, x0, x1 = window
+            if obstacles:
+                grid, clear = self._with_obstacles(
+                    obstacles, obstacle_radius, start, weights, window
+                )
+                if not (
+                    grid[g_cell[0] - y0, g_cell[1] - x0] < np.inf
+                    and grid[s_cell[0] - y0, s_cell[1] - x0] < np.inf
+                ):
+                    return None
+            else:
+                grid, clear = weights[y0:y1, x0:x1], self._clear[y0:y1, x0:x1]
+            raw = pyastar2d.astar_path(
+                grid,
+                (s_cell[0] - y0, s_cell[1] - x0),
+                (g_cell[0] - y0, g_cell[1] - x0),
+                allow_diagonal=True,
+            )
+            whole = window == self._whole()
+            if raw is None:
+                if whole:
+                    return None
+                window = self._whole()
+                continue
+            if not whole:
+                cost = float(grid[raw[1:, 0], raw[1:, 1]].astype(np.float64).sum())
+                need = self._window_for(s_cell, g_cell, cost)
+                if not (need[0] >= y0 and need[1] <= y1 and need[2] >= x0 and need[3] <= x1):
+                    window = need if self._worth_it(need) else self._whole()
+                    continue
+            raw[:, 0] += y0
+            raw[:, 1] += x0
+            return raw, clear, window
 
     # ------------------------------------------------------------- planning
     def plan(
@@ -207,20 +302,16 @@ class GridPlanner:
         g_cell = self._snap(*goal, self._clear)
         if s_cell is None or g_cell is None:
             return None
-        clear = self._clear
         if weights is None:
             weights = self._weights
-        if obstacles:
-            if obstacle_radius is None:
-                p = self.params
-                obstacle_radius = 2 * p.radius + p.block_margin + self.resolution
-            weights, clear = self._with_obstacles(obstacles, obstacle_radius, start, weights)
-            if not (weights[g_cell] < np.inf and weights[s_cell] < np.inf):
-                return None
-        raw = pyastar2d.astar_path(weights, s_cell, g_cell, allow_diagonal=True)
-        if raw is None:
+        if obstacle_radius is None:
+            p = self.params
+            obstacle_radius = 2 * p.radius + p.block_margin + self.resolution
+        found = self._search(s_cell, g_cell, weights, obstacles, obstacle_radius, start)
+        if found is None:
             return None
-        keep = self._simplify(raw, clear)
+        raw, clear, window = found
+        keep = self._simplify(raw, clear, (window[0], window[2]))
         cells = raw[keep]
         pts: list[Point] = [self.cell_centre(int(iy), int(ix)) for iy, ix in cells.tolist()]
         # The robot starts where it is, not at a cell centre; same for an exact goal.
@@ -235,8 +326,12 @@ class GridPlanner:
         waypoints = tuple((float(px), float(py)) for px, py in pts)
         return PlannedPath(waypoints, polyline_length(waypoints))
 
-    def _simplify(self, raw: NDArray[np.int32], clear: NDArray[np.float32]) -> list[int]:
-        """Indices of the raw A* cells kept as waypoints.
+    def _simplify(
+        self, raw: NDArray[np.int32], clear: NDArray[np.float32], corner: tuple[int, int]
+    ) -> list[int]:
+        """Indices of the raw A* cells kept as waypoints (``raw`` in whole-grid cells,
+        ``clear`` a window of the clearance whose first cell is ``corner``; the geometry
+        is computed in whole-grid cells, so the window changes no rounding).
 
         Douglas-Peucker on the validity test: a span is kept as one segment when the
         shortcut is valid, else split at the raw cell farthest from the chord. All spans
@@ -248,7 +343,7 @@ class GridPlanner:
             return list(range(n))
         comfort = self.inflation + self.params.wall_cost_range
         tol = 0.5 * self.resolution
-        c = clear[raw[:, 0], raw[:, 1]].tolist()
+        c = clear[raw[:, 0] - corner[0], raw[:, 1] - corner[1]].tolist()
         centres = raw.astype(np.float64) + 0.5
         keep = {0, n - 1}
         spans = [(0, n - 1)]
@@ -256,7 +351,7 @@ class GridPlanner:
             starts = np.array([i for i, _ in spans])
             ends = np.array([j for _, j in spans])
             need = np.array([min(min(c[i : j + 1]), comfort) - tol for i, j in spans])
-            ok = self._segments_ok(centres, clear, starts, ends, need)
+            ok = self._segments_ok(centres, clear, corner, starts, ends, need)
             nxt: list[tuple[int, int]] = []
             for (i, j), valid in zip(spans, ok.tolist(), strict=True):
                 if valid or j - i <= 1:
@@ -281,6 +376,7 @@ class GridPlanner:
             ok = self._segments_ok(
                 centres,
                 clear,
+                corner,
                 np.array([i for i, _ in spans]),
                 np.array([j for _, j in spans]),
                 need,
@@ -302,6 +398,7 @@ class GridPlanner:
         self,
         centres: NDArray[np.float64],
         clear: NDArray[np.float32],
+        corner: tuple[int, int],
         starts: NDArray[np.int64],
         ends: NDArray[np.int64],
         need: NDArray[np.float64],
@@ -318,6 +415,8 @@ class GridPlanner:
         seg = np.repeat(np.arange(len(counts)), counts)
         t = (np.arange(int(counts.sum())) - offsets[seg]) / (counts[seg] - 1)
         pts = a[seg] + (b - a)[seg] * t[:, None]
-        vals = clear[pts[:, 0].astype(np.int64), pts[:, 1].astype(np.int64)]
+        rows = pts[:, 0].astype(np.int64) - corner[0]
+        cols = pts[:, 1].astype(np.int64) - corner[1]
+        vals = clear[rows, cols]
         least = np.minimum.reduceat(vals, offsets)
         return (least > self.inflation) & (least >= need)

@@ -143,7 +143,7 @@ class Mission:
             positions.append((math.nan, math.nan))  # it shares its host's position
         links = self.links.update(positions, now)
         self.last_links = links
-        self.network.set_connected(links.connected.tolist())
+        self.network.set_connected(links.connected)
         if self.network.channel is not None and links.power is not None:
             self.network.channel.set_links(links.power, links.line_of_sight)
         self.assigner.set_time(now)
