@@ -36,6 +36,11 @@ from mrcomm.net.thresholds import BoolArray, FloatArray, PairGeometry, PairLayou
 from mrcomm.world.occupancy import OccupancyGrid
 
 RSSI_PERIOD = 0.5  # s between recorded RSSI samples (the pulse rate, 2 Hz)
+#: From this many pairs on, a model that casts no rays computes its distances as one
+#: numpy array (numpy's hypot, the C library's, which can differ from Python's
+#: ``math.hypot`` in the last bit: a team this large is never one of the original
+#: robots' missions).
+ARRAY_PAIRS = 64
 #: An end that moved at least this far (m) has moved.
 _MOVED = 1e-12
 
@@ -110,15 +115,24 @@ class LinkModel:
         xy = positions.tolist() if isinstance(positions, np.ndarray) else positions
         if self._expand is not None:
             xy = [xy[i] for i in self._evaluated]
-        hypot = math.hypot
-        pair_distance = [
-            hypot(xy[a][0] - xy[b][0], xy[a][1] - xy[b][1]) for a, b in self.layout.pairs
-        ]
-        distance = self.layout.matrix(pair_distance, 0.0)
+        pair_distance: list[float] | None = None
+        if not self._casts_rays and len(self.layout.pairs) >= ARRAY_PAIRS:
+            # Rays are cast pair by pair, in Python; without them the pairs are not
+            # needed one by one, and the whole matrix is a few array operations.
+            at = np.array(xy, dtype=np.float64)
+            distance = np.hypot(at[:, 0, None] - at[None, :, 0], at[:, 1, None] - at[None, :, 1])
+            np.fill_diagonal(distance, 0.0)
+        else:
+            hypot = math.hypot
+            pair_distance = [
+                hypot(xy[a][0] - xy[b][0], xy[a][1] - xy[b][1]) for a, b in self.layout.pairs
+            ]
+            distance = self.layout.matrix(pair_distance, 0.0)
         line_of_sight: BoolArray | None = None
         sight: list[bool] | None = None
         power: FloatArray | None = None
         if self._casts_rays:
+            assert pair_distance is not None
             walls = self._walls(xy, pair_distance)
             sight = [w == 0 for w in walls]
             line_of_sight = self._sight_matrix(sight)

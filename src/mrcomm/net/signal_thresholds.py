@@ -76,7 +76,7 @@ class ModelThreshold(Threshold):
         self._flat = {los: (table.flat_from(los), table.rssi_at(1e9, los)) for los in (False, True)}
 
     def evaluate(self, pairs: PairGeometry, now: float) -> tuple[FloatArray | None, BoolArray]:
-        assert pairs.pair_sight is not None
+        assert pairs.pair_sight is not None and pairs.pair_distance is not None
         # RSSI is symmetric (same distance, same model): one lookup per unordered pair.
         rssi_at = self.table.rssi_at
         flat = self._flat

@@ -56,13 +56,14 @@ class PairLayout:
 class PairGeometry:
     """The geometry of every pair at one step: the distance matrix (NaN for a node
     without a position), the same distances once per unordered pair (in ``layout``'s
-    order), and — for thresholds that need it — line of sight per pair. Per-pair plain
-    lists because a team has a handful of pairs: a Python loop over them is cheaper than
-    a chain of small numpy operations, and one gather makes the matrix."""
+    order; None for a large team whose model casts no rays, which only has the matrix),
+    and — for thresholds that need it — line of sight per pair. Per-pair plain lists
+    because a team has a handful of pairs: a Python loop over them is cheaper than a
+    chain of small numpy operations, and one gather makes the matrix."""
 
     distance: FloatArray
     layout: PairLayout
-    pair_distance: list[float]
+    pair_distance: list[float] | None
     pair_sight: list[bool] | None = None
     #: (n, n) received power of each link, dBm, when the network model has a radio.
     power: FloatArray | None = None
