@@ -37,6 +37,7 @@ def _plans(
 @pytest.mark.parametrize("scenario", ["s1.yaml", "s2/s2.yaml", "s4/s4.yaml"])
 def test_window_gives_the_whole_grid_path(scenario: str, monkeypatch: pytest.MonkeyPatch) -> None:
     planner = ScenarioResources.load(SCENARIOS / scenario).planner
+    monkeypatch.setattr(planner_module, "WINDOW_FROM_CELLS", 0)  # windows on any grid
     rng = np.random.default_rng(7)
     points = _free_points(planner, rng, 120)
     pairs = list(zip(points[0::2], points[1::2], strict=True))
@@ -70,6 +71,7 @@ def test_a_window_too_small_for_its_path_is_searched_again(
     """A route that must leave the first window (a long way round a wall) is found in a
     larger one, and it is the whole grid's route."""
     planner = ScenarioResources.load(SCENARIOS / "s2" / "s2.yaml").planner
+    monkeypatch.setattr(planner_module, "WINDOW_FROM_CELLS", 0)
     searched: list[tuple[int, int, int, int]] = []
     real = planner_module.pyastar2d.astar_path
 
@@ -90,3 +92,28 @@ def test_a_window_too_small_for_its_path_is_searched_again(
             assert planner.plan(start, goal) == path
             monkeypatch.setattr(planner_module, "WINDOW_FRACTION", 0.5)
     assert again > 0
+
+
+def test_campus_plans_on_windows_are_the_whole_grid_plans(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The 3000 x 3000 cell campus, where windows are on by default."""
+    from mrcomm.robot.params import RobotParams
+    from mrcomm.world.scenario import load_scenario
+
+    scenario = load_scenario(SCENARIOS / "campus1000" / "campus1000.yaml")
+    planner = GridPlanner(scenario.grid, RobotParams())
+    assert planner.shape[0] * planner.shape[1] >= planner_module.WINDOW_FROM_CELLS
+    rng = np.random.default_rng(11)
+    pairs = []
+    for robot in scenario.robots[:24]:
+        start = (robot.pose.x, robot.pose.y)
+        reach = rng.choice([3.0, 12.0, 40.0])
+        goal = (start[0] + rng.uniform(-reach, reach), start[1] + rng.uniform(-reach, reach))
+        pairs.append((start, goal))
+    mates = [[((s[0] + g[0]) / 2, (s[1] + g[1]) / 2)] for s, g in pairs]
+    windowed = _plans(planner, pairs, mates)
+    monkeypatch.setattr(planner_module, "WINDOW_FRACTION", 0.0)
+    whole = _plans(planner, pairs, mates)
+    assert windowed == whole
+    assert sum(p is not None for p in whole) > len(whole) // 2
