@@ -36,6 +36,11 @@ from mrcomm.net.thresholds import BoolArray, FloatArray, PairGeometry, PairLayou
 from mrcomm.world.occupancy import OccupancyGrid
 
 RSSI_PERIOD = 0.5  # s between recorded RSSI samples (the pulse rate, 2 Hz)
+#: Teams of more than this many robots get sparse per-pair link summaries: a 1000-robot
+#: team has a million ordered pairs, almost all of robots that never met.
+SPARSE_FROM = 30
+#: In a sparse summary, the robot pairs that came at least this close (m) once, ...
+SPARSE_NEAR_M = 10.0
 #: From this many pairs on, a model that casts no rays computes its distances as one
 #: numpy array (numpy's hypot, the C library's, which can differ from Python's
 #: ``math.hypot`` in the last bit: a team this large is never one of the original
@@ -381,11 +386,23 @@ class LinkRecorder:
         )
 
     def summaries(self) -> dict[str, dict[str, Any]]:
+        """Per ordered pair ``"a->b"``: distances, lowest RSSI, time in warning, warnings,
+        time disconnected. In a team of more than :data:`SPARSE_FROM` robots only the
+        pairs that matter: every link to or from a node that is not a robot (the task
+        assigner, an operator), and robot pairs that came within
+        :data:`SPARSE_NEAR_M` of each other or whose link ever warned; the rest of a
+        robot's links are summed up by its closest and furthest mate."""
+        kept = ~np.eye(len(self.ids), dtype=np.bool_)
+        if self.robots > SPARSE_FROM:
+            n = self.robots
+            kept[:n, :n] &= (self.min_distance[:n, :n] <= SPARSE_NEAR_M) | (
+                self.warning_onsets[:n, :n] > 0
+            )
         out: dict[str, dict[str, Any]] = {}
-        for i, a in enumerate(self.ids):
-            for j, b in enumerate(self.ids):
-                if i == j or (a, b) in self._skip:
-                    continue
+        ids = self.ids
+        for i, j in np.argwhere(kept).tolist():  # row by row, as nested loops would
+            a, b = ids[i], ids[j]
+            if (a, b) not in self._skip:
                 out[f"{a}->{b}"] = {
                     "min_distance": _finite(self.min_distance[i, j]),
                     "max_distance": _finite(self.max_distance[i, j]),
