@@ -9,8 +9,11 @@ fitted exponent of cost per step against N (log-log least squares). Cases are ru
 interleaved over ``--repeats`` rounds (the median is reported), and the machine's load
 is printed with them.
 
+With ``--old DIR`` (a ``git worktree`` of an earlier commit) every case also runs on
+that tree's code, interleaved with this one's, and the table gets both and their ratio.
+
 Run: ``.venv/bin/python benchmarks/bench_scale.py [--repeats 3] [--sim-time 120]
-[--only s2 --only s3] [--figure docs/figures/scale.png]``
+[--only s2 --only s3] [--figure docs/figures/scale.png] [--old /tmp/mrcomm-old]``
 """
 
 from __future__ import annotations
@@ -57,11 +60,15 @@ print(json.dumps({"sim": mission.now, "wall": wall, "cpu": cpu, "steps": steps,
 """
 
 
-def run_case(path: Path, sim_time: float) -> dict[str, float]:
+def run_case(path: Path, sim_time: float, tree: Path | None = None) -> dict[str, float]:
+    """One case in a fresh process; ``tree``: run that source tree's code instead."""
     command = [sys.executable, "-c", CHILD, str(path), str(sim_time)]
     if sys.platform.startswith("linux"):
         command = ["taskset", "-c", "0", *command]
-    done = subprocess.run(command, capture_output=True, text=True, check=True, cwd=ROOT)
+    env = dict(os.environ)
+    if tree is not None:
+        env["PYTHONPATH"] = str(tree / "src")
+    done = subprocess.run(command, capture_output=True, text=True, check=True, cwd=ROOT, env=env)
     return dict(json.loads(done.stdout.strip().splitlines()[-1]))
 
 
@@ -81,15 +88,27 @@ def main() -> None:
     parser.add_argument("--sim-time", type=float, default=120.0)
     parser.add_argument("--only", action="append", choices=sorted(SCENARIOS))
     parser.add_argument("--figure", type=Path)
+    parser.add_argument("--old", type=Path, help="an earlier tree to run side by side")
     args = parser.parse_args()
     names = args.only or list(SCENARIOS)
     print(f"Python {platform.python_version()}, {os.cpu_count()} CPUs, pinned to one core; "
           f"NB · WLAN · SPL 25, {args.sim_time:g} s simulated; load {os.getloadavg()}")  # fmt: skip
     results: dict[str, list[dict[str, float]]] = {name: [] for name in names}
+    before: dict[str, list[dict[str, float]]] = {name: [] for name in names}
     for _ in range(args.repeats):
         for name in names:  # interleaved: background load falls on every case alike
             results[name].append(run_case(SCENARIOS[name][1], args.sim_time))
+            if args.old is not None:
+                before[name].append(run_case(SCENARIOS[name][1], args.sim_time, args.old))
     print(f"load after: {os.getloadavg()}")
+    if args.old is not None:
+        print(f"| scenario | robots | CPU s, {args.old} | CPU s, this tree | this / old |")
+        print("|---|---|---|---|---|")
+        for name in names:
+            old_cpu = statistics.median(r["cpu"] for r in before[name])
+            new_cpu = statistics.median(r["cpu"] for r in results[name])
+            print(f"| {name} | {SCENARIOS[name][0]} | {old_cpu:.2f} | {new_cpu:.2f} "
+                  f"| {new_cpu / old_cpu:.2f} |")  # fmt: skip
     print("| scenario | robots | real-time factor | wall s | CPU s | ms per step | peak MB |")
     print("|---|---|---|---|---|---|---|")
     points = []
