@@ -131,6 +131,13 @@ class TopicCounts:
         else:
             self.dropped_queue += 1
 
+    def add(self, *, received: int, dropped_loss: int, dropped_range: int) -> None:
+        """Add the outcomes of several messages at once (no radio: no delays, no radio
+        causes), as :meth:`count` would one by one."""
+        self.received += received
+        self.dropped_loss += dropped_loss
+        self.dropped_range += dropped_range
+
     def as_dict(self, radio: bool = False) -> dict[str, int]:
         """The counts (:data:`COUNT_KEYS`; without a ``radio``, none of
         :data:`RADIO_COUNT_KEYS`, which are then always 0)."""

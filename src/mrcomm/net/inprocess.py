@@ -119,14 +119,15 @@ class InProcessNetwork:
         """Link matrix for this step: ``connected[s][r]`` (sender s can reach receiver r).
         With store and forward, a robot that gains a neighbour sends its stored statuses
         again (delivered with this step's messages)."""
-        links = np.array(connected, dtype=bool)
+        links = np.asarray(connected, dtype=bool)  # a new matrix each step: no copy
+        rows: list[list[bool]] | None = None
         relay = self.relay
         if relay is not None and relay.store is not None:
-            before, now = self._connected(), links.tolist()
-            for relayer, topic, message, crossed in relay.on_links(before, now):
+            rows = links.tolist()
+            for relayer, topic, message, crossed in relay.on_links(self._connected(), rows):
                 self._enqueue(relayer, topic, message, crossed, copy=True)
         self._links = links
-        self._rows = None
+        self._rows = rows
 
     def _connected(self) -> list[list[bool]]:
         """This step's link matrix as lists (a faster read one element at a time)."""
@@ -177,9 +178,7 @@ class InProcessNetwork:
                 self._deliver_batch(topic, batch, messages, receivers)
                 position = end
                 continue
-            counts = self._counts_by_index.get(topic)
-            if counts is None:
-                counts = self._counts_by_index[topic] = [None] * len(self.ids)
+            counts = self._topic_counts(topic)
             links = self._connected()[sender]
             # Per message, not per receiver: lost to the sender's queue, and its delay.
             queued_out = delay is None and not exempt(topic)
@@ -248,18 +247,18 @@ class InProcessNetwork:
         decided = others.sum(axis=0).tolist()
         reached_n = in_range.sum(axis=0).tolist()
         received_n = received.sum(axis=0).tolist()
-        counts = self._counts_by_index.get(topic)
-        if counts is None:
-            counts = self._counts_by_index[topic] = [None] * len(self.ids)
+        counts = self._topic_counts(topic)
         for column, receiver in enumerate(targets):
             if not decided[column]:
                 continue
             entry = counts[receiver]
             if entry is None:
                 entry = counts[receiver] = self._count(receiver, topic)
-            entry.received += received_n[column]
-            entry.dropped_loss += reached_n[column] - received_n[column]
-            entry.dropped_range += decided[column] - reached_n[column]
+            entry.add(
+                received=received_n[column],
+                dropped_loss=reached_n[column] - received_n[column],
+                dropped_range=decided[column] - reached_n[column],
+            )
         handlers = [receivers[r] for r in targets]
         heard_rows, heard_columns = np.nonzero(received)  # message by message, in order
         for row, column in zip(heard_rows.tolist(), heard_columns.tolist(), strict=True):
@@ -288,6 +287,14 @@ class InProcessNetwork:
 
     def _subscribe(self, receiver: int, topic: str, handler: Handler) -> None:
         self._subs.setdefault(topic, {}).setdefault(receiver, []).append(handler)
+
+    def _topic_counts(self, topic: str) -> list[TopicCounts | None]:
+        """``topic``'s counts by receiver index (an entry made on a receiver's first
+        delivery decision, as in ``counts``)."""
+        counts = self._counts_by_index.get(topic)
+        if counts is None:
+            counts = self._counts_by_index[topic] = [None] * len(self.ids)
+        return counts
 
     def _count(self, index: int, topic: str) -> TopicCounts:
         key = (self.ids[index], topic)
