@@ -4,7 +4,12 @@ reproduced exactly.
 
 One change is deliberate: the live result's AON total now has ``left_out_reports``
 (0 here), as the simulated result always had — the two assemblers had drifted, and
-there is one now (``run/assemble.py``)."""
+there is one now (``run/assemble.py``).
+
+Re-recorded once since, for a fix: AON brings a left-out member heard again up to date
+even while another left-out member is still silent (it used to wait for both). In four
+LF · AH runs only AON's traffic counts changed (publications -1 to +54, replies,
+restarts, mean finish times, pose/AON deliveries); every mission metric is the same."""
 
 from __future__ import annotations
 

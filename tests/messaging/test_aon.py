@@ -310,3 +310,25 @@ def test_constructor_rejects_bad_arguments(kwargs: dict[str, object], match: str
     team = args.pop("team")
     with pytest.raises(ValueError, match=match):
         AonEndpoint(net.buses["r0"], owner, 0, team, on_deliver=lambda p, m: None, **args)  # type: ignore[arg-type]
+
+
+def test_a_left_out_member_heard_again_is_brought_up_to_date_while_another_is_away() -> None:
+    # r2 and r3 are both silent when the lease runs out; r2 comes back at 30 s while r3
+    # stays away until 200 s. r2 must get the message soon after 30 s: it lacks it and
+    # is heard, so re-sending is not futile (it used to wait for r3 as well).
+    net = FakeNet(names(4), seed=3, cuts=[Cut("r2", None, 0.0, 30.0), Cut("r3", None, 0.0, 200.0)])
+    team = AonTeam(net, lease=5.0, beacons=True)
+    net.tick()
+    mid = team.send("r0")
+    net.run(12.0)
+    assert team.reports["r0"][0].left_out == ("r2", "r3")
+    net.run(40.0)
+    assert team.delivered["r2"][mid] == 1
+    assert team.delivered["r3"][mid] == 0
+    # Then paused again (everyone heard has it, r3 silent): no futile re-sends.
+    before = sum(net.counts.published.values())
+    net.run(150.0)
+    assert sum(net.counts.published.values()) == before
+    net.run(300.0, stop=team.all_done)
+    assert team.all_done() and not team.violations
+    assert team.delivered["r3"][mid] == 1

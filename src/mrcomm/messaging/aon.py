@@ -353,11 +353,13 @@ class AonEndpoint:
                 self._report(msg_id, st, left_out, now, late=False)
 
     def _paused(self, st: MsgState) -> bool:
-        """Reported with left-out members that are still silent: re-sending is futile."""
-        return (
-            st.reported_left_out is not None
-            and (self._team.full & ~st.recv & self._expired_bits) != 0
-        )
+        """Reported with left-out members that are still silent, and no member heard
+        again lacks it: re-sending is futile. (A left-out member heard again is brought
+        up to date even while another is still away.)"""
+        if st.reported_left_out is None:
+            return False
+        full, expired = self._team.full, self._expired_bits
+        return (full & ~st.recv & expired) != 0 and (full & ~st.have & ~expired) == 0
 
     # ------------------------------------------------------------------ sending
 
