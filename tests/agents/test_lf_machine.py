@@ -14,11 +14,15 @@ import pytest
 
 from mrcomm.agents.lf import LeaderFollowerExecutor
 from mrcomm.agents.lf_machine import LF_STATES, LF_TRANSITIONS, LfParams
+from mrcomm.messaging.aon import AonEndpoint
 from mrcomm.messaging.messages import (
+    TOPIC_AON,
+    TOPIC_HEARTBEAT,
     TOPIC_ROLE,
     TOPIC_TASK_STATUS,
     TOPIC_UTILITY,
     CommandKind,
+    Heartbeat,
     OperatorCommand,
     RoleMsg,
     TaskState,
@@ -29,7 +33,7 @@ from mrcomm.metrics import labels as L
 from mrcomm.net.link_sensors import DistanceSensor
 from mrcomm.ports import NavStatus
 
-from .fakes import Harness, pose_of, task, untaken
+from .fakes import FakeBus, Harness, pose_of, task, untaken
 
 TEAM = ("robot_1", "robot_2", "robot_3")
 
@@ -189,6 +193,46 @@ def scenario_an_idle_robot_joins_with_utility_zero_and_roles_dissolve(h: Harness
     assert published and published[0].utility == 0.0
 
 
+def scenario_a_completion_the_assigner_missed_is_reported_back(h: Harness) -> None:
+    """Alone with the assigner: its lease runs out while robot_1 completes its task, so
+    AON leaves it out; idle, robot_1 drives to the assigner's base station and, the
+    assigner heard again, brings it up to date, then settles (and only then is done)."""
+    h.agent.params = h.agent.params.model_copy(update={"report_back": True, "aon_lease": 5.0})
+    h.agent._assigner_at = (0.0, -8.0)  # a base station (as the scenario's wiring sets)
+    h.assign([task("t", 1.0, 0.0)], team=("robot_1",))
+    assigner_bus = FakeBus("assigner")
+    delivered: list[object] = []
+    assigner = AonEndpoint(
+        assigner_bus, "assigner", 1, ("robot_1", "assigner"), lease=5.0,
+        on_deliver=lambda status, _: delivered.append(status),
+    )  # fmt: skip
+
+    def heartbeat() -> None:
+        deliver(h, TOPIC_HEARTBEAT, Heartbeat(sender="assigner", incarnation=1, seq=1, stamp=h.now))
+
+    heartbeat()
+    assert h.step() == "na_navigating"
+    h.base.arrive()
+    h.step(times=2)
+    assert h.agent.state == "na_idle" and not h.agent.done  # AON still waits for it
+    h.step(times=60)  # 6 s without the assigner: left out, and robot_1 goes to find it
+    assert h.agent.state == "reporting" and h.base.goal == (0.0, -8.0)
+    assert not h.agent.done
+    heartbeat()  # in reach again: AON re-sends, the assigner acknowledges
+    for _ in range(20):
+        for message in h.bus.published(TOPIC_AON):
+            assigner.receive(message)
+        h.bus.sent.clear()
+        assigner.step(h.now)
+        for message in assigner_bus.published(TOPIC_AON):
+            deliver(h, TOPIC_AON, message)
+        assigner_bus.sent.clear()
+        heartbeat()
+        h.step()
+    assert h.agent.state == "na_idle" and h.agent.done
+    assert [status.task_id for status in delivered] == ["t"]  # type: ignore[attr-defined]
+
+
 SCENARIOS: list[Callable[[Harness], None]] = [
     scenario_leader_holds_for_its_follower_and_completes,
     scenario_leader_retries_and_avoids,
@@ -198,6 +242,7 @@ SCENARIOS: list[Callable[[Harness], None]] = [
     scenario_follower_dissolves_when_its_leader_completes,
     scenario_nobody_answers_so_it_regroups_then_rejoins,
     scenario_an_idle_robot_joins_with_utility_zero_and_roles_dissolve,
+    scenario_a_completion_the_assigner_missed_is_reported_back,
 ]
 
 

@@ -85,6 +85,7 @@ def test_lf_is_deterministic(s1_resources) -> None:  # type: ignore[no-untyped-d
 
 def test_a_route_leaving_the_connection_area_is_detected(s1_resources) -> None:  # type: ignore[no-untyped-def]
     from mrcomm.agents.lf import LeaderFollowerExecutor
+    from mrcomm.agents.lf_route import route_leaves_connection
     from mrcomm.sim.mission import Mission
 
     mission = Mission(
@@ -96,8 +97,11 @@ def test_a_route_leaving_the_connection_area_is_detected(s1_resources) -> None: 
     follower.leader = "robot_2"
     leader = (20.0, 16.0)
     # SLT warns beyond 4 m: a route that swings 5 m away from the leader leaves the area.
-    assert follower._route_leaves_connection(((17.0, 16.0), (20.0, 21.0), (19.0, 16.0)), leader)
-    assert not follower._route_leaves_connection(((17.0, 16.0), (18.5, 17.0), (19.0, 16.0)), leader)
+    sensor = follower.link_sensor
+    swing = ((17.0, 16.0), (20.0, 21.0), (19.0, 16.0))
+    close = ((17.0, 16.0), (18.5, 17.0), (19.0, 16.0))
+    assert route_leaves_connection(sensor, "robot_2", swing, leader, 0.5, 0.0)
+    assert not route_leaves_connection(sensor, "robot_2", close, leader, 0.5, 0.0)
 
 
 def test_ssd_followers_take_direct_routes_and_missions_succeed(s1_resources) -> None:  # type: ignore[no-untyped-def]

@@ -21,6 +21,7 @@ from mrcomm.messaging.messages import (
     TaskState,
     TaskStatus,
 )
+from mrcomm.world.scenario import AssignerSpec
 
 #: A member silent this long is left out of pending messages, unless the behaviour's
 #: parameters say otherwise (``aon_lease``).
@@ -34,14 +35,35 @@ class AonStatuses(TaskExecutor):
     #: The statuses sent with AON.
     AON_STATES: ClassVar[frozenset[TaskState]] = frozenset({TaskState.SUCCESS})
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
+    def __init__(self, *args: Any, assigner: AssignerSpec | None = None, **kwargs: Any) -> None:
+        """``assigner``: where the task assigner is (the scenario's), so that a robot
+        can bring it a status it missed."""
         self.aon: AonEndpoint | None = None
+        self._assigner_host = (assigner.host or "") if assigner is not None else ""
+        self._assigner_at = assigner.position if assigner is not None else None
         super().__init__(*args, **kwargs)
         self.bus.subscribe(TOPIC_HEARTBEAT, self._on_heartbeat)
 
     def aon_settled(self) -> bool:
         """Nothing this robot sent with AON is still pending."""
         return self.aon is None or not self.aon.pending_ids()
+
+    def unreported(self) -> bool:
+        """Something this robot sent with AON was finished without the task assigner
+        (left out when its lease ran out) and has not reached it since."""
+        if self.aon is None:
+            return False
+        aon = self.aon
+        return any(
+            msg_id[0] == self.robot_id and self._assigner_id not in (aon.holders(msg_id) or ())
+            for msg_id in aon.left_out_ids()
+        )
+
+    def assigner_position(self) -> tuple[float, float] | None:
+        """Where the task assigner is: its base station, or where its robot was last
+        heard of (None: virtual, or its robot never heard)."""
+        host = self.team_view.poses.get(self._assigner_host)
+        return (host.x, host.y) if host is not None else self._assigner_at
 
     def send_status(self, task_id: str, state: TaskState) -> None:
         status = self.status_message(task_id, state)

@@ -2,7 +2,8 @@
 
 A hierarchical state machine: ``na`` is NB plus a network trigger; ``leader`` and
 ``follower`` are sub-machines; ``assigning`` collects utilities and roles;
-``regrouping`` drives back to the team's last known position when nobody answers.
+``regrouping`` drives back to the team's last known position when nobody answers;
+``reporting`` brings the task assigner a completion it missed.
 
 * Trigger: an NA robot whose link to a team mate (judged by its link sensor from the
   mate's last known pose) crosses the warning threshold stops, cancels its goal,
@@ -10,30 +11,32 @@ A hierarchical state machine: ``na`` is NB plus a network trigger; ``leader`` an
   newer round join it; an idle robot joins with utility 0 (so it follows) but never
   opens one.
 * Role assignment: every member publishes its utility at 4 Hz until it has every
-  member's; the highest utility leads (ties by the team-wide random order). Roles are
-  then published the same way. A role message settles the round for whoever still
+  member's; the highest utility leads (ties by the team-wide random order) — in a
+  round of more than ``group_size`` members the best ``ceil(n/group_size)`` lead and
+  the others follow the nearest (:mod:`mrcomm.agents.lf_groups`). Roles are then
+  published the same way. A role message settles the round for whoever still
   collects, and a member already past the round answers late utilities with its role,
   so no exchange waits on another; a timeout decides with what was collected.
 * Leader: drives to its closest task and holds while any of *its* followers' links is
   in warning (leader disconnect time); its followers are the mates whose poses say
   they follow it (or that named it leader this round and have not spoken since). With
-  ``hold_prediction`` it judges each follower where it should be by now (its last pose
-  moved towards the leader at its speed for the pose's age), so a hold ends when the
-  follower is back inside, not when a pose saying so gets through. With ``hold_grace``
-  it holds only once a follower has been in warning that long, so the group may stretch
-  to the communication limit and past it (a robot out of range regroups). On
-  completion it reports with AON and dissolves the roles.
+  ``hold_prediction`` it judges each follower where it should be by now
+  (:mod:`mrcomm.agents.lf_route`). With ``hold_grace`` it holds only once a follower
+  has been in warning that long, so the group may stretch to the communication limit
+  and past it (a robot out of range regroups). On completion it reports with AON and
+  dissolves the roles.
 * Follower: drives to the leader's last known position (moved on for its age with
   ``mate_extrapolation``), refreshing the goal as leader poses arrive (more often when
-  far), and waits there (follower waiting time). It
-  returns to NA when the leader's completion reaches it.
+  far), and waits there (follower waiting time). It returns to NA when the leader's
+  completion reaches it.
 * Task statuses go with AON (acknowledged all-or-nothing), to every robot and the
-  assigner.
+  assigner. With ``report_back`` (on in teams larger than a group) a robot with
+  nothing left to do whose completion the assigner missed goes to find it
+  (:mod:`mrcomm.agents.lf_report`).
 """
 
 from __future__ import annotations
 
-import itertools
 import math
 from typing import Any
 
@@ -42,6 +45,7 @@ from transitions.extensions import HierarchicalMachine
 from mrcomm.agents import agenda
 from mrcomm.agents.aon_statuses import AonStatuses
 from mrcomm.agents.collision import MateState
+from mrcomm.agents.lf_groups import nearest_leader, round_leaders
 from mrcomm.agents.lf_machine import (
     ACTIVITY_OF_FULL_STATE,
     LF_STATES,
@@ -49,6 +53,8 @@ from mrcomm.agents.lf_machine import (
     ROLE_OF_TOP_STATE,
     LfParams,
 )
+from mrcomm.agents.lf_report import ReportTour, report_places
+from mrcomm.agents.lf_route import direct_hop, predicted_follower
 from mrcomm.agents.link_chain import chain_links
 from mrcomm.agents.role_round import RoleRound
 from mrcomm.agents.utility import UtilityInputs, utility_function
@@ -97,6 +103,7 @@ class LeaderFollowerExecutor(AonStatuses):
         self._no_hold_until = 0.0  # hold_timeout: no new hold before this time
         super().__init__(*args, **kwargs)
         self.role_round = RoleRound(self.robot_id)
+        self.report_tour = ReportTour()
         self.bus.subscribe(TOPIC_UTILITY, self._on_utility)
         self.bus.subscribe(TOPIC_ROLE, self._on_role)
 
@@ -111,7 +118,7 @@ class LeaderFollowerExecutor(AonStatuses):
     def done(self) -> bool:
         """Agenda complete, back in NA, and every status finished with AON."""
         settled = self._t0 is not None and not self.agenda and self.state == NA_IDLE
-        return settled and self.aon_settled()
+        return settled and self.aon_settled() and not (self._reports_back() and self.unreported())
 
     def on_team_status(self, status: TaskStatus) -> None:
         super().on_team_status(status)
@@ -133,6 +140,10 @@ class LeaderFollowerExecutor(AonStatuses):
         ):
             self._next_monitor = self._now + self.params.pose_period
             self._monitor_links()
+        elif self.state == NA_IDLE and self._reports_back() and self.unreported():
+            self._follow_target = None  # the assigner missed a completion: report it
+            self.report_tour.reset()
+            self.trigger("report")
 
     def _monitor_links(self) -> None:
         pose = self.base.pose
@@ -200,15 +211,25 @@ class LeaderFollowerExecutor(AonStatuses):
         if self.role_round.has_every_role() or late:
             self._take_role()
 
-    def _decide(self) -> None:
+    def _decide(self, named: str | None = None) -> None:
+        """Settle the round with the utilities collected (:mod:`mrcomm.agents.lf_groups`):
+        lead, or follow the nearest leader; ``named`` is a leader a member's role message
+        named, counted as one."""
         if self.role_round.alone and self.team:
             self.trigger("regroup")  # nobody answered: go back towards the team
             return
-        best, utility = self.role_round.best(self._rank)
-        if utility <= 0.0:
+        leaders = round_leaders(self.role_round.scores, self._rank, self.lf.group_size)
+        if named is not None and named not in leaders:
+            leaders.append(named)
+        if not leaders:
             self._dissolve("no robot has work left")
             return
-        self._settle(best)
+        if self.robot_id in leaders:
+            self._settle(self.robot_id)
+            return
+        positions = {mate: (known.x, known.y) for mate, known in self.mates.items()}
+        pose = self.base.pose
+        self._settle(nearest_leader(leaders, positions, (pose.x, pose.y), self._rank))
 
     def _settle(self, leader: str) -> None:
         self.leader = leader
@@ -281,8 +302,11 @@ class LeaderFollowerExecutor(AonStatuses):
         if message.round != self.role_round.number or self.state != "assigning":
             return
         self.role_round.hear_role(message.sender, message.role, message.leader, self._now)
-        if self.leader is None:
-            self._settle(message.leader)  # decided by a member that had every score
+        if self.leader is None:  # decided by a member that had every score (or timed out)
+            if len(self.role_round.scores) <= self.lf.group_size:
+                self._settle(message.leader)  # one group: its leader is ours
+            else:
+                self._decide(named=message.leader)
 
     def _dissolve(self, reason: str) -> None:
         self.timeline.event(L.ROLES_DISSOLVED, self._now, reason=reason)
@@ -348,25 +372,10 @@ class LeaderFollowerExecutor(AonStatuses):
         )
 
     def _predicted_follower(self, known: MateState, pose: Pose) -> tuple[float, float]:
-        """Where a follower should be now (``hold_prediction``): a follower drives to its
-        leader, so its last pose is moved straight towards this robot at the speed it
-        had, for the pose's age (at most ``hold_prediction`` s), stopping at the follow
-        distance. The hold then ends on geometry — the follower back inside the warning
-        threshold — and not on the arrival of the one pose that says so, which under
-        loss may take seconds. A follower that had stopped is predicted where it stood.
-        Judged against straight-line travel: a follower that must go round a wall is
-        predicted closer than it is, and the leader may move on early by up to the
-        horizon's travel (0.26 m/s x horizon)."""
-        horizon = self.lf.hold_prediction
-        if horizon <= 0:
-            return known.x, known.y
+        """Where a follower should be now (:func:`mrcomm.agents.lf_route.predicted_follower`)."""
         age = max(0.0, self._now - self.team_view.stamps.get(known.robot, self._now))
-        dx, dy = pose.x - known.x, pose.y - known.y
-        gap = math.hypot(dx, dy)
-        travel = min(abs(known.v) * min(age, horizon), max(0.0, gap - self.lf.follow_distance))
-        if travel <= 0.0:
-            return known.x, known.y
-        return known.x + dx * travel / gap, known.y + dy * travel / gap
+        lf = self.lf
+        return predicted_follower(known, pose, age, lf.hold_prediction, lf.follow_distance)
 
     def _follows_me(self, mate: str) -> bool:
         """Whether this leader waits for ``mate``: its latest pose says it follows this
@@ -437,10 +446,6 @@ class LeaderFollowerExecutor(AonStatuses):
         known = self.team_view.known(self._now, None, self.params.mate_extrapolation).get(leader)
         return (known.x, known.y) if known is not None else None
 
-    def _in_leaders_way(self) -> bool:
-        leader = self.mates.get(self.leader or "")
-        return leader is not None and self.in_way_of(leader)
-
     def _step_follower_clearing(self) -> None:
         self._step_clearing()
         if self.leaf() != "clearing":
@@ -476,8 +481,9 @@ class LeaderFollowerExecutor(AonStatuses):
         target = self._leader_position()
         if target is None:
             return
-        if self._in_leaders_way():
-            self.step_aside(self.mates[self.leader or ""])
+        leader = self.mates.get(self.leader or "")
+        if leader is not None and self.in_way_of(leader):
+            self.step_aside(leader)
             return
         pose = self.base.pose
         distance = math.hypot(target[0] - pose.x, target[1] - pose.y)
@@ -501,40 +507,17 @@ class LeaderFollowerExecutor(AonStatuses):
 
     def _drive_towards_leader(self, target: tuple[float, float]) -> None:
         """Navigate to the leader's last known position, unless the follower is in the
-        connection area and the planned route would take it out (some point of the
-        route in warning from the leader): then drive straight at the leader instead,
-        one short hop at a time, where the straight line is open (the planner
-        must not route a follower out of range). Where it is not, the planned route is
-        the only way and is kept."""
-        pose = self.base.pose
+        connection area and the planned route would take it out: then one short
+        straight hop at the leader, where the straight line is open
+        (:func:`mrcomm.agents.lf_route.direct_hop`)."""
         leader = self.leader or ""
-        inside = not self.link_sensor.warning(leader, pose, *target, self._now)
-        route = self.base.make_plan(*target) if inside else None
-        if route is not None and self._route_leaves_connection(route, target):
-            dx, dy = target[0] - pose.x, target[1] - pose.y
-            distance = math.hypot(dx, dy)
-            scale = min(self.lf.direct_hop, distance) / max(distance, 1e-9)
-            hop = (pose.x + dx * scale, pose.y + dy * scale)
-            hop_route = self.base.make_plan(*hop)
-            straight = math.hypot(hop[0] - pose.x, hop[1] - pose.y)
-            if hop_route is not None and polyline_length(hop_route) <= 1.25 * straight + 0.1:
-                self.timeline.event(L.DIRECT_ROUTE, self._now, leader=leader)
-                self.base.navigate_to(*hop)
-                return
-        self.base.navigate_to(*target)
-
-    def _route_leaves_connection(
-        self, route: tuple[tuple[float, float], ...], leader: tuple[float, float]
-    ) -> bool:
-        leader_id = self.leader or ""
-        step = self.lf.route_check_step
-        for (x0, y0), (x1, y1) in itertools.pairwise(route):
-            n = max(1, math.ceil(math.hypot(x1 - x0, y1 - y0) / step))
-            for k in range(1, n + 1):
-                x, y = x0 + (x1 - x0) * k / n, y0 + (y1 - y0) * k / n
-                if self.link_sensor.warning(leader_id, Pose(x, y), *leader, self._now):
-                    return True
-        return False
+        hop = direct_hop(
+            self.base, self.link_sensor, leader, target, self.lf.route_check_step,
+            self.lf.direct_hop, self._now,
+        )  # fmt: skip
+        if hop is not None:
+            self.timeline.event(L.DIRECT_ROUTE, self._now, leader=leader)
+        self.base.navigate_to(*(hop or target))
 
     def _step_follower_waiting(self) -> None:
         if self.before_follower_step():
@@ -572,6 +555,30 @@ class LeaderFollowerExecutor(AonStatuses):
             if known:
                 self._follow_target = (known[0].x, known[0].y)
                 self.base.navigate_to(*self._follow_target)
+
+    # -- reporting back ------------------------------------------------------------------
+    def _reports_back(self) -> bool:
+        """``report_back``; by default on in a team larger than one group."""
+        back = self.lf.report_back
+        return len(self.team) + 1 > self.lf.group_size if back is None else back
+
+    def _step_reporting(self) -> None:
+        """Nothing left to do but the assigner missed a completion: go and find it
+        (:mod:`mrcomm.agents.lf_report`) until AON brings it up to date."""
+        if not self.unreported():
+            self.base.cancel()
+            self.trigger("reported")
+            self._select_next()
+            return
+        mates = {mate: (known.x, known.y) for mate, known in self.mates.items()}
+        places, order = report_places(mates, self.team_view.heard, self.assigner_position())
+        pose = self.base.pose
+        failed = self.base.status is NavStatus.ABORTED
+        target = self.report_tour.target((pose.x, pose.y), places, order, self._now, failed=failed)
+        aimed = self._follow_target
+        if target is not None and (aimed is None or math.dist(target, aimed) > 1.0):
+            self._follow_target = target
+            self.base.navigate_to(*target)
 
     def _in(self, top: str) -> bool:
         """Whether the robot is in ``top`` or one of its sub-states — what

@@ -47,16 +47,19 @@ LF_STATES: list[Any] = [
         ],
     },
     "regrouping",
+    "reporting",
 ]
 LF_TRANSITIONS: list[dict[str, Any]] = [
     {
         "trigger": "disconnect",
-        "source": ["na", "leader", "follower", "regrouping"],
+        "source": ["na", "leader", "follower", "regrouping", "reporting"],
         "dest": "assigning",
     },
     {"trigger": "become_leader", "source": "assigning", "dest": "leader"},
     {"trigger": "become_follower", "source": "assigning", "dest": "follower"},
     {"trigger": "regroup", "source": "assigning", "dest": "regrouping"},
+    {"trigger": "report", "source": "na", "dest": "reporting"},
+    {"trigger": "reported", "source": "reporting", "dest": "na"},
     {
         "trigger": "dissolve",
         "source": ["leader", "follower", "assigning", "regrouping"],
@@ -71,6 +74,7 @@ ACTIVITY_OF_FULL_STATE = {
     "follower_waiting": L.FOLLOWER_WAITING,
     "follower_clearing": L.MOVING,
     "regrouping": L.MOVING,
+    "reporting": L.MOVING,
 }
 ROLE_OF_TOP_STATE = {
     "na": L.ROLE_NA,
@@ -78,6 +82,7 @@ ROLE_OF_TOP_STATE = {
     "leader": L.ROLE_LEADER,
     "follower": L.ROLE_FOLLOWER,
     "regrouping": L.ROLE_REGROUPING,
+    "reporting": L.ROLE_NA,
 }
 
 
@@ -95,6 +100,21 @@ class LfParams(ExecutorParams):
             raise ValueError(f"unknown utility {name!r}; choose from {', '.join(utility_names())}")
         return name
 
+    group_size: int = parameter(
+        4,
+        "most robots in one group: a role round of n members elects ceil(n/group_size) "
+        "leaders and every other member follows the nearest (a team of at most this many "
+        "is one group, as the original)",
+        "robots",
+        ge=1,
+    )
+    report_back: bool | None = parameter(
+        None,
+        "a robot with nothing left to do whose completions the task assigner missed (AON "
+        "left it out) goes to find the assigner until it has them (false: it stops, as "
+        "the original, and the statuses count as lost; null: on in teams of more than "
+        "group_size robots)",
+    )
     announce_period: float = parameter(
         0.25, "utilities and roles are published this often (4 Hz)", "s", gt=0
     )

@@ -78,6 +78,7 @@ from mrcomm.net.zenoh_config import check_key_chunk
 from mrcomm.net.zenoh_node import Incoming, Presence, ZenohNode
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.wiring import (
+    aon_options,
     build_link_sensor,
     build_network,
     build_radio_links,
@@ -203,15 +204,12 @@ class AgentProcess:
                 tie_break_rank=rank_of.__getitem__,
                 link_sensor=sensor,
                 incarnation=incarnation,
+                **aon_options(executor_class, self.scenario.assigner),
             )
-            if (
-                settings.lease is not None
-                and "aon_lease" in type(self.executor.params).model_fields
-            ):
-                # The LF executor reads its AON lease when its assignment arrives.
-                self.executor.params = self.executor.params.model_copy(
-                    update={"aon_lease": settings.lease}
-                )
+            # The LF executor reads its AON lease when its assignment arrives.
+            params = self.executor.params
+            if settings.lease is not None and "aon_lease" in type(params).model_fields:
+                self.executor.params = params.model_copy(update={"aon_lease": settings.lease})
             self.tail = TimelineTail(timeline, self.journal)
             self.resync = Resync(self.executor, endpoint, self._request_sync, wait=SYNC_WAIT)
         self.assigner: TaskAssigner | None = None

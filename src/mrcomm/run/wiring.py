@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.agents.commands import OPERATOR_ID
@@ -26,7 +26,7 @@ from mrcomm.robot.variation import VariationParams, robot_variations
 from mrcomm.run.config import RunConfig
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.seeding import stream
-from mrcomm.world.scenario import Scenario
+from mrcomm.world.scenario import AssignerSpec, Scenario
 
 if TYPE_CHECKING:
     from mrcomm.agents.executor import TaskExecutor
@@ -63,8 +63,10 @@ def build_executor(
     tie_break_rank: Callable[[str], float],
     link_sensor: LinkSensor,
     incarnation: int = 1,
+    assigner: AssignerSpec | None = None,
 ) -> TaskExecutor:
-    """One robot's task executor: the chosen behaviour with its parameters."""
+    """One robot's task executor: the chosen behaviour with its parameters (and, for
+    one that sends with AON, where the task assigner is)."""
     cls: type[TaskExecutor] = config.spec("behaviour").load()
     return cls(
         bus,
@@ -74,7 +76,14 @@ def build_executor(
         link_sensor=link_sensor,
         params=config.variant_params("behaviour"),
         incarnation=incarnation,
+        **aon_options(cls, assigner),
     )
+
+
+def aon_options(cls: type[TaskExecutor], assigner: AssignerSpec | None) -> dict[str, Any]:
+    """What an executor class takes beyond the common arguments: where the task
+    assigner is, for one whose statuses go with AON."""
+    return {"assigner": assigner} if cls.uses_aon and assigner is not None else {}
 
 
 def esd_trace_path(config: RunConfig) -> Path | None:

@@ -1,0 +1,48 @@
+"""LF in groups on the bundled 10-robot office (S2): a round of ten elects several
+leaders, each followed by the robots nearest it; a group size of the whole team is the
+original single leader."""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from mrcomm.metrics import labels as L
+from mrcomm.run.config import make_config
+from mrcomm.sim.mission import run_mission
+
+S2 = Path(__file__).resolve().parents[2] / "data" / "scenarios" / "s2" / "s2.yaml"
+
+
+def first_round(group_size: int) -> dict[str, str]:
+    """Who each robot follows (or leads) after the first role round of S2 · LF."""
+    config = make_config(
+        None, scenario=S2, behaviour="lf", network="ah", threshold="slt", seed=1,
+        max_time=20.0, params={"behaviour": {"group_size": group_size}},
+    )  # fmt: skip
+    result = run_mission(config)
+    leader_of: dict[str, str] = {}
+    for robot, timeline in result.timelines.items():
+        assigned = [e for e in timeline.events if e.label == L.ROLE_ASSIGNED]
+        assert assigned, f"{robot} took no role in 20 s"
+        first: Any = assigned[0]
+        assert first.data["round"] == 1
+        leader_of[robot] = first.data["leader"]
+    return leader_of
+
+
+@pytest.mark.slow
+def test_ten_robots_in_groups_of_four_get_three_leaders() -> None:
+    leader_of = first_round(4)
+    groups: dict[str, list[str]] = defaultdict(list)
+    for robot, leader in leader_of.items():
+        groups[leader].append(robot)
+    assert len(groups) == 3, groups  # ceil(10 / 4)
+    for leader, members in groups.items():
+        assert leader in members  # every leader leads itself
+        assert len(members) >= 2  # and someone follows it
+    # The original rule: one leader for the whole team.
+    assert len(set(first_round(10).values())) == 1
