@@ -57,3 +57,28 @@ def test_the_grace_doubles_with_each_repeat() -> None:
     # 3 s, then doubled for a repeat within the 5 s window; the next comes after the
     # 6 s grace, outside the window: back to 3 s.
     assert graces == [params.resume_grace, 2 * params.resume_grace, params.resume_grace]
+
+
+def test_a_pose_already_moved_on_from_does_not_stop_the_robot_again() -> None:
+    """A mate last heard long ago stops the robot once; the same pose (nothing newer
+    heard) never again, however often the grace runs out; news of it does."""
+    params = ExecutorParams()
+    avoidance = Avoidance("robot_1", params, RANK)
+    ghost = coming(goal_dist=0.5)._replace(stamp=5.0)  # heard at 5 s, not since
+    assert avoidance.detect(HERE, [ghost], 100.0, lambda: 9.0) is not None
+    assert not avoidance.right_of_way
+    mates = {"robot_2": ghost}
+    moved_on = 100.0 + params.give_way_timeout
+    assert avoidance.may_resume(lambda: HERE, mates, moved_on, 100.0)  # gave up waiting
+    after_grace = moved_on + params.max_grace + 1.0
+    assert avoidance.detect(HERE, [ghost], after_grace, lambda: 9.0) is None
+    heard_again = ghost._replace(stamp=after_grace - 0.1)
+    assert avoidance.detect(HERE, [heard_again], after_grace, lambda: 9.0) is not None
+
+
+def test_a_pose_of_unknown_age_is_always_news() -> None:
+    avoidance = Avoidance("robot_1", ExecutorParams(), RANK)
+    mate = coming(goal_dist=9.0)  # no stamp
+    assert avoidance.detect(HERE, [mate], 0.0, lambda: 1.0) is not None
+    assert avoidance.may_resume(lambda: HERE, {"robot_2": mate}, 1.0, 0.0)
+    assert avoidance.detect(HERE, [mate], 1.0 + 30.0, lambda: 1.0) is not None

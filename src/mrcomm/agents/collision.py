@@ -52,6 +52,9 @@ class MateState(NamedTuple):
     theta: float
     v: float
     goal_dist: float  # -1 when it has no goal
+    #: When the mate sent this pose (mission clock); NaN when unknown (never equal to
+    #: another stamp: such a pose always counts as news).
+    stamp: float = math.nan
 
 
 def classify(own: Pose, mate: MateState, params: CollisionParams) -> str | None:
