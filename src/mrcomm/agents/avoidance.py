@@ -9,6 +9,16 @@ The rules, beyond right of way (collision.py):
   *repeat*, a conflict with the same mate within ``repeat_window`` s of the last one:
   pausing again and again for the same mate means the bases are jammed, so navigation's
   re-planning and stuck recovery get longer each time before the next pause.
+* **Knots** (teams of more than two meeting at a door or in a corridor). A robot can
+  pause in turn for two or more mates, each pause starting right after it moved on from
+  the last, so no mate repeats within its window and the grace never grows. So pauses
+  are also counted per robot, whoever the mate: a pause that starts within
+  ``repeat_window`` s of moving on extends the robot's run of pauses in a row. A robot
+  that has paused more than ``knot_pauses`` times in a row is in a knot: its grace
+  doubles for each pause beyond that, whichever mate the pause was for, until the
+  graces overlap and the bases, re-planning around each other, untangle the knot.
+  Encounters of two or three robots end within a few pauses and are left as they were:
+  the longest run in the 3-robot S1 reference runs (tests/golden) is 4, the default.
 * **No news, no second pause.** A mate's pose that the robot has already moved on from
   (the same message: nothing newer heard from the mate since) cannot stop it again:
   a mate last heard long ago, then out of range, would otherwise stop the robot every
@@ -53,6 +63,9 @@ class Avoidance:
         self._repeats: dict[str, int] = {}
         #: mate -> the stamp of the pose the robot last moved on from.
         self._passed: dict[str, float] = {}
+        self._last_resume = -float("inf")
+        #: Pauses in a row, whoever the mate, each soon after moving on (1: the first).
+        self.pauses_in_row = 0
 
     def detect(
         self,
@@ -79,10 +92,13 @@ class Avoidance:
             kind = classify(pose, mate, collision)
             if kind is None:
                 continue
+            window = self.params.repeat_window
             previous = self._last_conflict.get(mate.robot)
-            repeat = previous is not None and now - previous < self.params.repeat_window
+            repeat = previous is not None and now - previous < window
             self._last_conflict[mate.robot] = now
             self._repeats[mate.robot] = self._repeats.get(mate.robot, 0) + 1 if repeat else 0
+            in_row = now - self._last_resume < window
+            self.pauses_in_row = self.pauses_in_row + 1 if in_row else 1
             self.mate = mate.robot
             self._clear_since = None
             self.right_of_way = has_right_of_way(
@@ -93,9 +109,11 @@ class Avoidance:
 
     def grace(self) -> float:
         """The grace given to the current mate when the robot moves on: doubled for each
-        repeat with that mate."""
+        repeat with that mate, or for each pause in a row beyond ``knot_pauses``."""
         params = self.params
-        doublings = self._repeats.get(self.mate or "", 0)
+        doublings = max(
+            self._repeats.get(self.mate or "", 0), self.pauses_in_row - params.knot_pauses
+        )
         return min(params.resume_grace * 2**doublings, params.max_grace)
 
     def may_resume(
@@ -118,6 +136,7 @@ class Avoidance:
                 self._clear_since = now
             if now - self._clear_since < params.clear_time:
                 return False
+        self._last_resume = now
         if self.mate is not None:
             self._grace_until[self.mate] = now + self.grace()
             passed = mates.get(self.mate)
