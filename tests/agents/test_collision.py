@@ -1,5 +1,6 @@
 """Near-collision geometry and right of way (SPEC §4)."""
 
+import itertools
 import math
 
 from mrcomm.agents.collision import (
@@ -66,3 +67,17 @@ def test_both_robots_agree_on_right_of_way_including_ties() -> None:
 def test_mate_without_goal_yields() -> None:
     assert has_right_of_way(8.0, -1.0, 1, 0)
     assert not has_right_of_way(-1.0, 8.0, 0, 1)
+
+
+def test_right_of_way_cannot_cycle_among_three_or_more_robots() -> None:
+    """With the same information every pair agrees, and the order is transitive: no
+    three robots can each yield to the next (goal distances with ties and robots
+    without a goal; ranks distinct, as the team-wide order gives them)."""
+    goals = [-1.0, 1.0, 2.0, 2.0, 5.0]
+    robots = [(g, float(r)) for r, g in enumerate(goals)]
+    for a, b, c in itertools.permutations(robots, 3):
+        a_b = has_right_of_way(a[0], b[0], a[1], b[1])
+        b_c = has_right_of_way(b[0], c[0], b[1], c[1])
+        c_a = has_right_of_way(c[0], a[0], c[1], a[1])
+        assert not (a_b and b_c and c_a), (a, b, c)
+        assert not (not a_b and not b_c and not c_a), (a, b, c)

@@ -1,8 +1,29 @@
 """Collision avoidance between team mates, as one part of an executor: which mate's
 pose puts it in the robot's danger zone, who has right of way, when the robot may move
-on, and the growing grace that breaks livelocks (pausing again and again for the same
-mate means the bases are jammed: navigation's re-planning and stuck recovery get longer
-each time before the next pause)."""
+on, and the growing grace that breaks livelocks.
+
+The rules, beyond right of way (collision.py):
+
+* **Grace.** Moving on from a conflict starts a grace with that mate: no new conflict
+  with it for ``resume_grace`` s. The grace doubles (up to ``max_grace``) with each
+  *repeat*, a conflict with the same mate within ``repeat_window`` s of the last one:
+  pausing again and again for the same mate means the bases are jammed, so navigation's
+  re-planning and stuck recovery get longer each time before the next pause.
+* **Knots** (teams of more than two meeting at a door or in a corridor). A robot can
+  pause in turn for two or more mates, each pause starting right after it moved on from
+  the last, so no mate repeats within its window and the grace never grows. So pauses
+  are also counted per robot, whoever the mate: a pause that starts within
+  ``repeat_window`` s of moving on extends the robot's run of pauses in a row. A robot
+  that has paused more than ``knot_pauses`` times in a row is in a knot: its grace
+  doubles for each pause beyond that, whichever mate the pause was for, until the
+  graces overlap and the bases, re-planning around each other, untangle the knot.
+  Encounters of two or three robots end within a few pauses and are left as they were:
+  the longest run in the 3-robot S1 reference runs (tests/golden) is 4, the default.
+* **No news, no second pause.** A mate's pose that the robot has already moved on from
+  (the same message: nothing newer heard from the mate since) cannot stop it again:
+  a mate last heard long ago, then out of range, would otherwise stop the robot every
+  time the grace runs out while it passes the place where the mate was.
+"""
 
 from __future__ import annotations
 
@@ -40,6 +61,11 @@ class Avoidance:
         self._grace_until: dict[str, float] = {}
         self._last_conflict: dict[str, float] = {}
         self._repeats: dict[str, int] = {}
+        #: mate -> the stamp of the pose the robot last moved on from.
+        self._passed: dict[str, float] = {}
+        self._last_resume = -float("inf")
+        #: Pauses in a row, whoever the mate, each soon after moving on (1: the first).
+        self.pauses_in_row = 0
 
     def detect(
         self,
@@ -48,8 +74,9 @@ class Avoidance:
         now: float,
         goal_distance: Callable[[], float],
     ) -> Conflict | None:
-        """The first mate in conflict with ``pose`` (outside its grace), which becomes
-        the current conflict with right of way decided; None when there is none."""
+        """The first mate in conflict with ``pose`` (outside its grace, and not a pose
+        already moved on from), which becomes the current conflict with right of way
+        decided; None when there is none."""
         collision = self.params.collision
         # Beyond this along either axis no mate can be in conflict (classify would say
         # so): skipped without a call, which matters when the team is large.
@@ -60,13 +87,18 @@ class Avoidance:
                 continue
             if self._grace_until.get(mate.robot, -1.0) > now:
                 continue
+            if self._passed.get(mate.robot) == mate.stamp:
+                continue  # no news from it since the robot moved on from this pose
             kind = classify(pose, mate, collision)
             if kind is None:
                 continue
+            window = self.params.repeat_window
             previous = self._last_conflict.get(mate.robot)
-            repeat = previous is not None and now - previous < self.params.repeat_window
+            repeat = previous is not None and now - previous < window
             self._last_conflict[mate.robot] = now
             self._repeats[mate.robot] = self._repeats.get(mate.robot, 0) + 1 if repeat else 0
+            in_row = now - self._last_resume < window
+            self.pauses_in_row = self.pauses_in_row + 1 if in_row else 1
             self.mate = mate.robot
             self._clear_since = None
             self.right_of_way = has_right_of_way(
@@ -74,6 +106,15 @@ class Avoidance:
             )
             return Conflict(mate.robot, kind, repeat)
         return None
+
+    def grace(self) -> float:
+        """The grace given to the current mate when the robot moves on: doubled for each
+        repeat with that mate, or for each pause in a row beyond ``knot_pauses``."""
+        params = self.params
+        doublings = max(
+            self._repeats.get(self.mate or "", 0), self.pauses_in_row - params.knot_pauses
+        )
+        return min(params.resume_grace * 2**doublings, params.max_grace)
 
     def may_resume(
         self, pose: Callable[[], Pose], mates: Mapping[str, MateState], now: float, since: float
@@ -95,8 +136,10 @@ class Avoidance:
                 self._clear_since = now
             if now - self._clear_since < params.clear_time:
                 return False
+        self._last_resume = now
         if self.mate is not None:
-            repeats = self._repeats.get(self.mate, 0)
-            grace = min(params.resume_grace * 2**repeats, params.max_grace)
-            self._grace_until[self.mate] = now + grace
+            self._grace_until[self.mate] = now + self.grace()
+            passed = mates.get(self.mate)
+            if passed is not None:
+                self._passed[self.mate] = passed.stamp
         return True

@@ -8,7 +8,11 @@
 * Event horizon: a small circle around the footprint; any team mate inside it, whatever
   its heading, is a near collision.
 * Right of way: the robot closer to its own goal goes first; a mate without a goal
-  yields; exact ties are broken by a team-wide random order.
+  yields; exact ties are broken by a team-wide random order. For the same information
+  this is a strict total order of the team (goal distance, then rank), so it cannot
+  cycle among three or more robots; robots that judge from different pose ages can
+  still disagree, and a knot of robots that each yield to the next is undone by the
+  growing grace of avoidance.py, not here.
 """
 
 from __future__ import annotations
@@ -52,6 +56,9 @@ class MateState(NamedTuple):
     theta: float
     v: float
     goal_dist: float  # -1 when it has no goal
+    #: When the mate sent this pose (mission clock); NaN when unknown (never equal to
+    #: another stamp: such a pose always counts as news).
+    stamp: float = math.nan
 
 
 def classify(own: Pose, mate: MateState, params: CollisionParams) -> str | None:

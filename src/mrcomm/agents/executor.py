@@ -14,10 +14,8 @@ Communication-aware behaviours subclass this executor (LF encloses NB).
 
 from __future__ import annotations
 
-import logging
 import math
-from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict, Field
@@ -27,7 +25,7 @@ from mrcomm.agents import agenda
 from mrcomm.agents.avoidance import Avoidance
 from mrcomm.agents.collision import CollisionParams, MateState
 from mrcomm.agents.commands import CommandInbox, command_team
-from mrcomm.agents.machine_table import StateEntry, build_table
+from mrcomm.agents.machine_table import StateEntry, build_table, quiet_rebinding
 from mrcomm.agents.team_view import TeamView
 from mrcomm.messaging.messages import (
     TOPIC_ASSIGNMENT,
@@ -111,6 +109,12 @@ class ExecutorParams(BaseModel):
     repeat_window: float = parameter(
         5.0, "near collisions with the same mate within this window are repeats", "s", ge=0
     )
+    knot_pauses: int = parameter(
+        4,
+        "more pauses in a row than this, each soon after moving on, whoever the mate, "
+        "make a knot: the grace doubles for each one beyond (agents/avoidance.py)",
+        ge=1,
+    )
     # What a robot knows of its mates ages: these two say how it treats an old pose.
     # The defaults are the original robots' (a mate's last pose is used however old).
     mate_max_age: float | None = parameter(
@@ -136,20 +140,6 @@ class ExecutorParams(BaseModel):
     )
     make_way_step: float = parameter(1.5, "how far it steps aside", "m", gt=0)
     make_way_timeout: float = parameter(6.0, "it gives up stepping aside after", "s", gt=0)
-
-
-@contextmanager
-def _quiet_rebinding() -> Iterator[None]:
-    """Nested sub-machines share trigger names (``conflict``, ``resume``...); the first
-    binding already dispatches on the current state, so transitions' warning that it
-    skips re-binding them is noise. Silence it while a machine is built, only."""
-    logger = logging.getLogger("transitions.core")
-    level = logger.level
-    logger.setLevel(logging.ERROR)
-    try:
-        yield
-    finally:
-        logger.setLevel(level)
 
 
 class TaskExecutor:
@@ -211,7 +201,7 @@ class TaskExecutor:
         self._clearing_goals: list[tuple[float, float]] = []
         self._execute_until = 0.0
         self._agenda_reported = False
-        with _quiet_rebinding():
+        with quiet_rebinding():
             self.machine = self.machine_class(
                 model=self,
                 states=self.states,

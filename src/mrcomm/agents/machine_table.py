@@ -9,11 +9,14 @@ that steps it: ``_step_<full name>`` if the class has one (``_step_leader_holdin
 else ``_step_<leaf>`` (NB's ``_step_navigating`` serves LF's ``leader_navigating``).
 A leaf state without a handler must be declared passive; a ``_step_`` method that no
 state uses is an error — both raised when the class is defined, not mid-mission.
+(:func:`quiet_rebinding` keeps building a nested machine quiet.)
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+import logging
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -80,3 +83,17 @@ def build_table(cls: type, states: Iterable[Any], passive: frozenset[str]) -> di
     if unused:
         raise TypeError(f"{cls.__name__}: handlers for no state: {', '.join(unused)}")
     return table
+
+
+@contextmanager
+def quiet_rebinding() -> Iterator[None]:
+    """Nested sub-machines share trigger names (``conflict``, ``resume``...); the first
+    binding already dispatches on the current state, so transitions' warning that it
+    skips re-binding them is noise. Silence it while a machine is built, only."""
+    logger = logging.getLogger("transitions.core")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)

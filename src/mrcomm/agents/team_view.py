@@ -30,7 +30,13 @@ def mate_state(message: PoseMsg) -> MateState:
     if last is message and state is not None:
         return state
     state = MateState(
-        message.sender, message.x, message.y, message.theta, message.v, message.goal_dist
+        message.sender,
+        message.x,
+        message.y,
+        message.theta,
+        message.v,
+        message.goal_dist,
+        message.stamp,
     )
     _last_state = (message, state)
     return state
