@@ -417,3 +417,56 @@ def test_a_leader_whose_task_is_reassigned_dissolves_its_group() -> None:
     assert not h.agent._in("leader") and h.agent.leader is None
     assert "t" not in [t.task_id for t in h.agent.agenda]
     assert L.ROLES_DISSOLVED in [e.label for e in h.timeline.events]
+
+
+# -- groups ----------------------------------------------------------------------------------
+
+
+def _grouped(group_size: int) -> Harness:
+    return Harness(
+        LeaderFollowerExecutor,
+        link_sensor=DistanceSensor(4.0),
+        params=LfParams(group_size=group_size),
+    )
+
+
+def test_in_a_round_larger_than_a_group_the_best_two_lead() -> None:
+    """Three members, groups of two: robot_2 (utility 50) and robot_1 (its own small
+    utility) lead; robot_3, without work, does not. In one group of three, robot_1
+    follows robot_2, as the original."""
+    for group_size, expected in ((2, "leader_navigating"), (3, "follower_following")):
+        h = _grouped(group_size)
+        disconnect(h)
+        deliver(h, TOPIC_UTILITY, utility("robot_2", 50.0))
+        deliver(h, TOPIC_UTILITY, utility("robot_3", 0.0))
+        h.step()
+        leader = "robot_1" if group_size == 2 else "robot_2"
+        assert h.agent.leader == leader
+        deliver(h, TOPIC_ROLE, role("robot_2", "robot_2"))
+        deliver(h, TOPIC_ROLE, role("robot_3", "robot_2"))
+        assert h.step() == expected
+
+
+def test_settled_by_a_role_message_a_member_still_counts_its_own_leaders() -> None:
+    """robot_3's role names robot_2 before robot_1 has decided: in a round larger than
+    a group robot_1 decides with what it has (robot_2 counted as a leader) and, being
+    among the best two, leads itself; in one group it adopts robot_2."""
+    for group_size, leader in ((2, "robot_1"), (3, "robot_2")):
+        h = _grouped(group_size)
+        disconnect(h)
+        deliver(h, TOPIC_UTILITY, utility("robot_2", 50.0))
+        deliver(h, TOPIC_ROLE, role("robot_3", "robot_2"))
+        assert h.agent.leader == leader
+
+
+def test_a_follower_whose_leader_follows_another_leaves_the_roles() -> None:
+    """Members deciding on different utilities may follow a robot that does not lead:
+    its own poses, saying it follows someone else, make the follower dissolve its
+    roles (and the next round sorts the groups out) instead of following it for ever."""
+    h = lf()
+    follow(h)
+    h.hear(pose_of("robot_2", 3.0, 0.0, role=L.ROLE_FOLLOWER, leader="robot_3"))
+    h.step(times=2)
+    assert h.agent.state.startswith("na_")
+    dissolved = [e for e in h.timeline.events if e.label == L.ROLES_DISSOLVED]
+    assert dissolved[-1].data["reason"] == "leader no longer leads"
