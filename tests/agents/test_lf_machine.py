@@ -216,8 +216,14 @@ def scenario_a_completion_the_assigner_missed_is_reported_back(h: Harness) -> No
     h.step(times=2)
     assert h.agent.state == "na_idle" and not h.agent.done  # AON still waits for it
     h.step(times=60)  # 6 s without the assigner: left out, and robot_1 goes to find it
-    assert h.agent.state == "reporting" and h.base.goal == (0.0, -8.0)
+    assert h.agent.state == "reporting_navigating" and h.base.goal == (0.0, -8.0)
     assert not h.agent.done
+    # On the way it avoids its mates like any driving robot.
+    h.hear(pose_of("robot_3", 1.3, 0.0, math.pi))  # inside the event horizon
+    assert h.step() == "reporting_avoiding"
+    h.hear(pose_of("robot_3", 9.0, 9.0))
+    h.step(times=40)
+    assert h.agent.state == "reporting_navigating" and h.base.goal == (0.0, -8.0)
     heartbeat()  # in reach again: AON re-sends, the assigner acknowledges
     for _ in range(20):
         for message in h.bus.published(TOPIC_AON):
@@ -259,7 +265,7 @@ def test_every_lf_transition_is_taken_by_these_tests() -> None:
         taken += harness.taken
     missing = untaken(LF_TRANSITIONS, taken)
     for state in LF_STATES:
-        if isinstance(state, dict) and state["name"] in ("leader", "follower"):
+        if isinstance(state, dict) and state["name"] in ("leader", "follower", "reporting"):
             missing += untaken(state["transitions"], taken, prefix=state["name"] + "_")
     assert not missing, missing
 
@@ -470,3 +476,32 @@ def test_a_follower_whose_leader_follows_another_leaves_the_roles() -> None:
     assert h.agent.state.startswith("na_")
     dissolved = [e for e in h.timeline.events if e.label == L.ROLES_DISSOLVED]
     assert dissolved[-1].data["reason"] == "leader no longer leads"
+
+
+def test_in_groups_a_follower_stops_waiting_for_a_leader_it_no_longer_hears() -> None:
+    """robot_1 follows robot_3 (the nearer of two leaders) and waits where it was; robot_3
+    is never heard again (it may have finished out of range). In groups, after
+    lost_timeout the follower leaves the roles; in the original it waits on."""
+    for group_size, lost in ((2, True), (3, False)):
+        h = _grouped(group_size)
+        disconnect(h)
+        deliver(h, TOPIC_UTILITY, utility("robot_2", 50.0))
+        deliver(h, TOPIC_UTILITY, utility("robot_3", 40.0))
+        h.step()
+        deliver(h, TOPIC_ROLE, role("robot_2", "robot_2"))
+        deliver(h, TOPIC_ROLE, role("robot_3", "robot_3" if group_size == 2 else "robot_2"))
+        h.step()
+        if group_size == 2:
+            assert h.agent.leader == "robot_3"  # two leaders: the nearer one
+        assert h.agent.state == "follower_following"
+        h.step(times=3)
+        h.base.arrive()
+        h.step(times=3)
+        assert h.agent.state == "follower_waiting", (h.agent.state, h.base.goals)
+        give_up = h.agent.team_view.heard["robot_3"] + h.agent.lf.lost_timeout
+        h.step(times=round((give_up - 0.5 - h.now) / 0.1))
+        assert h.agent.state == "follower_waiting"  # not yet
+        h.step(times=10)
+        reasons = [e.data["reason"] for e in h.timeline.events if e.label == L.ROLES_DISSOLVED]
+        assert ("leader lost" in reasons) is lost
+        assert (h.agent.state == "follower_waiting") is not lost, h.agent.state

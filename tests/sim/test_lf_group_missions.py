@@ -46,3 +46,17 @@ def test_ten_robots_in_groups_of_four_get_three_leaders() -> None:
         assert len(members) >= 2  # and someone follows it
     # The original rule: one leader for the whole team.
     assert len(set(first_round(10).values())) == 1
+
+
+@pytest.mark.slow
+def test_ten_robots_in_groups_complete_and_every_status_reaches_the_assigner() -> None:
+    """S2 · LF · AH · SLT · SPL 25 · seed 1: one leader for ten robots reached the time
+    limit with 3 of 20 tasks; in groups, with reporting back, it completes every task
+    and every completion reaches the assigner (on robot_1) well within the limit."""
+    config = make_config(
+        None, scenario=S2, behaviour="lf", network="ah", threshold="slt", spl=25, seed=1
+    )
+    mission = run_mission(config).summary()["mission"]
+    assert not mission["timed_out"]
+    assert mission["successful"] and mission["tasks_completed"] == 20
+    assert mission["end_time"] < 1500.0

@@ -12,6 +12,7 @@ from __future__ import annotations
 from typing import Any, ClassVar
 
 from mrcomm.agents.executor import TaskExecutor
+from mrcomm.agents.report_tour import ReportTour, report_places
 from mrcomm.messaging.aon import AonEndpoint, MessageId
 from mrcomm.messaging.messages import (
     TOPIC_HEARTBEAT,
@@ -21,8 +22,11 @@ from mrcomm.messaging.messages import (
     TaskState,
     TaskStatus,
 )
+from mrcomm.ports import NavStatus
 from mrcomm.world.scenario import AssignerSpec
 
+#: A robot's last known position counts as where the assigner on it is for this long (s).
+HOST_FRESH = 30.0
 #: A member silent this long is left out of pending messages, unless the behaviour's
 #: parameters say otherwise (``aon_lease``).
 DEFAULT_AON_LEASE = 60.0
@@ -35,12 +39,21 @@ class AonStatuses(TaskExecutor):
     #: The statuses sent with AON.
     AON_STATES: ClassVar[frozenset[TaskState]] = frozenset({TaskState.SUCCESS})
 
-    def __init__(self, *args: Any, assigner: AssignerSpec | None = None, **kwargs: Any) -> None:
-        """``assigner``: where the task assigner is (the scenario's), so that a robot
-        can bring it a status it missed."""
+    def __init__(
+        self,
+        *args: Any,
+        assigner: AssignerSpec | None = None,
+        assigner_home: tuple[float, float] | None = None,
+        **kwargs: Any,
+    ) -> None:
+        """``assigner``: where the task assigner is (the scenario's), and
+        ``assigner_home`` the start of the robot it runs on, so that a robot can bring
+        it a status it missed."""
         self.aon: AonEndpoint | None = None
+        self.report_tour = ReportTour()
         self._assigner_host = (assigner.host or "") if assigner is not None else ""
         self._assigner_at = assigner.position if assigner is not None else None
+        self.assigner_home = assigner_home
         super().__init__(*args, **kwargs)
         self.bus.subscribe(TOPIC_HEARTBEAT, self._on_heartbeat)
 
@@ -60,10 +73,27 @@ class AonStatuses(TaskExecutor):
         )
 
     def assigner_position(self) -> tuple[float, float] | None:
-        """Where the task assigner is: its base station, or where its robot was last
-        heard of (None: virtual, or its robot never heard)."""
-        host = self.team_view.poses.get(self._assigner_host)
-        return (host.x, host.y) if host is not None else self._assigner_at
+        """Where the task assigner is: its base station; or its robot's last known
+        position while that is fresh (heard within ``HOST_FRESH`` s), else that robot's
+        home, where it waits once its own work is done (None: virtual)."""
+        host = self._assigner_host
+        known = self.team_view.poses.get(host)
+        if known is not None and self.team_view.age(host, self._now) <= HOST_FRESH:
+            return (known.x, known.y)
+        return self._assigner_at or self.assigner_home
+
+    def hosts_assigner(self) -> bool:
+        """This robot carries the task assigner."""
+        return self.robot_id == self._assigner_host
+
+    def report_target(self) -> tuple[float, float] | None:
+        """Where to go next to bring the assigner a status it missed: the next place
+        of the report tour (:mod:`mrcomm.agents.report_tour`)."""
+        mates = {mate: (known.x, known.y) for mate, known in self.mates.items()}
+        places, order = report_places(mates, self.team_view.heard, self.assigner_position())
+        pose = self.base.pose
+        failed = self.base.status is NavStatus.ABORTED
+        return self.report_tour.target((pose.x, pose.y), places, order, self._now, failed=failed)
 
     def send_status(self, task_id: str, state: TaskState) -> None:
         status = self.status_message(task_id, state)

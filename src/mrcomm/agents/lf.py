@@ -32,7 +32,7 @@ A hierarchical state machine: ``na`` is NB plus a network trigger; ``leader`` an
 * Task statuses go with AON (acknowledged all-or-nothing), to every robot and the
   assigner. With ``report_back`` (on in teams larger than a group) a robot with
   nothing left to do whose completion the assigner missed goes to find it
-  (:mod:`mrcomm.agents.lf_report`).
+  (:mod:`mrcomm.agents.report_tour`).
 """
 
 from __future__ import annotations
@@ -53,7 +53,6 @@ from mrcomm.agents.lf_machine import (
     ROLE_OF_TOP_STATE,
     LfParams,
 )
-from mrcomm.agents.lf_report import ReportTour, report_places
 from mrcomm.agents.lf_route import direct_hop, predicted_follower
 from mrcomm.agents.link_chain import chain_links
 from mrcomm.agents.role_round import RoleRound
@@ -74,6 +73,7 @@ from mrcomm.ports import NavStatus
 from mrcomm.world.geometry import Pose, polyline_length
 
 NA_IDLE = "na_idle"  # transitions' name of NA's idle state
+HOME_REACH = 1.0  # m: the assigner's robot is home this close to its start
 
 
 class LeaderFollowerExecutor(AonStatuses):
@@ -103,7 +103,6 @@ class LeaderFollowerExecutor(AonStatuses):
         self._no_hold_until = 0.0  # hold_timeout: no new hold before this time
         super().__init__(*args, **kwargs)
         self.role_round = RoleRound(self.robot_id)
-        self.report_tour = ReportTour()
         self.bus.subscribe(TOPIC_UTILITY, self._on_utility)
         self.bus.subscribe(TOPIC_ROLE, self._on_role)
 
@@ -116,8 +115,10 @@ class LeaderFollowerExecutor(AonStatuses):
     # -- completion and communication ----------------------------------------------------
     @property
     def done(self) -> bool:
-        """Agenda complete, back in NA, and every status finished with AON."""
-        settled = self._t0 is not None and not self.agenda and self.state == NA_IDLE
+        """Agenda complete, back in NA (or the assigner's robot on its way home), and
+        every status finished with AON (and, reporting back, the assigner has them)."""
+        home = self.state == NA_IDLE or (self._in("reporting") and self.hosts_assigner())
+        settled = self._t0 is not None and not self.agenda and home
         return settled and self.aon_settled() and not (self._reports_back() and self.unreported())
 
     def on_team_status(self, status: TaskStatus) -> None:
@@ -132,15 +133,17 @@ class LeaderFollowerExecutor(AonStatuses):
     # -- every step ----------------------------------------------------------------------
     def before_state_step(self) -> None:
         super().before_state_step()  # AON first
-        # Idle robots join rounds but never open one; links are judged at the pose rate.
+        # Idle robots join rounds but never open one (in groups, neither does one without
+        # work left that makes way); links are judged at the pose rate.
         if (
             self._in("na")
             and self.leaf() not in ("unassigned", "idle")
+            and (self.agenda or self.goal is not None or not self._in_groups())
             and self._now >= self._next_monitor
         ):
             self._next_monitor = self._now + self.params.pose_period
             self._monitor_links()
-        elif self.state == NA_IDLE and self._reports_back() and self.unreported():
+        elif self.state == NA_IDLE and self._reports_back() and self._to_report():
             self._follow_target = None  # the assigner missed a completion: report it
             self.report_tour.reset()
             self.trigger("report")
@@ -248,37 +251,24 @@ class LeaderFollowerExecutor(AonStatuses):
             self._next_refresh = self._now
             self.trigger("become_follower")
 
-    def _announce_utility(self) -> None:
+    def _announce(self, topic: str, kind: type[UtilityMsg | RoleMsg], **fields: Any) -> None:
+        """Publish this robot's utility or role in the current round."""
         self._seq += 1
-        self.bus.publish(
-            TOPIC_UTILITY,
-            UtilityMsg(
-                sender=self.robot_id,
-                incarnation=self.incarnation,
-                seq=self._seq,
-                stamp=self._now,
-                round=self.role_round.number,
-                utility=self.role_round.scores[self.robot_id],
-            ),
-        )
+        message = kind(
+            sender=self.robot_id, incarnation=self.incarnation, seq=self._seq,
+            stamp=self._now, round=self.role_round.number, **fields,
+        )  # fmt: skip
+        self.bus.publish(topic, message)
         self.role_round.next_announce = self._now + self.lf.announce_period
+
+    def _announce_utility(self) -> None:
+        utility = self.role_round.scores[self.robot_id]
+        self._announce(TOPIC_UTILITY, UtilityMsg, utility=utility)
 
     def _announce_role(self) -> None:
         assert self.leader is not None
-        self._seq += 1
-        self.bus.publish(
-            TOPIC_ROLE,
-            RoleMsg(
-                sender=self.robot_id,
-                incarnation=self.incarnation,
-                seq=self._seq,
-                stamp=self._now,
-                round=self.role_round.number,
-                role=self.role_round.roles[self.robot_id],
-                leader=self.leader,
-            ),
-        )
-        self.role_round.next_announce = self._now + self.lf.announce_period
+        role = self.role_round.roles[self.robot_id]
+        self._announce(TOPIC_ROLE, RoleMsg, role=role, leader=self.leader)
 
     def _on_utility(self, message: Message) -> None:
         assert isinstance(message, UtilityMsg)
@@ -435,7 +425,7 @@ class LeaderFollowerExecutor(AonStatuses):
 
     # -- follower ------------------------------------------------------------------------
     def navigation_target(self) -> tuple[float, float] | None:
-        if self._in("follower") or self.state == "regrouping":
+        if self._in("follower") or self.state == "regrouping" or self._in("reporting"):
             return self._follow_target
         return super().navigation_target()
 
@@ -459,9 +449,8 @@ class LeaderFollowerExecutor(AonStatuses):
         return (self.leader or "") if self._in("follower") else ""
 
     def _leader_gone(self) -> bool:
-        """The leader's process has gone (live mode: its liveliness vanished), or its
-        own poses, sent since we follow it, say it no longer leads (its completion may
-        have reached us before we followed it)."""
+        """The leader's process has gone (live mode: its liveliness vanished), or its own
+        poses since we follow it say it no longer leads (its completion came earlier)."""
         leader = self.leader or ""
         if leader in self.team_view.departed:
             return True
@@ -469,9 +458,14 @@ class LeaderFollowerExecutor(AonStatuses):
         return fresh and self.team_view.roles.get(leader) not in (L.ROLE_LEADER, L.ROLE_ASSIGNING)
 
     def before_follower_step(self) -> bool:
-        if self._leader_gone():
+        # In groups, a follower waiting where its leader was that has not heard it for
+        # lost_timeout gives up (it may have finished out of range): no wait for ever.
+        silent = self.team_view.age(self.leader or "", self._now) > self.lf.lost_timeout
+        lost = silent and self.leaf() == "waiting" and self._in_groups()
+        if lost or self._leader_gone():
             gone = self.leader in self.team_view.departed
-            self._dissolve("leader's process has gone" if gone else "leader no longer leads")
+            why = "lost" if lost else "no longer leads"
+            self._dissolve("leader's process has gone" if gone else f"leader {why}")
             return True
         return False
 
@@ -547,38 +541,44 @@ class LeaderFollowerExecutor(AonStatuses):
         if heard_recently and self._now - self._state_since > 1.0:
             self._open_round(self.role_round.number + 1)
             return
-        if self._follow_target is None:
+        if self._follow_target is None and self.mates:
             pose = self.base.pose
-            known = sorted(
-                self.mates.values(), key=lambda m: math.hypot(m.x - pose.x, m.y - pose.y)
-            )
-            if known:
-                self._follow_target = (known[0].x, known[0].y)
-                self.base.navigate_to(*self._follow_target)
+            near = min(self.mates.values(), key=lambda m: math.hypot(m.x - pose.x, m.y - pose.y))
+            self._follow_target = (near.x, near.y)
+            self.base.navigate_to(*self._follow_target)
 
     # -- reporting back ------------------------------------------------------------------
+    def _in_groups(self) -> bool:
+        """The team is larger than one group: the large-team rules apply."""
+        return len(self.team) + 1 > self.lf.group_size
+
     def _reports_back(self) -> bool:
         """``report_back``; by default on in a team larger than one group."""
-        back = self.lf.report_back
-        return len(self.team) + 1 > self.lf.group_size if back is None else back
+        return self._in_groups() if self.lf.report_back is None else self.lf.report_back
 
-    def _step_reporting(self) -> None:
-        """Nothing left to do but the assigner missed a completion: go and find it
-        (:mod:`mrcomm.agents.lf_report`) until AON brings it up to date."""
-        if not self.unreported():
+    def _to_report(self) -> tuple[float, float] | None:
+        """Where to go for reporting back: the assigner's robot, its work done, goes
+        home to be found; a robot whose completion the assigner missed goes to find it
+        (:meth:`report_target`). None: nothing to report."""
+        home = self.assigner_home
+        if self.hosts_assigner() and home is not None and not self.agenda:
+            pose = self.base.pose
+            return home if math.dist((pose.x, pose.y), home) > HOME_REACH else None
+        return self.report_target() if self.unreported() else None
+
+    def _step_reporting_navigating(self) -> None:
+        """Reporting back (:meth:`_to_report`) until there is nothing to report."""
+        target = self._to_report()
+        if target is None:
             self.base.cancel()
             self.trigger("reported")
             self._select_next()
             return
-        mates = {mate: (known.x, known.y) for mate, known in self.mates.items()}
-        places, order = report_places(mates, self.team_view.heard, self.assigner_position())
-        pose = self.base.pose
-        failed = self.base.status is NavStatus.ABORTED
-        target = self.report_tour.target((pose.x, pose.y), places, order, self._now, failed=failed)
         aimed = self._follow_target
-        if target is not None and (aimed is None or math.dist(target, aimed) > 1.0):
+        if aimed is None or math.dist(target, aimed) > 1.0:
             self._follow_target = target
             self.base.navigate_to(*target)
+        self._check_collisions()
 
     def _in(self, top: str) -> bool:
         """Whether the robot is in ``top`` or one of its sub-states — what

@@ -47,7 +47,15 @@ LF_STATES: list[Any] = [
         ],
     },
     "regrouping",
-    "reporting",
+    {
+        "name": "reporting",
+        "children": ["navigating", "avoiding"],
+        "initial": "navigating",
+        "transitions": [
+            {"trigger": "conflict", "source": "navigating", "dest": "avoiding"},
+            {"trigger": "resume", "source": "avoiding", "dest": "navigating"},
+        ],
+    },
 ]
 LF_TRANSITIONS: list[dict[str, Any]] = [
     {
@@ -74,7 +82,6 @@ ACTIVITY_OF_FULL_STATE = {
     "follower_waiting": L.FOLLOWER_WAITING,
     "follower_clearing": L.MOVING,
     "regrouping": L.MOVING,
-    "reporting": L.MOVING,
 }
 ROLE_OF_TOP_STATE = {
     "na": L.ROLE_NA,
@@ -101,7 +108,7 @@ class LfParams(ExecutorParams):
         return name
 
     group_size: int = parameter(
-        4,
+        3,
         "most robots in one group: a role round of n members elects ceil(n/group_size) "
         "leaders and every other member follows the nearest (a team of at most this many "
         "is one group, as the original)",

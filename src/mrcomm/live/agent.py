@@ -204,7 +204,7 @@ class AgentProcess:
                 tie_break_rank=rank_of.__getitem__,
                 link_sensor=sensor,
                 incarnation=incarnation,
-                **aon_options(executor_class, self.scenario.assigner),
+                **aon_options(executor_class, self.scenario),
             )
             # The LF executor reads its AON lease when its assignment arrives.
             params = self.executor.params

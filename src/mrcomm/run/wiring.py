@@ -26,7 +26,7 @@ from mrcomm.robot.variation import VariationParams, robot_variations
 from mrcomm.run.config import RunConfig
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.seeding import stream
-from mrcomm.world.scenario import AssignerSpec, Scenario
+from mrcomm.world.scenario import Scenario
 
 if TYPE_CHECKING:
     from mrcomm.agents.executor import TaskExecutor
@@ -63,7 +63,7 @@ def build_executor(
     tie_break_rank: Callable[[str], float],
     link_sensor: LinkSensor,
     incarnation: int = 1,
-    assigner: AssignerSpec | None = None,
+    scenario: Scenario | None = None,
 ) -> TaskExecutor:
     """One robot's task executor: the chosen behaviour with its parameters (and, for
     one that sends with AON, where the task assigner is)."""
@@ -76,14 +76,19 @@ def build_executor(
         link_sensor=link_sensor,
         params=config.variant_params("behaviour"),
         incarnation=incarnation,
-        **aon_options(cls, assigner),
+        **aon_options(cls, scenario),
     )
 
 
-def aon_options(cls: type[TaskExecutor], assigner: AssignerSpec | None) -> dict[str, Any]:
+def aon_options(cls: type[TaskExecutor], scenario: Scenario | None) -> dict[str, Any]:
     """What an executor class takes beyond the common arguments: where the task
-    assigner is, for one whose statuses go with AON."""
-    return {"assigner": assigner} if cls.uses_aon and assigner is not None else {}
+    assigner is, for one whose statuses go with AON — its spec, and for one on a robot
+    that robot's start (its home)."""
+    if not cls.uses_aon or scenario is None:
+        return {}
+    starts = {robot.id: (robot.pose.x, robot.pose.y) for robot in scenario.robots}
+    home = starts.get(scenario.assigner.host or "")
+    return {"assigner": scenario.assigner, "assigner_home": home}
 
 
 def esd_trace_path(config: RunConfig) -> Path | None:

@@ -94,7 +94,7 @@ class Mission:
                 self.timelines[rid],
                 tie_break_rank=rank_of.__getitem__,
                 link_sensor=self.sensors[rid],
-                assigner=scenario.assigner,
+                scenario=scenario,
             )
             for rid in self.robot_ids
         }

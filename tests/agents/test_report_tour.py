@@ -1,8 +1,8 @@
-"""LF's report tour: where a robot goes to bring the task assigner a missed status."""
+"""The report tour: where a robot goes to bring the task assigner a missed status."""
 
 from __future__ import annotations
 
-from mrcomm.agents.lf_report import AIM_TIMEOUT, REACH, ReportTour
+from mrcomm.agents.report_tour import AIM_TIMEOUT, REACH, ReportTour
 
 PLACES = {"assigner": (0.0, 0.0), "robot_2": (10.0, 0.0), "robot_3": (20.0, 0.0)}
 ORDER = ["assigner", "robot_2", "robot_3"]
