@@ -191,6 +191,13 @@ def test_member_out_of_range_for_minutes_gets_it_when_the_link_returns() -> None
     assert net.now < 320.0
 
 
+def assert_paused_until(net: FakeNet, until: float) -> None:
+    """Nothing is published from now until ``until``: re-sending is paused."""
+    before = sum(net.counts.published.values())
+    net.run(until)
+    assert sum(net.counts.published.values()) == before
+
+
 def test_lease_names_the_silent_member_then_brings_it_up_to_date() -> None:
     net = FakeNet(names(3), seed=8, cuts=[Cut("r2", None, 0.0, 60.0)])
     team = AonTeam(net, lease=5.0, beacons=True)
@@ -207,10 +214,7 @@ def test_lease_names_the_silent_member_then_brings_it_up_to_date() -> None:
         assert endpoint.left_out_ids() == (mid,) and endpoint.pending_ids() == ()
         assert endpoint.stats.left_out_reports == 1
     assert team.delivered["r2"][mid] == 0
-    # Paused while r2 is silent: no futile re-sends.
-    before = sum(net.counts.published.values())
-    net.run(55.0)
-    assert sum(net.counts.published.values()) == before
+    assert_paused_until(net, 55.0)  # while r2 is silent: no futile re-sends
     # r2 is back: brought up to date, and the others report completion, late.
     net.run(80.0, stop=team.all_done)
     assert team.all_done() and not team.violations
@@ -325,10 +329,7 @@ def test_a_left_out_member_heard_again_is_brought_up_to_date_while_another_is_aw
     net.run(40.0)
     assert team.delivered["r2"][mid] == 1
     assert team.delivered["r3"][mid] == 0
-    # Then paused again (everyone heard has it, r3 silent): no futile re-sends.
-    before = sum(net.counts.published.values())
-    net.run(150.0)
-    assert sum(net.counts.published.values()) == before
+    assert_paused_until(net, 150.0)  # everyone heard has it, r3 silent: no re-sends
     net.run(300.0, stop=team.all_done)
     assert team.all_done() and not team.violations
     assert team.delivered["r3"][mid] == 1

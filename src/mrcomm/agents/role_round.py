@@ -1,8 +1,8 @@
 """LF's role-assignment round, as one part of the executor: what a robot collected in
 the round it is in — the round number, every member's utility and role as heard, who
-named this robot leader and when — and the rule that decides the leader (the highest
-utility; ties by the team-wide random order). The executor does the talking (utility
-and role messages at 4 Hz) and the state changes."""
+named this robot leader and when. The executor does the talking (utility and role
+messages at 4 Hz), decides with :func:`mrcomm.agents.lf_groups.round_leaders` (of which
+:meth:`RoleRound.best` is the one-group case) and makes the state changes."""
 
 from __future__ import annotations
 

@@ -86,8 +86,8 @@ def aon_options(cls: type[TaskExecutor], scenario: Scenario | None) -> dict[str,
     that robot's start (its home)."""
     if not cls.uses_aon or scenario is None:
         return {}
-    starts = {robot.id: (robot.pose.x, robot.pose.y) for robot in scenario.robots}
-    home = starts.get(scenario.assigner.host or "")
+    host = scenario.assigner.host
+    home = next(((r.pose.x, r.pose.y) for r in scenario.robots if r.id == host), None)
     return {"assigner": scenario.assigner, "assigner_home": home}
 
 
