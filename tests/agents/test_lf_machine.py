@@ -405,7 +405,7 @@ def test_the_prediction_stops_at_the_follow_distance_and_not_for_a_stopped_follo
     moving = h.agent.mates["robot_2"]
     x, y = h.agent._predicted_follower(moving, pose)
     assert math.hypot(x - pose.x, y - pose.y) == pytest.approx(h.agent.lf.follow_distance)
-    stopped = moving._replace(v=0.0)
+    stopped = msgspec.structs.replace(moving, v=0.0)
     assert h.agent._predicted_follower(stopped, pose) == (moving.x, moving.y)
 
 

@@ -142,7 +142,7 @@ def test_the_team_view_knows_each_mates_age() -> None:
     view.hear(pose_of("robot_2", 1.0, 2.0, role="leader", leader=""), now=3.0)
     assert view.age("robot_2", 4.5) == pytest.approx(1.5)
     assert math.isinf(view.age("robot_3", 4.5))
-    assert view.poses["robot_2"].x == 1.0 and view.roles["robot_2"] == "leader"
+    assert view.poses["robot_2"].x == 1.0 and view.role("robot_2") == "leader"
     assert view.heard_within(2.0, 4.5) and not view.heard_within(1.0, 4.5)
 
 

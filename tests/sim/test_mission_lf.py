@@ -127,7 +127,7 @@ def _first_leader(world):  # type: ignore[no-untyped-def]
         if leaders:
             leader = leaders[0]
             others = [r for r in leader.team if r in mission.executors]
-            if all(leader.team_view.leaders.get(r) == leader.robot_id for r in others):
+            if all(leader.team_view.leader(r) == leader.robot_id for r in others):
                 return mission, leader
     raise AssertionError("no leader with followers in the whole mission")
 

@@ -31,7 +31,7 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from mrcomm.agents.collision import MateState, classify, has_right_of_way
+from mrcomm.agents.collision import Mate, classify, has_right_of_way
 from mrcomm.world.geometry import Pose
 
 if TYPE_CHECKING:
@@ -70,7 +70,7 @@ class Avoidance:
     def detect(
         self,
         pose: Pose,
-        mates: Iterable[MateState],
+        mates: Iterable[Mate],
         now: float,
         goal_distance: Callable[[], float],
     ) -> Conflict | None:
@@ -117,7 +117,7 @@ class Avoidance:
         return min(params.resume_grace * 2**doublings, params.max_grace)
 
     def may_resume(
-        self, pose: Callable[[], Pose], mates: Mapping[str, MateState], now: float, since: float
+        self, pose: Callable[[], Pose], mates: Mapping[str, Mate], now: float, since: float
     ) -> bool:
         """Whether a robot paused since ``since`` may move on: after the pause, at once
         with right of way; without it once the mate has been clear for a while, or after

@@ -18,7 +18,7 @@
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import NamedTuple, Protocol
 
 from pydantic import BaseModel, ConfigDict
 
@@ -46,9 +46,29 @@ class CollisionParams(BaseModel):
     )
 
 
+class Mate(Protocol):
+    """A team mate as a robot reads it: the pose message it last received from the mate
+    (``messaging.messages.PoseMsg``), or a :class:`MateState` made from one."""
+
+    @property
+    def robot(self) -> str: ...
+    @property
+    def x(self) -> float: ...
+    @property
+    def y(self) -> float: ...
+    @property
+    def theta(self) -> float: ...
+    @property
+    def v(self) -> float: ...
+    @property
+    def goal_dist(self) -> float: ...
+    @property
+    def stamp(self) -> float: ...
+
+
 class MateState(NamedTuple):
-    """What a robot knows of a team mate from its last pose message. (A named tuple:
-    one is made for every pose received, which in a large team is most of the work.)"""
+    """A team mate's state that is not a received pose as it came: a pose moved on for
+    its age (``TeamView.known``), or a mate made up by a test."""
 
     robot: str
     x: float
@@ -61,7 +81,7 @@ class MateState(NamedTuple):
     stamp: float = math.nan
 
 
-def classify(own: Pose, mate: MateState, params: CollisionParams) -> str | None:
+def classify(own: Pose, mate: Mate, params: CollisionParams) -> str | None:
     """Kind of near collision with ``mate`` (``EVENT_HORIZON``/``DANGER_ZONE``) or None."""
     dx = mate.x - own.x
     dy = mate.y - own.y

@@ -23,7 +23,7 @@ from transitions import Machine
 
 from mrcomm.agents import agenda
 from mrcomm.agents.avoidance import Avoidance
-from mrcomm.agents.collision import CollisionParams, MateState
+from mrcomm.agents.collision import CollisionParams, Mate
 from mrcomm.agents.commands import CommandInbox, command_team
 from mrcomm.agents.machine_table import StateEntry, build_table, quiet_rebinding
 from mrcomm.agents.team_view import TeamView
@@ -316,7 +316,7 @@ class TaskExecutor:
     def _step_waiting(self) -> None:
         self._select_next()
 
-    def known_mates(self) -> Mapping[str, MateState]:
+    def known_mates(self) -> Mapping[str, Mate]:
         """The mates as collision avoidance and making way see them now: fresh enough,
         and moved on for their age (:meth:`TeamView.known`)."""
         params = self.params
@@ -336,7 +336,7 @@ class TaskExecutor:
                 return
 
     # -- making way ------------------------------------------------------------------
-    def in_way_of(self, mate: MateState) -> bool:
+    def in_way_of(self, mate: Mate) -> bool:
         """This robot (without a goal of its own, or following) stands close to a mate
         that has a goal: ahead of it, or next to it while it is stuck."""
         if mate.goal_dist < 0:
@@ -348,7 +348,7 @@ class TaskExecutor:
         ahead = abs(wrap_angle(math.atan2(dy, dx) - mate.theta)) < math.radians(75)
         return ahead or mate.v < self.params.collision.moving_speed
 
-    def step_aside(self, mate: MateState) -> None:
+    def step_aside(self, mate: Mate) -> None:
         """Step aside of the mate's heading (left, right, then straight away from it);
         the base snaps each candidate to free space and aborts unreachable ones."""
         pose = self.base.pose

@@ -44,7 +44,7 @@ from transitions.extensions import HierarchicalMachine
 
 from mrcomm.agents import agenda
 from mrcomm.agents.aon_statuses import AonStatuses
-from mrcomm.agents.collision import MateState
+from mrcomm.agents.collision import Mate
 from mrcomm.agents.lf_groups import nearest_leader, round_leaders
 from mrcomm.agents.lf_machine import (
     ACTIVITY_OF_FULL_STATE,
@@ -361,9 +361,9 @@ class LeaderFollowerExecutor(AonStatuses):
             is None
         )
 
-    def _predicted_follower(self, known: MateState, pose: Pose) -> tuple[float, float]:
+    def _predicted_follower(self, known: Mate, pose: Pose) -> tuple[float, float]:
         """Where a follower should be now (:func:`mrcomm.agents.lf_route.predicted_follower`)."""
-        age = max(0.0, self._now - self.team_view.stamps.get(known.robot, self._now))
+        age = max(0.0, self._now - known.stamp)
         lf = self.lf
         return predicted_follower(known, pose, age, lf.hold_prediction, lf.follow_distance)
 
@@ -377,9 +377,9 @@ class LeaderFollowerExecutor(AonStatuses):
         confirmed = self.role_round.confirmed_at.get(mate)
         if confirmed is not None and self.team_view.heard.get(mate, -math.inf) <= confirmed:
             return True
-        role = self.team_view.roles.get(mate)
+        role = self.team_view.role(mate)
         if role == L.ROLE_FOLLOWER:
-            return self.team_view.leaders.get(mate) == self.robot_id
+            return self.team_view.leader(mate) == self.robot_id
         return role == L.ROLE_ASSIGNING and confirmed is not None
 
     def _step_leader_navigating(self) -> None:
@@ -455,7 +455,7 @@ class LeaderFollowerExecutor(AonStatuses):
         if leader in self.team_view.departed:
             return True
         fresh = self.team_view.heard.get(leader, -1.0) > self._state_since_role
-        return fresh and self.team_view.roles.get(leader) not in (L.ROLE_LEADER, L.ROLE_ASSIGNING)
+        return fresh and self.team_view.role(leader) not in (L.ROLE_LEADER, L.ROLE_ASSIGNING)
 
     def before_follower_step(self) -> bool:
         # In groups, a follower waiting where its leader was that has not heard it for

@@ -7,7 +7,7 @@ from __future__ import annotations
 import itertools
 import math
 
-from mrcomm.agents.collision import MateState
+from mrcomm.agents.collision import Mate
 from mrcomm.ports import Base, LinkSensor
 from mrcomm.world.geometry import Pose, polyline_length
 
@@ -64,7 +64,7 @@ def direct_hop(
 
 
 def predicted_follower(
-    known: MateState, pose: Pose, age: float, horizon: float, follow_distance: float
+    known: Mate, pose: Pose, age: float, horizon: float, follow_distance: float
 ) -> tuple[float, float]:
     """Where a follower should be now: a follower drives to its leader (at ``pose``),
     so its last pose is moved straight towards the leader at the speed it had, for the

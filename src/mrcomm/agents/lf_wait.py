@@ -199,8 +199,8 @@ class LfWaitExecutor(LeaderFollowerExecutor):
         out = []
         for mate in self.team:
             detouring = (
-                self.team_view.roles.get(mate) == L.ROLE_DETOURING
-                and self.team_view.leaders.get(mate) == self.robot_id
+                self.team_view.role(mate) == L.ROLE_DETOURING
+                and self.team_view.leader(mate) == self.robot_id
             )
             if not detouring:
                 self._detours_heard.pop(mate, None)
@@ -226,8 +226,8 @@ class LfWaitExecutor(LeaderFollowerExecutor):
             self.trigger("release")
 
     def _follows_me(self, mate: str) -> bool:
-        if self.team_view.roles.get(mate) == L.ROLE_DETOURING:
-            return self.team_view.leaders.get(mate) == self.robot_id
+        if self.team_view.role(mate) == L.ROLE_DETOURING:
+            return self.team_view.leader(mate) == self.robot_id
         return super()._follows_me(mate)
 
 

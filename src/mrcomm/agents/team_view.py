@@ -13,84 +13,78 @@ pose without inventing turns the mate may have made)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
-from mrcomm.agents.collision import MateState
+from mrcomm.agents.collision import Mate, MateState
 from mrcomm.messaging.messages import PoseMsg
-
-#: The last pose message turned into a mate's state, and that state: a pose reaches
-#: every mate in turn, so each builds the same immutable state once, not once per
-#: receiver. One tuple, replaced whole, so runs in threads never see half an update.
-_last_state: tuple[PoseMsg | None, MateState | None] = (None, None)
-
-
-def mate_state(message: PoseMsg) -> MateState:
-    """The state of the mate that sent ``message``, as collision avoidance reads it."""
-    global _last_state
-    last, state = _last_state
-    if last is message and state is not None:
-        return state
-    state = MateState(
-        message.sender,
-        message.x,
-        message.y,
-        message.theta,
-        message.v,
-        message.goal_dist,
-        message.stamp,
-    )
-    _last_state = (message, state)
-    return state
 
 
 class TeamView:
-    """Each mate's last received pose, with the time it was received."""
+    """Each mate's last received pose, with the time it was received.
+
+    The pose message itself is kept: it carries everything a robot reads of a mate
+    (position, heading, speed, goal distance, stamp, role, leader), and in a large team
+    storing one reference per received pose, rather than a state built from it, is
+    what keeps hearing a pose cheap (most of a large team's work)."""
 
     def __init__(self) -> None:
-        self.poses: dict[str, MateState] = {}
+        #: Each mate's last pose message (a :class:`Mate` as collision avoidance reads it).
+        self.poses: dict[str, PoseMsg] = {}
         #: When each mate's last pose arrived (the receiver's clock).
         self.heard: dict[str, float] = {}
-        #: When each mate's last pose was sent (its stamp, on the mission clock).
-        self.stamps: dict[str, float] = {}
-        self.roles: dict[str, str] = {}
-        #: mate -> the robot it follows ("" when none).
-        self.leaders: dict[str, str] = {}
         #: Mates whose process has gone, as the transport's liveliness says (live mode;
         #: always empty in simulation, where no process dies).
         self.departed: set[str] = set()
 
     def hear(self, message: PoseMsg, now: float) -> None:
         mate = message.sender
-        self.poses[mate] = mate_state(message)
+        self.poses[mate] = message
         self.heard[mate] = now
-        self.stamps[mate] = message.stamp
-        self.roles[mate] = message.role
-        self.leaders[mate] = message.leader
+
+    def stamp(self, mate: str) -> float | None:
+        """When ``mate``'s last pose was sent (its stamp, on the mission clock)."""
+        message = self.poses.get(mate)
+        return None if message is None else message.stamp
+
+    def role(self, mate: str) -> str | None:
+        """The role ``mate`` announced in its last pose (None if never heard)."""
+        message = self.poses.get(mate)
+        return None if message is None else message.role
+
+    def leader(self, mate: str) -> str | None:
+        """The robot ``mate`` said it follows ("" when none; None if never heard)."""
+        message = self.poses.get(mate)
+        return None if message is None else message.leader
 
     def age(self, mate: str, now: float) -> float:
         """Seconds since ``mate``'s last pose arrived (inf if never heard)."""
         heard = self.heard.get(mate)
         return math.inf if heard is None else now - heard
 
-    def known(
-        self, now: float, max_age: float | None, extrapolation: float
-    ) -> dict[str, MateState]:
+    def known(self, now: float, max_age: float | None, extrapolation: float) -> Mapping[str, Mate]:
         """Each mate as a robot should act on it at ``now``: left out when its pose is
         older than ``max_age`` (None: never), moved on for its age (at most
         ``extrapolation`` s) along its heading at its speed."""
         if max_age is None and extrapolation <= 0:
             return self.poses  # the original robots' view: every last pose, as it came
-        out: dict[str, MateState] = {}
-        for mate, state in self.poses.items():
-            age = max(0.0, now - self.stamps[mate])
+        out: dict[str, Mate] = {}
+        for mate, pose in self.poses.items():
+            age = max(0.0, now - pose.stamp)
             if max_age is not None and age > max_age:
                 continue
-            ahead = min(age, extrapolation) * state.v
-            if ahead != 0.0:
-                state = state._replace(
-                    x=state.x + ahead * math.cos(state.theta),
-                    y=state.y + ahead * math.sin(state.theta),
-                )
-            out[mate] = state
+            ahead = min(age, extrapolation) * pose.v
+            if ahead == 0.0:
+                out[mate] = pose
+                continue
+            out[mate] = MateState(
+                pose.sender,
+                pose.x + ahead * math.cos(pose.theta),
+                pose.y + ahead * math.sin(pose.theta),
+                pose.theta,
+                pose.v,
+                pose.goal_dist,
+                pose.stamp,
+            )
         return out
 
     def heard_within(self, seconds: float, now: float) -> bool:

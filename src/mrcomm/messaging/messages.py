@@ -69,6 +69,11 @@ class PoseMsg(Message, frozen=True, tag="pose"):
     role: str = ""
     leader: str = ""
 
+    @property
+    def robot(self) -> str:
+        """The robot this pose is of (its sender): a pose reads as a team mate's state."""
+        return self.sender
+
 
 class TaskStatus(Message, frozen=True, tag="task_status"):
     """A robot's report about one of its tasks (or about itself, for role events)."""
