@@ -11,7 +11,7 @@ Agents are stepped with ``step(now)``: they never sleep, block or read a global 
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from enum import Enum
 from typing import Protocol
 
@@ -19,6 +19,24 @@ from mrcomm.messaging.messages import Message
 from mrcomm.world.geometry import Pose
 
 Handler = Callable[[Message], None]
+
+
+class BatchHandler:
+    """A handler a bus may also give several messages of one topic at once, in the order
+    they reached the agent: ``handler.many(messages)`` does what ``handler(m)`` for each
+    would. Only for handlers that touch nothing but their own agent's state and publish
+    nothing (a team mate's pose), so taking one receiver's messages together changes no
+    result. The in-process bus hands a large team's poses over this way (one call per
+    receiver and step instead of one per pose); a bus that delivers one message at a
+    time calls it like any handler."""
+
+    __slots__ = ("many",)
+
+    def __init__(self, many: Callable[[Sequence[Message]], None]) -> None:
+        self.many = many
+
+    def __call__(self, message: Message) -> None:
+        self.many((message,))
 
 
 class Bus(Protocol):

@@ -92,3 +92,28 @@ def test_the_limit_must_be_positive_and_finite() -> None:
             ExecutorParams(mate_max_age=bad)
     with pytest.raises(ValueError, match="mate_extrapolation"):
         ExecutorParams(mate_extrapolation=-0.1)
+
+
+def test_poses_heard_together_read_as_heard_one_by_one() -> None:
+    """A step's poses given at once (the in-process bus's batches) leave the view as
+    hearing them one by one would: the last of a mate's poses wins, mates keep the order
+    they were first heard in (collision avoidance takes the first in conflict), and the
+    robot's own pose is left out."""
+    first = [pose_of("robot_3", 1.0, 0.0), pose_of("robot_2", 2.0, 0.0)]
+    later = [
+        pose_of("robot_4", 0.0, 4.0),
+        pose_of("robot_1", 9.0, 9.0),
+        pose_of("robot_2", 2.5, 0.0),
+        pose_of("robot_4", 0.0, 4.5),
+    ]
+    together, one_by_one = TeamView(), TeamView()
+    together.hear_all(first, 1.0, "robot_1")
+    together.hear_all(later, 2.0, "robot_1")
+    for now, batch in ((1.0, first), (2.0, later)):
+        for message in batch:
+            if message.sender != "robot_1":
+                one_by_one.hear(message, now)
+    assert list(together.poses.items()) == list(one_by_one.poses.items())
+    assert together.heard == one_by_one.heard == {"robot_3": 1.0, "robot_2": 2.0, "robot_4": 2.0}
+    assert list(together.poses) == ["robot_3", "robot_2", "robot_4"]
+    assert (together.poses["robot_4"].y, together.poses["robot_2"].x) == (4.5, 2.5)

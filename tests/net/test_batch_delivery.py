@@ -3,14 +3,16 @@ same counts and the same handler calls as one message at a time."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from mrcomm.messaging.messages import PoseMsg
+from mrcomm.messaging.messages import Message, PoseMsg
 from mrcomm.net.delivery import DeliveryPolicy, LossStream
 from mrcomm.net.inprocess import InProcessNetwork
+from mrcomm.ports import BatchHandler
 from mrcomm.run.config import make_config
 from mrcomm.sim.mission import Mission
 from tests.golden.golden import comparable
@@ -30,8 +32,12 @@ def _pose(sender: str, k: int) -> PoseMsg:
     return PoseMsg(sender=sender, incarnation=1, seq=k, stamp=0.1 * k, x=float(k), y=0.0, theta=0.0)
 
 
-def _deliveries(batch_from: int) -> tuple[list[tuple[str, str, int]], dict]:
-    """Twelve agents, a ragged link matrix, SPL 40: who got which pose, in order."""
+def _deliveries(
+    batch_from: int, taking_many: frozenset[str] = frozenset()
+) -> tuple[list[tuple[str, str, int]], dict, list[int]]:
+    """Twelve agents, a ragged link matrix, SPL 40: who got which pose, in order; the
+    agents in ``taking_many`` subscribe with a BatchHandler (the sizes of its calls are
+    returned too)."""
     ids = [f"r{i}" for i in range(12)]
     net = InProcessNetwork(
         ids,
@@ -40,7 +46,16 @@ def _deliveries(batch_from: int) -> tuple[list[tuple[str, str, int]], dict]:
     )
     net.batch_from = batch_from
     got: list[tuple[str, str, int]] = []
+    calls: list[int] = []
+
+    def take(agent: str, messages: Sequence[Message]) -> None:
+        calls.append(len(messages))
+        got.extend((agent, m.sender, round(m.x)) for m in messages)  # type: ignore[attr-defined]
+
     for a in ids:
+        if a in taking_many:
+            net.endpoint(a).subscribe("pose", BatchHandler(lambda ms, a=a: take(a, ms)))
+            continue
         net.endpoint(a).subscribe(
             "pose",
             lambda m, a=a: got.append((a, m.sender, round(m.x))),  # type: ignore[misc]
@@ -52,12 +67,12 @@ def _deliveries(batch_from: int) -> tuple[list[tuple[str, str, int]], dict]:
             if (step + k) % 2 == 0:
                 net.endpoint(a).publish("pose", _pose(a, step * 100 + k))
         net.deliver(0.1 * step)
-    return got, net.counts_by_agent()
+    return got, net.counts_by_agent(), calls
 
 
 def test_batched_and_single_deliveries_agree() -> None:
-    batched, batched_counts = _deliveries(batch_from=0)
-    single, single_counts = _deliveries(batch_from=10**6)
+    batched, batched_counts, _ = _deliveries(batch_from=0)
+    single, single_counts, _ = _deliveries(batch_from=10**6)
     assert batched == single
     assert batched_counts == single_counts
     counts = batched_counts["r3"]["pose"]
@@ -82,3 +97,28 @@ def test_missions_are_the_same_batched_or_not(scenario: str, behaviour: str) -> 
         mission.network.batch_from = batch_from
         results.append(comparable(mission.run()))
     assert results[0] == results[1]
+
+
+def _per_agent(got: list[tuple[str, str, int]], agent: str) -> list[tuple[str, str, int]]:
+    return [entry for entry in got if entry[0] == agent]
+
+
+def test_a_batch_handler_gets_each_receivers_poses_of_a_step_in_one_call() -> None:
+    """Half the agents take their poses in batches: each agent still gets the same poses
+    in the same order; the plain handlers are called in the same order as before; a
+    batch handler is called once per step in the batched path, per pose otherwise."""
+    many = frozenset(f"r{i}" for i in range(0, 12, 2))
+    single, counts, _ = _deliveries(batch_from=10**6)
+    for batch_from in (0, 10**6):
+        got, got_counts, calls = _deliveries(batch_from, many)
+        assert got_counts == counts
+        for agent in (f"r{i}" for i in range(12)):
+            assert _per_agent(got, agent) == _per_agent(single, agent)
+        plain = [entry for entry in got if entry[0] not in many]
+        assert plain == [entry for entry in single if entry[0] not in many]
+        heard = sum(1 for entry in single if entry[0] in many)
+        assert sum(calls) == heard
+        if batch_from == 0:
+            assert len(calls) <= 30 * len(many) < heard  # one call per receiver and step
+        else:
+            assert set(calls) == {1}  # one message at a time

@@ -156,7 +156,7 @@ def test_a_leader_waits_for_its_own_followers_only(s1_resources) -> None:  # typ
             leader=follows,
             **far,
         )
-        leader._on_pose(message)
+        leader._on_poses((message,))
 
     heard("follower", leader.robot_id)
     assert leader._judge_followers()  # my follower is out: hold

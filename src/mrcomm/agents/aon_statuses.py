@@ -9,6 +9,7 @@ handler; the executor is done only when nothing it sent is still pending."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any, ClassVar
 
 from mrcomm.agents.executor import TaskExecutor
@@ -108,10 +109,11 @@ class AonStatuses(TaskExecutor):
     def _on_aon_deliver(self, status: TaskStatus, msg_id: MessageId) -> None:
         self.on_team_status(status)
 
-    def _on_pose(self, message: Message) -> None:
-        super()._on_pose(message)
+    def _on_poses(self, messages: Sequence[Message]) -> None:
+        super()._on_poses(messages)
         if self.aon is not None:
-            self.aon.heard_from(message.sender, self._now)  # liveliness for the lease
+            for message in messages:  # liveliness for the lease
+                self.aon.heard_from(message.sender, self._now)
 
     def _on_heartbeat(self, message: Message) -> None:
         if self.aon is not None:

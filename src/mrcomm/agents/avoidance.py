@@ -80,10 +80,12 @@ class Avoidance:
         collision = self.params.collision
         # Beyond this along either axis no mate can be in conflict (classify would say
         # so): skipped without a call, which matters when the team is large.
+        # (Chained comparisons rather than abs(): the same test without a call per mate.)
         reach = max(collision.danger_radius, collision.event_horizon)
+        short = -reach
         x, y = pose.x, pose.y
         for mate in mates:
-            if abs(mate.x - x) > reach or abs(mate.y - y) > reach:
+            if not (short <= mate.x - x <= reach and short <= mate.y - y <= reach):
                 continue
             if self._grace_until.get(mate.robot, -1.0) > now:
                 continue

@@ -15,8 +15,8 @@ Communication-aware behaviours subclass this executor (LF encloses NB).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
-from typing import Any, ClassVar
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, ClassVar, cast
 
 from pydantic import BaseModel, ConfigDict, Field
 from transitions import Machine
@@ -43,7 +43,7 @@ from mrcomm.messaging.messages import (
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ACTIVITY, Timeline
 from mrcomm.net.link_sensors import NoSensor
-from mrcomm.ports import Base, Bus, LinkSensor, NavStatus
+from mrcomm.ports import Base, BatchHandler, Bus, LinkSensor, NavStatus
 from mrcomm.specs import parameter
 from mrcomm.world.geometry import Pose, wrap_angle
 
@@ -211,7 +211,7 @@ class TaskExecutor:
                 after_state_change="_after_state_change",
             )
         bus.subscribe(TOPIC_ASSIGNMENT, self._on_assignment)
-        bus.subscribe(TOPIC_POSE, self._on_pose)
+        bus.subscribe(TOPIC_POSE, BatchHandler(self._on_poses))
         bus.subscribe(TOPIC_TASK_STATUS, self._on_status)
         self.paused = False  # by the operator
         self._new_tasks = False  # the operator gave tasks: plan again once idle
@@ -506,11 +506,9 @@ class TaskExecutor:
         self.timeline.event(L.ASSIGNMENT_RECEIVED, self._now, tasks=len(self.agenda))
         self.timeline.set_state(ACTIVITY, L.INIT, self._now)
 
-    def _on_pose(self, message: Message) -> None:
-        assert isinstance(message, PoseMsg)
-        if message.sender == self.robot_id:
-            return
-        self.team_view.hear(message, self._now)
+    def _on_poses(self, messages: Sequence[Message]) -> None:
+        """Mates' poses that reached the robot, in order (one, or a step's batch)."""
+        self.team_view.hear_all(cast("Sequence[PoseMsg]", messages), self._now, self.robot_id)
 
     def _on_status(self, message: Message) -> None:
         assert isinstance(message, TaskStatus)

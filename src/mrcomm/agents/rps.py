@@ -34,6 +34,7 @@ the gather radius, so robots already there need not make way.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any, Literal
 
 import msgspec
@@ -147,11 +148,12 @@ class RendezvousExecutor(TaskExecutor):
             self._start = (pose.x, pose.y)
             self._left_point = self._now
 
-    def _on_pose(self, message: Message) -> None:
-        super()._on_pose(message)
-        assert isinstance(message, PoseMsg)
-        if message.sender != self.robot_id:
-            self._first_heard.setdefault(message.sender, (message.x, message.y))
+    def _on_poses(self, messages: Sequence[Message]) -> None:
+        super()._on_poses(messages)
+        for message in messages:
+            assert isinstance(message, PoseMsg)
+            if message.sender != self.robot_id:
+                self._first_heard.setdefault(message.sender, (message.x, message.y))
 
     def on_team_status(self, status: TaskStatus) -> None:
         super().on_team_status(status)

@@ -13,7 +13,7 @@ pose without inventing turns the mate may have made)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 from mrcomm.agents.collision import Mate, MateState
 from mrcomm.messaging.messages import PoseMsg
@@ -37,9 +37,16 @@ class TeamView:
         self.departed: set[str] = set()
 
     def hear(self, message: PoseMsg, now: float) -> None:
-        mate = message.sender
-        self.poses[mate] = message
-        self.heard[mate] = now
+        """A mate's pose arrived at ``now``."""
+        self.hear_all((message,), now, "")
+
+    def hear_all(self, messages: Sequence[PoseMsg], now: float, own: str) -> None:
+        """Poses that arrived together, in order (the robot's own, ``own``, left out):
+        the same as :meth:`hear` for each, in two dict updates."""
+        latest = {message.sender: message for message in messages}
+        latest.pop(own, None)
+        self.poses.update(latest)
+        self.heard.update(dict.fromkeys(latest, now))
 
     def stamp(self, mate: str) -> float | None:
         """When ``mate``'s last pose was sent (its stamp, on the mission clock)."""

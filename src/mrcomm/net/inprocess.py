@@ -21,7 +21,9 @@ messages on one topic is then decided as a batch — the step's link matrix gath
 all of them at once, each receiver's loss draws taken as an array from its own stream
 (the same values in the same order as one draw per message), the counts added per
 receiver — and the handlers are called in the same order as one message at a time
-would call them, so the results are the same either way.
+would call them, so the results are the same either way; a
+:class:`~mrcomm.ports.BatchHandler` (a robot hearing its mates' poses) is given each
+receiver's messages of the batch in one call.
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ from mrcomm.net.delivery import (
 )
 from mrcomm.net.radio.channel import RadioChannel
 from mrcomm.net.relay import Relay
-from mrcomm.ports import Handler
+from mrcomm.ports import BatchHandler, Handler
 
 #: A message on its way: sender index, topic, message, due time, radio delay (None:
 #: lost to the sender's queue), bits on the air, links it crossed before this send (0:
@@ -260,6 +262,26 @@ class InProcessNetwork:
                 dropped_range=decided[column] - reached_n[column],
             )
         handlers = [receivers[r] for r in targets]
+        # Batch handlers (receiver-local, publishing nothing: see ports.BatchHandler)
+        # get each receiver's messages in one call; the others, which may publish, are
+        # called message by message, in order, as one message at a time would call them.
+        many = [[h.many for h in hs if isinstance(h, BatchHandler)] for hs in handlers]
+        if any(many):
+            by_receiver = np.nonzero(received.T)[1].tolist()  # receiver by receiver
+            end = 0
+            for column, takers in enumerate(many):
+                start, end = end, end + received_n[column]
+                if takers and end > start:
+                    heard = [messages[row] for row in by_receiver[start:end]]
+                    for take in takers:
+                        take(heard)
+            handlers = [[h for h in hs if not isinstance(h, BatchHandler)] for hs in handlers]
+        columns_with = [column for column, hs in enumerate(handlers) if hs]
+        if not columns_with:
+            return
+        if len(columns_with) < len(handlers):
+            received = received[:, columns_with]
+            handlers = [handlers[column] for column in columns_with]
         heard_rows, heard_columns = np.nonzero(received)  # message by message, in order
         for row, column in zip(heard_rows.tolist(), heard_columns.tolist(), strict=True):
             message = messages[row]
