@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mrcomm.robot.params import RobotParams
-from mrcomm.robot.planner import GridPlanner, PlannedPath
+from mrcomm.robot.planner import GridPlanner, PlanMemo, PlannedPath
 from mrcomm.world.occupancy import OccupancyGrid
 from tests.robot.robot_maps import dead_end, ring, sealed_rooms, two_rooms
 
@@ -146,3 +146,38 @@ def test_paths_never_cross_walls(start: tuple[float, float], goal: tuple[float, 
 
 TWO_ROOMS = two_rooms()
 PLANNER_TWO_ROOMS = GridPlanner(TWO_ROOMS, P)
+
+
+def test_a_memo_answers_a_repeated_search_as_the_search_would() -> None:
+    """A robot's plan memo: asked again from the same planning cell to the same goal cell
+    (a robot resuming where it paused) it gives the path a search gives, without one;
+    another start cell, other costs or mates to plan around search again; a goal with no
+    path stays without one."""
+    planner = GridPlanner(two_rooms(door=0.8), P)
+    searches: list[int] = []
+    search = planner._search
+
+    def counted(*args: object, **kwargs: object) -> object:
+        searches.append(1)
+        return search(*args, **kwargs)  # type: ignore[arg-type]
+
+    planner._search = counted  # type: ignore[assignment, method-assign]
+    memo = PlanMemo()
+    first = planner.plan((1.0, 1.0), (9.0, 4.0), memo=memo)
+    again = planner.plan((1.01, 1.01), (9.0, 4.0), memo=memo)  # the same planning cell
+    assert len(searches) == 1
+    assert again == planner.plan((1.01, 1.01), (9.0, 4.0))  # as a search finds it
+    assert first is not None and again is not None and again.waypoints[0] == (1.01, 1.01)
+    assert len(searches) == 2
+    planner.plan((2.0, 1.0), (9.0, 4.0), memo=memo)  # another start cell
+    assert len(searches) == 3
+    noisy = planner.tie_break_weights(np.random.default_rng(1), 0.5)
+    planner.plan((2.0, 1.0), (9.0, 4.0), weights=noisy, memo=memo)  # other costs
+    assert len(searches) == 4
+    planner.plan((2.0, 1.0), (9.0, 4.0), obstacles=[(5.0, 2.5)], weights=noisy, memo=memo)
+    planner.plan((2.0, 1.0), (9.0, 4.0), obstacles=[(5.0, 2.5)], weights=noisy, memo=memo)
+    assert len(searches) == 6  # mates are never remembered
+    sealed = GridPlanner(sealed_rooms(), P)
+    none = PlanMemo()
+    assert sealed.plan((1.0, 1.0), (9.0, 4.0), memo=none) is None
+    assert sealed.plan((1.0, 1.0), (9.0, 4.0), memo=none) is None

@@ -29,7 +29,7 @@ from mrcomm.robot.follower import PathFollower
 from mrcomm.robot.kinematics import integrate, limit_velocity, wrap
 from mrcomm.robot.noise import AmclError, LocalisationError, NormalStream, Odometry
 from mrcomm.robot.params import RobotParams
-from mrcomm.robot.planner import GridPlanner, PlannedPath
+from mrcomm.robot.planner import GridPlanner, PlanMemo, PlannedPath
 from mrcomm.robot.variation import RobotVariation
 from mrcomm.world.geometry import Pose
 from mrcomm.world.occupancy import OccupancyGrid
@@ -69,6 +69,7 @@ class SimBase:
         self._ready_at = -math.inf  # no start-up delay
         self._speed_factor = 1.0
         self._weights = None if variation is None else variation.weights
+        self._plan_memo = PlanMemo()  # its last search without mates (planner.PlanMemo)
         if variation is not None:
             factor = self._speed_factor = variation.draws.speed_factor
             self._mate_v = params.max_v * max(1.0, variation.params.speed_max)
@@ -338,7 +339,9 @@ class SimBase:
         assert self._goal is not None
         loc = self._loc
         start = (self._x + loc.ex, self._y + loc.ey)
-        return self.planner.plan(start, self._goal, obstacles, weights=self._weights)
+        return self.planner.plan(
+            start, self._goal, obstacles, weights=self._weights, memo=self._plan_memo
+        )
 
     def _follow(self, path: PlannedPath) -> None:
         self._target = path.goal

@@ -67,6 +67,21 @@ class PlannedPath:
         return self.waypoints[-1]
 
 
+class PlanMemo:
+    """One robot's last search without mates: its start and goal cells, the cell costs
+    it ran on and the waypoint cells it found (None: no path). A robot that resumes
+    where it paused (a knot of mates stops it again before it has left its planning
+    cell) asks for the same search again; its answer depends on nothing else, so it is
+    not searched again. Owned by the robot, never by the shared planner."""
+
+    __slots__ = ("cells", "key", "weights")
+
+    def __init__(self) -> None:
+        self.key: tuple[tuple[int, int], tuple[int, int]] | None = None
+        self.weights: NDArray[np.float32] | None = None
+        self.cells: NDArray[np.int32] | None = None
+
+
 class GridPlanner:
     """A* planner for one map and one robot size, shared by the robots of a run and by
     the runs a worker executes at once in threads (Dask): it never writes its fields
@@ -296,6 +311,7 @@ class GridPlanner:
         obstacles: Sequence[Point] = (),
         obstacle_radius: float | None = None,
         weights: NDArray[np.float32] | None = None,
+        memo: PlanMemo | None = None,
     ) -> PlannedPath | None:
         """Shortest safe path from ``start`` to ``goal``, or None when there is none.
 
@@ -304,7 +320,9 @@ class GridPlanner:
         one planning cell). Start and goal inside the inflated zone are snapped to the
         nearest free cell first (on the static map: a mate on the goal means no path).
         ``weights``: the run's own cell costs (:meth:`tie_break_weights`) instead of the
-        planner's; passed in, never stored, because the planner is shared.
+        planner's; passed in, never stored, because the planner is shared. ``memo``: the
+        robot's :class:`PlanMemo` (a search without mates from the start cell and to the
+        goal cell of its last one is answered from it).
         """
         s_cell = self._snap(*start, self._clear)
         g_cell = self._snap(*goal, self._clear)
@@ -315,12 +333,21 @@ class GridPlanner:
         if obstacle_radius is None:
             p = self.params
             obstacle_radius = 2 * p.radius + p.block_margin + self.resolution
-        found = self._search(s_cell, g_cell, weights, obstacles, obstacle_radius, start)
-        if found is None:
+        remembered = (
+            memo is not None
+            and not obstacles
+            and memo.key == (s_cell, g_cell)
+            and memo.weights is weights
+        )
+        if remembered:
+            assert memo is not None
+            cells = memo.cells
+        else:
+            cells = self._cells(s_cell, g_cell, weights, obstacles, obstacle_radius, start)
+            if memo is not None and not obstacles:
+                memo.key, memo.weights, memo.cells = (s_cell, g_cell), weights, cells
+        if cells is None:
             return None
-        raw, clear, window = found
-        keep = self._simplify(raw, clear, (window[0], window[2]))
-        cells = raw[keep]
         pts: list[Point] = [self.cell_centre(int(iy), int(ix)) for iy, ix in cells.tolist()]
         # The robot starts where it is, not at a cell centre; same for an exact goal.
         s_exact = self.cell_of(*start) == s_cell
@@ -333,6 +360,22 @@ class GridPlanner:
             pts[-1] = (float(goal[0]), float(goal[1]))
         waypoints = tuple((float(px), float(py)) for px, py in pts)
         return PlannedPath(waypoints, polyline_length(waypoints))
+
+    def _cells(
+        self,
+        s_cell: tuple[int, int],
+        g_cell: tuple[int, int],
+        weights: NDArray[np.float32],
+        obstacles: Sequence[Point],
+        obstacle_radius: float,
+        start: Point,
+    ) -> NDArray[np.int32] | None:
+        """The waypoint cells of the search from ``s_cell`` to ``g_cell`` (None: no path)."""
+        found = self._search(s_cell, g_cell, weights, obstacles, obstacle_radius, start)
+        if found is None:
+            return None
+        raw, clear, window = found
+        return raw[self._simplify(raw, clear, (window[0], window[2]))]
 
     def _simplify(
         self, raw: NDArray[np.int32], clear: NDArray[np.float32], corner: tuple[int, int]
