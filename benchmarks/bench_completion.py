@@ -7,7 +7,8 @@ statuses lost, and the simulated mission time:
 
 * ``s2``: S2 (10 robots) · NB and LF · AH + SLT · SPL 0 / 25 / 50 · seeds 1-5;
 * ``s3``: S3 (30 robots) · NB and LF · AH + SLT · SPL 25 · seeds 1-3;
-* ``s4``: S4 (100 robots) · NB · WLAN · SPL 0 · seed 1.
+* ``s4``: S4 (100 robots) · NB · WLAN · SPL 0 · seed 1, and LF and NB · AH + SLT · SPL
+  25 · seed 1 (on WLAN every robot is always connected, so LF never leaves NB's states).
 
 Runs go to a process pool (``--workers``, default 2); each is deterministic, so the
 figures do not depend on the machine, only its wall times do.
@@ -46,6 +47,10 @@ def cases(only: list[str], seeds: int) -> Iterator[dict[str, Any]]:
                            threshold="slt", spl=25, seed=seed)  # fmt: skip
     if "s4" in only:
         yield dict(scenario="s4", behaviour="nb", network="wlan", threshold="none", spl=0, seed=1)
+        # LF where it matters, out of range (10 minutes on this machine): groups at 100.
+        for behaviour in ("lf", "nb"):
+            yield dict(scenario="s4", behaviour=behaviour, network="ah", threshold="slt",
+                       spl=25, seed=1)  # fmt: skip
 
 
 def run_case(case: dict[str, Any]) -> dict[str, Any]:
