@@ -42,16 +42,12 @@ class TeamView:
 
     def hear_all(self, messages: Sequence[PoseMsg], now: float, own: str) -> None:
         """Poses that arrived together, in order (the robot's own, ``own``, left out):
-        the same as :meth:`hear` for each, in two dict updates."""
+        the same as hearing each in turn (the last of a mate's wins; mates keep the order
+        they were first heard in), in two dict updates."""
         latest = {message.sender: message for message in messages}
         latest.pop(own, None)
         self.poses.update(latest)
         self.heard.update(dict.fromkeys(latest, now))
-
-    def stamp(self, mate: str) -> float | None:
-        """When ``mate``'s last pose was sent (its stamp, on the mission clock)."""
-        message = self.poses.get(mate)
-        return None if message is None else message.stamp
 
     def role(self, mate: str) -> str | None:
         """The role ``mate`` announced in its last pose (None if never heard)."""

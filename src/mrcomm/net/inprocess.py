@@ -29,6 +29,7 @@ receiver's messages of the batch in one call.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -60,6 +61,27 @@ PublishObserver = Callable[[float, str, str, Message], None]
 #: Messages on one topic are decided as a batch when they have at least this many
 #: receivers (below it, numpy's per-call cost exceeds what a batch saves).
 BATCH_FROM = 8
+
+
+@dataclass(frozen=True)
+class _Takers:
+    """A topic's receivers split by how they take a batch (made once, again after each
+    subscription): batch handlers get a receiver's messages in one call, the others one
+    message at a time."""
+
+    targets: list[int]  # receiver indices, in subscription order
+    many: list[list[Callable[[Sequence[Message]], None]]]  # each receiver's batch handlers
+    batched: bool  # any receiver has one
+    plain_columns: list[int]  # columns (of targets) of receivers with other handlers
+    plain: list[list[Handler]]  # those receivers' other handlers
+
+    @classmethod
+    def of(cls, receivers: dict[int, list[Handler]]) -> _Takers:
+        many = [[h.many for h in hs if isinstance(h, BatchHandler)] for hs in receivers.values()]
+        others = [[h for h in hs if not isinstance(h, BatchHandler)] for hs in receivers.values()]
+        columns = [column for column, hs in enumerate(others) if hs]
+        plain = [others[column] for column in columns]
+        return cls(list(receivers), many, any(many), columns, plain)
 
 
 class InProcessEndpoint:
@@ -100,6 +122,7 @@ class InProcessNetwork:
         self._streams = [LossStream(loss_rngs[a]) for a in self.ids]
         # topic -> receiver index -> handlers
         self._subs: dict[str, dict[int, list[Handler]]] = {}
+        self._takers: dict[str, _Takers] = {}  # each topic's, made on its first batch
         self._outbox: list[_Queued] = []
         n = len(self.ids)
         self._links = np.ones((n, n), dtype=bool)
@@ -227,7 +250,10 @@ class InProcessNetwork:
         """Decide and deliver consecutive messages on ``topic`` (none relayed, no radio,
         no observer) together: the same decisions, counts and handler calls, in the same
         order, as one message at a time (see the module docstring)."""
-        targets = list(receivers)
+        takers = self._takers.get(topic)
+        if takers is None:
+            takers = self._takers[topic] = _Takers.of(receivers)
+        targets = takers.targets
         columns = np.array(targets)
         rows = np.array(senders)
         others = rows[:, None] != columns[None, :]  # a sender does not hear itself
@@ -261,27 +287,23 @@ class InProcessNetwork:
                 dropped_loss=reached_n[column] - received_n[column],
                 dropped_range=decided[column] - reached_n[column],
             )
-        handlers = [receivers[r] for r in targets]
         # Batch handlers (receiver-local, publishing nothing: see ports.BatchHandler)
         # get each receiver's messages in one call; the others, which may publish, are
         # called message by message, in order, as one message at a time would call them.
-        many = [[h.many for h in hs if isinstance(h, BatchHandler)] for hs in handlers]
-        if any(many):
+        if takers.batched:
             by_receiver = np.nonzero(received.T)[1].tolist()  # receiver by receiver
             end = 0
-            for column, takers in enumerate(many):
+            for column, takes in enumerate(takers.many):
                 start, end = end, end + received_n[column]
-                if takers and end > start:
+                if takes and end > start:
                     heard = [messages[row] for row in by_receiver[start:end]]
-                    for take in takers:
+                    for take in takes:
                         take(heard)
-            handlers = [[h for h in hs if not isinstance(h, BatchHandler)] for hs in handlers]
-        columns_with = [column for column, hs in enumerate(handlers) if hs]
-        if not columns_with:
+        handlers = takers.plain
+        if not handlers:
             return
-        if len(columns_with) < len(handlers):
-            received = received[:, columns_with]
-            handlers = [handlers[column] for column in columns_with]
+        if len(handlers) < len(targets):
+            received = received[:, takers.plain_columns]
         heard_rows, heard_columns = np.nonzero(received)  # message by message, in order
         for row, column in zip(heard_rows.tolist(), heard_columns.tolist(), strict=True):
             message = messages[row]
@@ -309,6 +331,7 @@ class InProcessNetwork:
 
     def _subscribe(self, receiver: int, topic: str, handler: Handler) -> None:
         self._subs.setdefault(topic, {}).setdefault(receiver, []).append(handler)
+        self._takers.pop(topic, None)
 
     def _topic_counts(self, topic: str) -> list[TopicCounts | None]:
         """``topic``'s counts by receiver index (an entry made on a receiver's first

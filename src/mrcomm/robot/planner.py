@@ -343,7 +343,11 @@ class GridPlanner:
             assert memo is not None
             cells = memo.cells
         else:
-            cells = self._cells(s_cell, g_cell, weights, obstacles, obstacle_radius, start)
+            found = self._search(s_cell, g_cell, weights, obstacles, obstacle_radius, start)
+            cells = None
+            if found is not None:
+                raw, clear, window = found
+                cells = raw[self._simplify(raw, clear, (window[0], window[2]))]
             if memo is not None and not obstacles:
                 memo.key, memo.weights, memo.cells = (s_cell, g_cell), weights, cells
         if cells is None:
@@ -360,22 +364,6 @@ class GridPlanner:
             pts[-1] = (float(goal[0]), float(goal[1]))
         waypoints = tuple((float(px), float(py)) for px, py in pts)
         return PlannedPath(waypoints, polyline_length(waypoints))
-
-    def _cells(
-        self,
-        s_cell: tuple[int, int],
-        g_cell: tuple[int, int],
-        weights: NDArray[np.float32],
-        obstacles: Sequence[Point],
-        obstacle_radius: float,
-        start: Point,
-    ) -> NDArray[np.int32] | None:
-        """The waypoint cells of the search from ``s_cell`` to ``g_cell`` (None: no path)."""
-        found = self._search(s_cell, g_cell, weights, obstacles, obstacle_radius, start)
-        if found is None:
-            return None
-        raw, clear, window = found
-        return raw[self._simplify(raw, clear, (window[0], window[2]))]
 
     def _simplify(
         self, raw: NDArray[np.int32], clear: NDArray[np.float32], corner: tuple[int, int]
