@@ -6,14 +6,20 @@
 * :class:`Base` — the robot's motion layer, like ROS move_base: ``navigate_to(goal)``,
   ``cancel()``, ``status``, ``pose``, odometry.
 
+A bus that delivers in steps may hand a :class:`BatchHandler` each receiver's messages
+of a step at once (:class:`Received`, a share of a :class:`StepBatch`).
+
 Agents are stepped with ``step(now)``: they never sleep, block or read a global clock.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from enum import Enum
-from typing import Protocol
+from typing import Any, Protocol, overload
+
+import numpy as np
+from numpy.typing import NDArray
 
 from mrcomm.messaging.messages import Message
 from mrcomm.world.geometry import Pose
@@ -37,6 +43,84 @@ class BatchHandler:
 
     def __call__(self, message: Message) -> None:
         self.many((message,))
+
+
+class StepBatch:
+    """Messages of one topic delivered together in one step, as a bus that delivers in
+    steps (the in-process bus) hands them to :class:`BatchHandler` s: the messages, each
+    one's sender as the bus numbers the team's endpoints (``0 .. members - 1``, the same
+    numbers every step), and columns of a message field as arrays, made once for all
+    receivers of the batch. A receiver gets its share as :class:`Received`."""
+
+    __slots__ = ("_columns", "_objects", "distinct", "members", "messages", "senders")
+
+    def __init__(self, messages: Sequence[Message], senders: Sequence[int], members: int) -> None:
+        self.messages = messages
+        self.senders: NDArray[np.intp] = np.asarray(senders, dtype=np.intp)
+        self.members = members
+        #: No sender has two messages in the batch (one message per sender and field).
+        self.distinct = len(set(senders)) == len(senders)
+        self._objects: NDArray[np.object_] | None = None
+        self._columns: dict[str, NDArray[Any]] = {}
+
+    def objects(self) -> NDArray[np.object_]:
+        """The messages as an array (picking a receiver's share is then one call)."""
+        if self._objects is None:
+            objects = np.empty(len(self.messages), dtype=object)
+            objects[:] = self.messages
+            self._objects = objects
+        return self._objects
+
+    def column(self, field: str) -> NDArray[np.float64]:
+        """A float field of every message, in order."""
+        values = self._columns.get(field)
+        if values is None:
+            values = np.fromiter(
+                (getattr(m, field) for m in self.messages), np.float64, len(self.messages)
+            )
+            self._columns[field] = values
+        return values
+
+    def labels(self, field: str) -> NDArray[np.object_]:
+        """A field of every message as an array of Python objects (e.g. the senders)."""
+        key = "labels:" + field
+        values = self._columns.get(key)
+        if values is None:
+            values = np.empty(len(self.messages), dtype=object)
+            values[:] = [getattr(m, field) for m in self.messages]
+            self._columns[key] = values
+        return values
+
+
+class Received(Sequence[Message]):
+    """One receiver's share of a :class:`StepBatch`: the messages at ``rows`` (in the
+    order they reached it). Reads as the sequence of those messages."""
+
+    __slots__ = ("batch", "rows")
+
+    def __init__(self, batch: StepBatch, rows: NDArray[np.intp]) -> None:
+        self.batch = batch
+        self.rows = rows
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    @overload
+    def __getitem__(self, index: int) -> Message: ...
+    @overload
+    def __getitem__(self, index: slice) -> Sequence[Message]: ...
+    def __getitem__(self, index: int | slice) -> Message | Sequence[Message]:
+        if isinstance(index, slice):
+            return self.messages()[index]
+        return self.batch.messages[int(self.rows[index])]
+
+    def __iter__(self) -> Iterator[Message]:
+        return iter(self.messages())
+
+    def messages(self) -> list[Message]:
+        """The messages, as a list."""
+        picked: list[Message] = self.batch.objects()[self.rows].tolist()
+        return picked
 
 
 class Bus(Protocol):

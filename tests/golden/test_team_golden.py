@@ -20,3 +20,31 @@ def test_team_run_is_identical_to_the_recorded_one(
     name: str, scenario: Path, options: dict[str, Any]
 ) -> None:
     assert run_team_case(scenario, options) == GOLDEN[name]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("name", "scenario", "options"),
+    [c for c in CASES if c[0].startswith(("s2-nb", "s4"))],
+    ids=lambda c: c if isinstance(c, str) else "",
+)
+def test_a_team_view_on_arrays_gives_the_recorded_run(
+    name: str, scenario: Path, options: dict[str, Any], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Mates found near from position arrays (kept by views in teams of at least
+    ``NEAR_ARRAYS_FROM`` members, 1000-robot teams) leave every result as it was: here
+    with arrays in every view, whatever the team's size."""
+    from mrcomm.agents import team_view
+
+    monkeypatch.setattr(team_view, "NEAR_ARRAYS_FROM", 1)
+    calls = 0
+    near = team_view._Positions.near
+
+    def counted(self: team_view._Positions, x: float, y: float, reach: float) -> list[str]:
+        nonlocal calls
+        calls += 1
+        return near(self, x, y, reach)
+
+    monkeypatch.setattr(team_view._Positions, "near", counted)
+    assert run_team_case(scenario, options) == GOLDEN[name]
+    assert calls > 1000  # the arrays answered

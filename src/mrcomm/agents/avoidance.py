@@ -67,6 +67,12 @@ class Avoidance:
         #: Pauses in a row, whoever the mate, each soon after moving on (1: the first).
         self.pauses_in_row = 0
 
+    @property
+    def reach(self) -> float:
+        """Beyond this distance along either axis a mate cannot be in conflict."""
+        collision = self.params.collision
+        return max(collision.danger_radius, collision.event_horizon)
+
     def detect(
         self,
         pose: Pose,
@@ -78,10 +84,10 @@ class Avoidance:
         already moved on from), which becomes the current conflict with right of way
         decided; None when there is none."""
         collision = self.params.collision
-        # Beyond this along either axis no mate can be in conflict (classify would say
+        # Beyond reach along either axis no mate can be in conflict (classify would say
         # so): skipped without a call, which matters when the team is large.
         # (Chained comparisons rather than abs(): the same test without a call per mate.)
-        reach = max(collision.danger_radius, collision.event_horizon)
+        reach = self.reach
         short = -reach
         x, y = pose.x, pose.y
         for mate in mates:

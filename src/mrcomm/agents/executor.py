@@ -416,9 +416,18 @@ class TaskExecutor:
 
     def _check_collisions(self) -> None:
         pose = self.base.pose
-        conflict = self.avoidance.detect(
-            pose, self.known_mates().values(), self._now, self._goal_distance
+        params = self.params
+        # Only the mates near enough to be in conflict (found without a loop over the
+        # whole team when it is large), in the order known_mates() has them.
+        near = self.team_view.near(
+            pose.x,
+            pose.y,
+            self.avoidance.reach,
+            self._now,
+            params.mate_max_age,
+            params.mate_extrapolation,
         )
+        conflict = self.avoidance.detect(pose, near, self._now, self._goal_distance)
         if conflict is None:
             return
         self.timeline.event(

@@ -23,7 +23,8 @@ all of them at once, each receiver's loss draws taken as an array from its own s
 receiver — and the handlers are called in the same order as one message at a time
 would call them, so the results are the same either way; a
 :class:`~mrcomm.ports.BatchHandler` (a robot hearing its mates' poses) is given each
-receiver's messages of the batch in one call.
+receiver's messages of the batch in one call, as its share (:class:`~mrcomm.ports.Received`)
+of the step's :class:`~mrcomm.ports.StepBatch`, whose arrays are made once for all.
 """
 
 from __future__ import annotations
@@ -43,7 +44,7 @@ from mrcomm.net.delivery import (
 )
 from mrcomm.net.radio.channel import RadioChannel
 from mrcomm.net.relay import Relay
-from mrcomm.ports import BatchHandler, Handler
+from mrcomm.ports import BatchHandler, Handler, Received, StepBatch
 
 #: A message on its way: sender index, topic, message, due time, radio delay (None:
 #: lost to the sender's queue), bits on the air, links it crossed before this send (0:
@@ -291,12 +292,13 @@ class InProcessNetwork:
         # get each receiver's messages in one call; the others, which may publish, are
         # called message by message, in order, as one message at a time would call them.
         if takers.batched:
-            by_receiver = np.nonzero(received.T)[1].tolist()  # receiver by receiver
+            batch = StepBatch(messages, senders, len(self.ids))
+            by_receiver = np.nonzero(received.T)[1]  # receiver by receiver
             end = 0
             for column, takes in enumerate(takers.many):
                 start, end = end, end + received_n[column]
                 if takes and end > start:
-                    heard = [messages[row] for row in by_receiver[start:end]]
+                    heard = Received(batch, by_receiver[start:end])
                     for take in takes:
                         take(heard)
         handlers = takers.plain

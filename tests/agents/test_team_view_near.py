@@ -1,0 +1,95 @@
+"""A large team's view of its mates kept as arrays (poses heard in the in-process bus's
+step batches) answers which mates are near exactly as the loop over its mates does:
+the same mates, in the order they were first heard, from the latest pose of each."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mrcomm.agents.team_view import NEAR_ARRAYS_FROM, TeamView
+from mrcomm.messaging.messages import PoseMsg
+from mrcomm.ports import Received, StepBatch
+
+from .fakes import pose_of
+
+MEMBERS = NEAR_ARRAYS_FROM + 50
+
+
+def _steps(seed: int) -> list[list[tuple[int, PoseMsg]]]:
+    """Twenty steps of poses of a team: each step a random subset of the members (the
+    one receiver, member 0, never among them; some members first heard late) at random
+    places in a 40 m square, so that near and far mates change from step to step."""
+    rng = np.random.default_rng(seed)
+    steps = []
+    for _ in range(20):
+        senders = rng.choice(
+            np.arange(1, MEMBERS), size=int(rng.integers(1, MEMBERS)), replace=False
+        )
+        steps.append(
+            [(int(s), pose_of(f"robot_{s}", *rng.uniform(0.0, 40.0, 2).tolist())) for s in senders]
+        )
+    return steps
+
+
+def _received(step: list[tuple[int, PoseMsg]]) -> Received:
+    """The step as the bus hands it over: a batch of everyone's poses (the receiver's
+    own included, as a batch has it) and the receiver's share of it, in order."""
+    own = pose_of("robot_0", 20.0, 20.0)
+    batch = StepBatch([own, *(m for _, m in step)], [0, *(s for s, _ in step)], MEMBERS)
+    return Received(batch, np.arange(1, len(step) + 1))
+
+
+def test_the_arrays_find_the_near_mates_the_loop_finds() -> None:
+    arrays, loop = TeamView(), TeamView()
+    rng = np.random.default_rng(7)
+    checked = 0
+    for now, step in enumerate(_steps(3)):
+        arrays.hear_all(_received(step), float(now), "robot_0")
+        loop.hear_all([m for _, m in step], float(now), "robot_0")
+        assert arrays._positions is not None and loop._positions is None
+        assert list(arrays.poses.items()) == list(loop.poses.items())
+        assert arrays.heard == loop.heard
+        for x, y in rng.uniform(-2.0, 42.0, (30, 2)).tolist():
+            reach = float(rng.uniform(0.5, 6.0))
+            near = arrays.near(x, y, reach, float(now), None, 0.0)
+            assert near == loop.near(x, y, reach, float(now), None, 0.0)
+            checked += len(near)
+    assert checked > 100  # the queries found mates, not only empty answers
+
+
+def test_a_mate_on_the_edge_of_reach_is_near_in_both() -> None:
+    """The arrays' test is the loop's exactly (a mate exactly ``reach`` away counts)."""
+    arrays, loop = TeamView(), TeamView()
+    step = [(1, pose_of("robot_1", 10.0, 10.0)), (2, pose_of("robot_2", 12.5, 10.0))]
+    arrays.hear_all(_received(step), 0.0, "robot_0")
+    loop.hear_all([m for _, m in step], 0.0, "robot_0")
+    for view in (arrays, loop):
+        assert [m.robot for m in view.near(10.0, 10.0, 2.5, 0.0, None, 0.0)] == [
+            "robot_1",
+            "robot_2",
+        ]
+        assert [m.robot for m in view.near(10.0, 10.0, 2.4, 0.0, None, 0.0)] == ["robot_1"]
+
+
+def test_the_arrays_are_dropped_once_a_pose_arrives_otherwise() -> None:
+    """Poses heard one at a time (or a batch with a mate twice) would leave the arrays
+    behind: the view drops them for good and loops, with the same answers."""
+    view = TeamView()
+    steps = _steps(5)
+    view.hear_all(_received(steps[0]), 0.0, "robot_0")
+    assert view._positions is not None
+    view.hear(steps[1][0][1], 1.0)
+    assert view._positions is None
+    view.hear_all(_received(steps[2]), 2.0, "robot_0")
+    assert view._positions is None
+    twice = [(1, pose_of("robot_1", 1.0, 1.0)), (1, pose_of("robot_1", 2.0, 2.0))]
+    fresh = TeamView()
+    fresh.hear_all(_received(twice), 0.0, "robot_0")
+    assert fresh._positions is None and fresh.poses["robot_1"].x == 2.0
+
+
+def test_a_receivers_share_reads_as_its_messages() -> None:
+    step = [(4, pose_of("robot_4", 1.0, 0.0)), (9, pose_of("robot_9", 2.0, 0.0))]
+    share = _received(step)
+    assert len(share) == 2 and list(share) == [m for _, m in step]
+    assert share[1] is step[1][1] and share[-1] is step[1][1] and share[:1] == [step[0][1]]
