@@ -4,6 +4,8 @@ the same mates, in the order they were first heard, from the latest pose of each
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from mrcomm.agents.team_view import NEAR_ARRAYS_FROM, TeamView
@@ -46,9 +48,12 @@ def test_the_arrays_find_the_near_mates_the_loop_finds() -> None:
     for now, step in enumerate(_steps(3)):
         arrays.hear_all(_received(step), float(now), "robot_0")
         loop.hear_all([m for _, m in step], float(now), "robot_0")
-        assert arrays._positions is not None and loop._positions is None
+        assert arrays._table is not None and loop._table is None
         assert list(arrays.poses.items()) == list(loop.poses.items())
-        assert arrays.heard == loop.heard
+        assert list(arrays.heard.items()) == list(loop.heard.items())
+        assert arrays.heard.get("robot_0") is None and arrays.age("robot_0", now) == math.inf
+        for seconds in (0.5, 1.0, 2.5):
+            assert arrays.heard_within(seconds, now + 1.0) == loop.heard_within(seconds, now + 1.0)
         for x, y in rng.uniform(-2.0, 42.0, (30, 2)).tolist():
             reach = float(rng.uniform(0.5, 6.0))
             near = arrays.near(x, y, reach, float(now), None, 0.0)
@@ -77,15 +82,19 @@ def test_the_arrays_are_dropped_once_a_pose_arrives_otherwise() -> None:
     view = TeamView()
     steps = _steps(5)
     view.hear_all(_received(steps[0]), 0.0, "robot_0")
-    assert view._positions is not None
+    assert view._table is not None
+    heard = list(view.heard.items())
     view.hear(steps[1][0][1], 1.0)
-    assert view._positions is None
+    assert view._table is None
+    assert list(view.heard.items())[: len(heard)] == [
+        (m, 1.0 if m == steps[1][0][1].sender else t) for m, t in heard
+    ]
     view.hear_all(_received(steps[2]), 2.0, "robot_0")
-    assert view._positions is None
+    assert view._table is None
     twice = [(1, pose_of("robot_1", 1.0, 1.0)), (1, pose_of("robot_1", 2.0, 2.0))]
     fresh = TeamView()
     fresh.hear_all(_received(twice), 0.0, "robot_0")
-    assert fresh._positions is None and fresh.poses["robot_1"].x == 2.0
+    assert fresh._table is None and fresh.poses["robot_1"].x == 2.0
 
 
 def test_a_receivers_share_reads_as_its_messages() -> None:

@@ -13,7 +13,7 @@ pose without inventing turns the mate may have made)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from typing import cast
 
 import numpy as np
@@ -32,21 +32,24 @@ NEAR_ARRAYS_FROM = 200
 _NEVER = np.iinfo(np.int64).max
 
 
-class _Positions:
-    """Each mate's last heard position as arrays, indexed by the numbers the bus gives
-    the team's endpoints, and the order mates were first heard in (the order of
-    :attr:`TeamView.poses`). Kept while every pose arrives in a step batch
-    (:class:`~mrcomm.ports.Received`), so that finding the mates near a point costs a
-    few array operations, not a loop over the whole team."""
+class _MateTable:
+    """Each mate's last heard position and when it was heard, as arrays indexed by the
+    numbers the bus gives the team's endpoints, and the order mates were first heard in
+    (the order of :attr:`TeamView.poses`). Kept while every pose arrives in a step batch
+    (:class:`~mrcomm.ports.Received`), so that hearing a batch and finding the mates
+    near a point cost a few array operations, not a loop over the whole team."""
 
     def __init__(self, members: int) -> None:
         self.xs: NDArray[np.float64] = np.full(members, np.nan)
         self.ys: NDArray[np.float64] = np.full(members, np.nan)
+        #: When each member's last pose arrived (NaN: never).
+        self.heard_at: NDArray[np.float64] = np.full(members, np.nan)
         self.first: NDArray[np.int64] = np.full(members, _NEVER, dtype=np.int64)
         self.names: list[str] = [""] * members
-        self._heard = 0  # mates heard so far
+        #: Each heard mate's member number.
+        self.number: dict[str, int] = {}
 
-    def hear(self, received: Received, names: list[str]) -> None:
+    def hear(self, received: Received, names: list[str], now: float) -> None:
         """Take a receiver's share of a batch with no sender twice; ``names``: its
         senders, in order."""
         batch, rows = received.batch, received.rows
@@ -54,12 +57,14 @@ class _Positions:
         new = np.flatnonzero(self.first[senders] == _NEVER)
         if len(new):
             fresh = senders[new]
-            self.first[fresh] = np.arange(self._heard, self._heard + len(new))
-            self._heard += len(new)
+            heard = len(self.number)
+            self.first[fresh] = np.arange(heard, heard + len(new))
             for at, number in zip(new.tolist(), fresh.tolist(), strict=True):
                 self.names[number] = names[at]
+                self.number[names[at]] = number
         self.xs[senders] = batch.column("x")[rows]
         self.ys[senders] = batch.column("y")[rows]
+        self.heard_at[senders] = now
 
     def near(self, x: float, y: float, reach: float) -> list[str]:
         """The mates whose last position is within ``reach`` of (x, y) along both axes
@@ -74,6 +79,29 @@ class _Positions:
         return [names[i] for i in found.tolist()]
 
 
+class _HeardTimes(Mapping[str, float]):
+    """:attr:`TeamView.heard` read from a :class:`_MateTable`: when each mate's last
+    pose arrived, mates in the order they were first heard (that of the poses)."""
+
+    __slots__ = ("_poses", "_table")
+
+    def __init__(self, table: _MateTable, poses: dict[str, PoseMsg]) -> None:
+        self._table = table
+        self._poses = poses
+
+    def __getitem__(self, mate: str) -> float:
+        number = self._table.number.get(mate)
+        if number is None:
+            raise KeyError(mate)
+        return float(self._table.heard_at[number])
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._poses)
+
+    def __len__(self) -> int:
+        return len(self._poses)
+
+
 class TeamView:
     """Each mate's last received pose, with the time it was received.
 
@@ -85,14 +113,16 @@ class TeamView:
     def __init__(self) -> None:
         #: Each mate's last pose message (a :class:`Mate` as collision avoidance reads it).
         self.poses: dict[str, PoseMsg] = {}
-        #: When each mate's last pose arrived (the receiver's clock).
-        self.heard: dict[str, float] = {}
+        self._heard: dict[str, float] = {}
+        #: When each mate's last pose arrived (the receiver's clock); read-only.
+        self.heard: Mapping[str, float] = self._heard
         #: Mates whose process has gone, as the transport's liveliness says (live mode;
         #: always empty in simulation, where no process dies).
         self.departed: set[str] = set()
-        #: Every mate's position as arrays while all poses come in step batches (the
-        #: in-process bus); None otherwise (then :meth:`near` loops over the mates).
-        self._positions: _Positions | None = None
+        #: In a large team whose poses all come in step batches (the in-process bus),
+        #: the mates' positions and heard times as arrays; None otherwise (then the
+        #: heard times are a dict and :meth:`near` loops over the mates).
+        self._table: _MateTable | None = None
         self._batches_only = True
 
     def hear(self, message: PoseMsg, now: float) -> None:
@@ -107,21 +137,26 @@ class TeamView:
             # A bus's share of a step batch never holds the receiver's own messages.
             batch = messages.batch
             names: list[str] = batch.labels("sender")[messages.rows].tolist()
+            if not self.poses and batch.members >= NEAR_ARRAYS_FROM:  # the first poses
+                self._table = _MateTable(batch.members)
+                self.heard = _HeardTimes(self._table, self.poses)
             poses = cast("list[PoseMsg]", messages.messages())
             self.poses.update(zip(names, poses, strict=True))
-            self.heard.update(dict.fromkeys(names, now))
-            if self._positions is None and batch.members >= NEAR_ARRAYS_FROM:
-                self._positions = _Positions(batch.members)
-            if self._positions is not None:
-                self._positions.hear(messages, names)
+            if self._table is not None:
+                self._table.hear(messages, names, now)
+            else:
+                self._heard.update(dict.fromkeys(names, now))
             return
-        # Positions stay in step with the poses only if every pose comes in a batch.
+        # The table stays in step with the poses only if every pose comes in a batch.
         self._batches_only = False
-        self._positions = None
+        if self._table is not None:
+            self._heard = dict(self.heard)
+            self.heard = self._heard
+            self._table = None
         latest = {message.sender: message for message in messages}
         latest.pop(own, None)
         self.poses.update(latest)
-        self.heard.update(dict.fromkeys(latest, now))
+        self._heard.update(dict.fromkeys(latest, now))
 
     def role(self, mate: str) -> str | None:
         """The role ``mate`` announced in its last pose (None if never heard)."""
@@ -176,10 +211,10 @@ class TeamView:
         """The mates of :meth:`known` (same arguments) within ``reach`` of (x, y) along
         both axes, in the same order: what a robot checks for near collisions. From
         the position arrays in a large team fed by step batches, else by a loop."""
-        positions = self._positions
-        if positions is not None and max_age is None and extrapolation <= 0:
+        table = self._table
+        if table is not None and max_age is None and extrapolation <= 0:
             poses = self.poses  # known() is the poses themselves here
-            return [poses[name] for name in positions.near(x, y, reach)]
+            return [poses[name] for name in table.near(x, y, reach)]
         short = -reach
         return [
             mate
@@ -189,4 +224,6 @@ class TeamView:
 
     def heard_within(self, seconds: float, now: float) -> bool:
         """Whether any mate's pose arrived less than ``seconds`` ago."""
-        return any(now - t < seconds for t in self.heard.values())
+        if self._table is not None:
+            return bool(np.any(now - self._table.heard_at < seconds))  # NaN: never heard
+        return any(now - t < seconds for t in self._heard.values())

@@ -293,6 +293,7 @@ class LinkRecorder:
         self._pairs = np.triu_indices(robots, k=1)
         self._pair_state = np.zeros(len(self._pairs[0]), dtype=np.int8)
         self._pair_since = np.zeros(len(self._pairs[0]))
+        self._open_pairs = False  # any pair in warning or out of range
         self._closed: list[tuple[str, str, str, float, float]] = []
         self._next_group = 0.0
         #: (time, robots in the largest connected group) at :data:`GROUP_PERIOD`.
@@ -300,13 +301,21 @@ class LinkRecorder:
 
     def record(self, state: LinkState, dt: float, now: float) -> list[tuple[str, str, float]]:
         """Add one step of ``dt`` s; return the RSSI samples taken now (usually none)."""
-        self.time_warning += dt * state.warning
-        self.time_disconnected += dt * ~state.connected
-        self.warning_onsets += state.warning & ~self._prev_warning
+        # Most steps of most runs have no warning and every link connected (a WLAN, a
+        # team in range): then the sums below would add zeros, skipped as they would
+        # change nothing (n² cells each, a million in a team of 1000).
+        warned = bool(state.warning.any())
+        if warned:
+            self.time_warning += dt * state.warning
+            self.warning_onsets += state.warning & ~self._prev_warning
         self._prev_warning = state.warning
+        disconnected = not state.connected.all()
+        if disconnected:
+            self.time_disconnected += dt * ~state.connected
         np.fmin(self.min_distance, state.distance, out=self.min_distance)
         np.fmax(self.max_distance, state.distance, out=self.max_distance)
-        self._track_pair_states(state, now)
+        if warned or disconnected or self._open_pairs:
+            self._track_pair_states(state, now)
         n = self.robots
         if now >= self._next_group:
             self._next_group += GROUP_PERIOD
@@ -347,6 +356,7 @@ class LinkRecorder:
             self._close(k, start)
             self._pair_state[k] = codes[k]
             self._pair_since[k] = start
+        self._open_pairs = bool(self._pair_state.any())
 
     def _close(self, k: int, end: float) -> None:
         code = int(self._pair_state[k])
