@@ -322,6 +322,14 @@ class TaskExecutor:
         params = self.params
         return self.team_view.known(self._now, params.mate_max_age, params.mate_extrapolation)
 
+    def _mates_near(self, pose: Pose, reach: float) -> list[Mate]:
+        """The mates of :meth:`known_mates` within ``reach`` of ``pose`` along both axes,
+        in the same order (found without a loop over the whole team when it is large)."""
+        params = self.params
+        return self.team_view.near(
+            pose.x, pose.y, reach, self._now, params.mate_max_age, params.mate_extrapolation
+        )
+
     def _plan_new_tasks(self) -> None:
         self._new_tasks = False
         self.trigger("new_tasks")
@@ -330,7 +338,10 @@ class TaskExecutor:
         if self._new_tasks and self.agenda:  # given tasks while making way, say
             self._plan_new_tasks()
             return
-        for mate in self.known_mates().values():
+        # Only mates within the make-way radius can be in the way (found without a loop
+        # over the whole team when it is large), in the order known_mates() has them.
+        pose = self.base.pose
+        for mate in self._mates_near(pose, self.params.make_way_radius):
             if self.in_way_of(mate):
                 self.step_aside(mate)
                 return
@@ -416,17 +427,8 @@ class TaskExecutor:
 
     def _check_collisions(self) -> None:
         pose = self.base.pose
-        params = self.params
-        # Only the mates near enough to be in conflict (found without a loop over the
-        # whole team when it is large), in the order known_mates() has them.
-        near = self.team_view.near(
-            pose.x,
-            pose.y,
-            self.avoidance.reach,
-            self._now,
-            params.mate_max_age,
-            params.mate_extrapolation,
-        )
+        # Only the mates near enough to be in conflict.
+        near = self._mates_near(pose, self.avoidance.reach)
         conflict = self.avoidance.detect(pose, near, self._now, self._goal_distance)
         if conflict is None:
             return
