@@ -31,9 +31,9 @@ def test_team_run_is_identical_to_the_recorded_one(
 def test_a_team_view_on_arrays_gives_the_recorded_run(
     name: str, scenario: Path, options: dict[str, Any], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """Mates found near from position arrays (kept by views in teams of at least
-    ``NEAR_ARRAYS_FROM`` members, 1000-robot teams) leave every result as it was: here
-    with arrays in every view, whatever the team's size."""
+    """A mate table (positions and heard times as arrays, kept by views in teams of at
+    least ``NEAR_ARRAYS_FROM`` members, e.g. 1000 robots) leaves every result as it was:
+    here with a table in every view, whatever the team's size, NB and LF."""
     from mrcomm.agents import team_view
 
     monkeypatch.setattr(team_view, "NEAR_ARRAYS_FROM", 1)
