@@ -134,25 +134,24 @@ class TeamView:
         the same as hearing each in turn (the last of a mate's wins; mates keep the order
         they were first heard in), in two dict updates."""
         if self._batches_only and isinstance(messages, Received) and messages.batch.distinct:
-            # A bus's share of a step batch never holds the receiver's own messages.
             batch = messages.batch
-            names: list[str] = batch.labels("sender")[messages.rows].tolist()
             if not self.poses and batch.members >= NEAR_ARRAYS_FROM:  # the first poses
                 self._table = _MateTable(batch.members)
                 self.heard = _HeardTimes(self._table, self.poses)
-            poses = cast("list[PoseMsg]", messages.messages())
-            self.poses.update(zip(names, poses, strict=True))
             if self._table is not None:
+                # A bus's share of a step batch never holds the receiver's own messages.
+                names: list[str] = batch.labels("sender")[messages.rows].tolist()
+                poses = cast("list[PoseMsg]", messages.messages())
+                self.poses.update(zip(names, poses, strict=True))
                 self._table.hear(messages, names, now)
-            else:
-                self._heard.update(dict.fromkeys(names, now))
-            return
-        # The table stays in step with the poses only if every pose comes in a batch.
-        self._batches_only = False
-        if self._table is not None:
-            self._heard = dict(self.heard)
-            self.heard = self._heard
-            self._table = None
+                return
+        elif self._batches_only:
+            # The table stays in step with the poses only if every pose comes in a batch.
+            self._batches_only = False
+            if self._table is not None:
+                self._heard = dict(self.heard)
+                self.heard = self._heard
+                self._table = None
         latest = {message.sender: message for message in messages}
         latest.pop(own, None)
         self.poses.update(latest)
