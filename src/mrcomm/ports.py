@@ -14,7 +14,7 @@ Agents are stepped with ``step(now)``: they never sleep, block or read a global 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from enum import Enum
 from typing import Any, Protocol, overload
 
@@ -53,16 +53,24 @@ PICK_FROM = 64
 class StepBatch:
     """Messages of one topic delivered together in one step, as a bus that delivers in
     steps (the in-process bus) hands them to :class:`BatchHandler` s: the messages, each
-    one's sender as the bus numbers the team's endpoints (``0 .. members - 1``, the same
-    numbers every step), and columns of a message field as arrays, made once for all
+    one's sender as the bus numbers the team's endpoints (its place in ``members``, the
+    same every step), and columns of a message field as arrays, made once for all
     receivers of the batch. A receiver gets its share as :class:`Received`."""
 
-    __slots__ = ("_columns", "_objects", "distinct", "members", "messages", "senders")
+    __slots__ = ("_columns", "_objects", "distinct", "index", "members", "messages", "senders")
 
-    def __init__(self, messages: Sequence[Message], senders: Sequence[int], members: int) -> None:
+    def __init__(
+        self,
+        messages: Sequence[Message],
+        senders: Sequence[int],
+        members: Sequence[str],
+        index: Mapping[str, int],
+    ) -> None:
         self.messages = messages
         self.senders: NDArray[np.intp] = np.asarray(senders, dtype=np.intp)
+        #: The team's endpoints (agent ids) by number, and each one's number.
         self.members = members
+        self.index = index
         #: No sender has two messages in the batch (one message per sender and field).
         self.distinct = len(set(senders)) == len(senders)
         self._objects: NDArray[np.object_] | None = None

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from mrcomm.agents.collision import Mate, MateState
 from mrcomm.messaging.messages import PoseMsg
-from mrcomm.ports import Received
+from mrcomm.ports import Received, StepBatch
 
 #: A team of at least this many members (as the bus counts them) keeps position arrays
 #: when its poses come in step batches, and :meth:`TeamView.near` answers from them:
@@ -29,7 +29,7 @@ from mrcomm.ports import Received
 #: per-call overhead (measured: the loop ~0.05 us per mate; the arrays ~9 us per query
 #: and ~6-15 us per batch heard, whatever the team's size).
 NEAR_ARRAYS_FROM = 200
-_NEVER = np.iinfo(np.int64).max
+_NEVER = np.iinfo(np.int32).max
 
 
 class _MateTable:
@@ -37,34 +37,39 @@ class _MateTable:
     numbers the bus gives the team's endpoints, and the order mates were first heard in
     (the order of :attr:`TeamView.poses`). Kept while every pose arrives in a step batch
     (:class:`~mrcomm.ports.Received`), so that hearing a batch and finding the mates
-    near a point cost a few array operations, not a loop over the whole team."""
+    near a point cost a few array operations, not a loop over the whole team. The
+    endpoints' names and numbers are the bus's, shared by every view."""
 
-    def __init__(self, members: int) -> None:
+    def __init__(self, batch: StepBatch) -> None:
+        members = len(batch.members)
+        self.names = batch.members
+        self.number = batch.index
         self.xs: NDArray[np.float64] = np.full(members, np.nan)
         self.ys: NDArray[np.float64] = np.full(members, np.nan)
         #: When each member's last pose arrived (NaN: never).
         self.heard_at: NDArray[np.float64] = np.full(members, np.nan)
-        self.first: NDArray[np.int64] = np.full(members, _NEVER, dtype=np.int64)
-        self.names: list[str] = [""] * members
-        #: Each heard mate's member number.
-        self.number: dict[str, int] = {}
+        #: The order members were first heard in (_NEVER: not yet).
+        self.first: NDArray[np.int32] = np.full(members, _NEVER, dtype=np.int32)
+        self._heard = 0  # mates heard so far
 
-    def hear(self, received: Received, names: list[str], now: float) -> None:
-        """Take a receiver's share of a batch with no sender twice; ``names``: its
-        senders, in order."""
+    def hear(self, received: Received, now: float) -> None:
+        """Take a receiver's share of a batch with no sender twice."""
         batch, rows = received.batch, received.rows
         senders = batch.senders[rows]
         new = np.flatnonzero(self.first[senders] == _NEVER)
         if len(new):
-            fresh = senders[new]
-            heard = len(self.number)
-            self.first[fresh] = np.arange(heard, heard + len(new))
-            for at, number in zip(new.tolist(), fresh.tolist(), strict=True):
-                self.names[number] = names[at]
-                self.number[names[at]] = number
+            self.first[senders[new]] = np.arange(self._heard, self._heard + len(new))
+            self._heard += len(new)
         self.xs[senders] = batch.column("x")[rows]
         self.ys[senders] = batch.column("y")[rows]
         self.heard_at[senders] = now
+
+    def heard(self, mate: str) -> float | None:
+        """When ``mate``'s last pose arrived (None: never)."""
+        number = self.number.get(mate)
+        if number is None or self.first[number] == _NEVER:
+            return None
+        return float(self.heard_at[number])
 
     def near(self, x: float, y: float, reach: float) -> list[str]:
         """The mates whose last position is within ``reach`` of (x, y) along both axes
@@ -90,10 +95,10 @@ class _HeardTimes(Mapping[str, float]):
         self._poses = poses
 
     def __getitem__(self, mate: str) -> float:
-        number = self._table.number.get(mate)
-        if number is None:
+        heard = self._table.heard(mate)
+        if heard is None:
             raise KeyError(mate)
-        return float(self._table.heard_at[number])
+        return heard
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._poses)
@@ -135,15 +140,15 @@ class TeamView:
         they were first heard in), in two dict updates."""
         if self._batches_only and isinstance(messages, Received) and messages.batch.distinct:
             batch = messages.batch
-            if not self.poses and batch.members >= NEAR_ARRAYS_FROM:  # the first poses
-                self._table = _MateTable(batch.members)
+            if not self.poses and len(batch.members) >= NEAR_ARRAYS_FROM:  # the first poses
+                self._table = _MateTable(batch)
                 self.heard = _HeardTimes(self._table, self.poses)
             if self._table is not None:
                 # A bus's share of a step batch never holds the receiver's own messages.
                 names: list[str] = batch.labels("sender")[messages.rows].tolist()
                 poses = cast("list[PoseMsg]", messages.messages())
                 self.poses.update(zip(names, poses, strict=True))
-                self._table.hear(messages, names, now)
+                self._table.hear(messages, now)
                 return
         elif self._batches_only:
             # The table stays in step with the poses only if every pose comes in a batch.

@@ -117,6 +117,7 @@ class InProcessNetwork:
         relay: Relay | None = None,
     ) -> None:
         self.ids: tuple[str, ...] = tuple(agent_ids)
+        self._numbers = {agent: i for i, agent in enumerate(self.ids)}
         self.policy = policy
         self.channel = channel
         self.relay = relay
@@ -292,7 +293,7 @@ class InProcessNetwork:
         # get each receiver's messages in one call; the others, which may publish, are
         # called message by message, in order, as one message at a time would call them.
         if takers.batched:
-            batch = StepBatch(messages, senders, len(self.ids))
+            batch = StepBatch(messages, senders, self.ids, self._numbers)
             by_receiver = np.nonzero(received.T)[1]  # receiver by receiver
             end = 0
             for column, takes in enumerate(takers.many):
