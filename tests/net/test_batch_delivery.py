@@ -22,9 +22,11 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def test_take_gives_the_draws_in_order() -> None:
     one, many = LossStream(np.random.default_rng(5)), LossStream(np.random.default_rng(5))
-    singles = [one.draw() for _ in range(3000)]
+    singles = [one.draw() for _ in range(4000)]
     taken = [many.draw(), *many.take(1500).tolist(), *many.take(0).tolist()]
     taken += many.take(1499).tolist()
+    # A batch refilled by take() and then read by draw() (its list made lazily).
+    taken += [*many.take(100).tolist(), *(many.draw() for _ in range(900))]
     assert taken == singles
 
 

@@ -72,18 +72,23 @@ class LossStream:
     def __init__(self, rng: np.random.Generator) -> None:
         self._rng = rng
         self._array = np.empty(0)
-        self._buffer: list[float] = []  # the same batch as a list: a faster scalar read
+        # The same batch as a list (a faster scalar read), made when draw() first needs
+        # it: a stream read only by take() (a large team's poses) never does.
+        self._buffer: list[float] | None = []
         self._next = 0
 
     def _refill(self) -> None:
         self._array = self._rng.random(_UNIFORM_BATCH)
-        self._buffer = self._array.tolist()
+        self._buffer = None
         self._next = 0
 
     def draw(self) -> float:
-        if self._next >= len(self._buffer):
+        if self._next >= len(self._array):
             self._refill()
-        value = self._buffer[self._next]
+        buffer = self._buffer
+        if buffer is None:
+            buffer = self._buffer = self._array.tolist()
+        value = buffer[self._next]
         self._next += 1
         return value
 
@@ -91,9 +96,9 @@ class LossStream:
         """The next ``k`` draws (as ``k`` calls of :meth:`draw` would give them)."""
         parts = []
         while k > 0:
-            if self._next >= len(self._buffer):
+            if self._next >= len(self._array):
                 self._refill()
-            end = min(len(self._buffer), self._next + k)
+            end = min(len(self._array), self._next + k)
             parts.append(self._array[self._next : end])
             k -= end - self._next
             self._next = end
