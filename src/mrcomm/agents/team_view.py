@@ -23,11 +23,11 @@ from mrcomm.agents.collision import Mate, MateState
 from mrcomm.messaging.messages import PoseMsg
 from mrcomm.ports import Received, StepBatch
 
-#: A team of at least this many members (as the bus counts them) keeps position arrays
-#: when its poses come in step batches, and :meth:`TeamView.near` answers from them:
-#: below it a loop over the mates costs less than the arrays' upkeep and numpy's
-#: per-call overhead (measured: the loop ~0.05 us per mate; the arrays ~9 us per query
-#: and ~6-15 us per batch heard, whatever the team's size).
+#: A team of at least this many members (as the bus counts them) keeps a mate table
+#: (:class:`_MateTable`) when its poses come in step batches, and :meth:`TeamView.near`
+#: answers from it: below it a loop over the mates costs less than the table's upkeep
+#: and numpy's per-call overhead (measured: the loop ~0.05 us per mate; the table ~9 us
+#: per query and ~6-15 us per batch heard, whatever the team's size).
 NEAR_ARRAYS_FROM = 200
 _NEVER = np.iinfo(np.int32).max
 
@@ -137,7 +137,8 @@ class TeamView:
     def hear_all(self, messages: Sequence[PoseMsg], now: float, own: str) -> None:
         """Poses that arrived together, in order (the robot's own, ``own``, left out):
         the same as hearing each in turn (the last of a mate's wins; mates keep the order
-        they were first heard in), in two dict updates."""
+        they were first heard in): two dict updates, or with a mate table one dict
+        update and a few array writes."""
         if self._batches_only and isinstance(messages, Received) and messages.batch.distinct:
             batch = messages.batch
             if not self.poses and len(batch.members) >= NEAR_ARRAYS_FROM:  # the first poses
