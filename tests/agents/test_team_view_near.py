@@ -5,9 +5,11 @@ the same mates, in the order they were first heard, from the latest pose of each
 from __future__ import annotations
 
 import math
+from collections.abc import Collection
 
 import numpy as np
 
+from mrcomm.agents.collision import Mate
 from mrcomm.agents.team_view import NEAR_ARRAYS_FROM, TeamView
 from mrcomm.messaging.messages import PoseMsg
 from mrcomm.ports import Received, StepBatch
@@ -43,6 +45,17 @@ def _received(step: list[tuple[int, PoseMsg]]) -> Received:
     return Received(batch, np.arange(1, len(step) + 1))
 
 
+def _in_box(mates: Collection[Mate], x: float, y: float, reach: float) -> list[Mate]:
+    """The mates within ``reach`` along both axes, as the callers of near() test it."""
+    return [m for m in mates if -reach <= m.x - x <= reach and -reach <= m.y - y <= reach]
+
+
+def test_without_a_table_every_known_mate_is_a_candidate() -> None:
+    view = TeamView()
+    view.hear_all([pose_of("robot_1", 0.0, 0.0), pose_of("robot_2", 90.0, 0.0)], 0.0, "")
+    assert [m.robot for m in view.near(0.0, 0.0, 1.0, 0.0, None, 0.0)] == ["robot_1", "robot_2"]
+
+
 def test_the_arrays_find_the_near_mates_the_loop_finds() -> None:
     arrays, loop = TeamView(), TeamView()
     rng = np.random.default_rng(7)
@@ -59,7 +72,7 @@ def test_the_arrays_find_the_near_mates_the_loop_finds() -> None:
         for x, y in rng.uniform(-2.0, 42.0, (30, 2)).tolist():
             reach = float(rng.uniform(0.5, 6.0))
             near = arrays.near(x, y, reach, float(now), None, 0.0)
-            assert near == loop.near(x, y, reach, float(now), None, 0.0)
+            assert near == _in_box(loop.near(x, y, reach, float(now), None, 0.0), x, y, reach)
             checked += len(near)
     assert checked > 100  # the queries found mates, not only empty answers
 
@@ -71,11 +84,14 @@ def test_a_mate_on_the_edge_of_reach_is_near_in_both() -> None:
     arrays.hear_all(_received(step), 0.0, "robot_0")
     loop.hear_all([m for _, m in step], 0.0, "robot_0")
     for view in (arrays, loop):
-        assert [m.robot for m in view.near(10.0, 10.0, 2.5, 0.0, None, 0.0)] == [
+        assert [
+            m.robot for m in _in_box(view.near(10.0, 10.0, 2.5, 0.0, None, 0.0), 10.0, 10.0, 2.5)
+        ] == [
             "robot_1",
             "robot_2",
         ]
-        assert [m.robot for m in view.near(10.0, 10.0, 2.4, 0.0, None, 0.0)] == ["robot_1"]
+    assert [m.robot for m in arrays.near(10.0, 10.0, 2.5, 0.0, None, 0.0)] == ["robot_1", "robot_2"]
+    assert [m.robot for m in arrays.near(10.0, 10.0, 2.4, 0.0, None, 0.0)] == ["robot_1"]
 
 
 def test_the_arrays_are_dropped_once_a_pose_arrives_otherwise() -> None:

@@ -15,7 +15,7 @@ Communication-aware behaviours subclass this executor (LF encloses NB).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from typing import Any, ClassVar, cast
 
 from pydantic import BaseModel, ConfigDict, Field
@@ -322,9 +322,10 @@ class TaskExecutor:
         params = self.params
         return self.team_view.known(self._now, params.mate_max_age, params.mate_extrapolation)
 
-    def _mates_near(self, pose: Pose, reach: float) -> list[Mate]:
-        """The mates of :meth:`known_mates` within ``reach`` of ``pose`` along both axes,
-        in the same order (found without a loop over the whole team when it is large)."""
+    def _mates_near(self, pose: Pose, reach: float) -> Collection[Mate]:
+        """The mates of :meth:`known_mates` that may lie within ``reach`` of ``pose``
+        along both axes, in the same order (:meth:`TeamView.near`: without a loop over
+        the whole team when it is large); the caller tests each one."""
         params = self.params
         return self.team_view.near(
             pose.x, pose.y, reach, self._now, params.mate_max_age, params.mate_extrapolation
@@ -338,8 +339,7 @@ class TaskExecutor:
         if self._new_tasks and self.agenda:  # given tasks while making way, say
             self._plan_new_tasks()
             return
-        # Only mates within the make-way radius can be in the way (found without a loop
-        # over the whole team when it is large), in the order known_mates() has them.
+        # Only mates within the make-way radius can be in the way (in_way_of tests it).
         pose = self.base.pose
         for mate in self._mates_near(pose, self.params.make_way_radius):
             if self.in_way_of(mate):
@@ -427,7 +427,7 @@ class TaskExecutor:
 
     def _check_collisions(self) -> None:
         pose = self.base.pose
-        # Only the mates near enough to be in conflict.
+        # Only the mates near enough to be in conflict (detect tests it).
         near = self._mates_near(pose, self.avoidance.reach)
         conflict = self.avoidance.detect(pose, near, self._now, self._goal_distance)
         if conflict is None:

@@ -13,7 +13,7 @@ pose without inventing turns the mate may have made)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Collection, Iterator, Mapping, Sequence
 from typing import cast
 
 import numpy as np
@@ -212,20 +212,17 @@ class TeamView:
         now: float,
         max_age: float | None,
         extrapolation: float,
-    ) -> list[Mate]:
-        """The mates of :meth:`known` (same arguments) within ``reach`` of (x, y) along
-        both axes, in the same order: what a robot checks for near collisions. From
-        the position arrays in a large team fed by step batches, else by a loop."""
+    ) -> Collection[Mate]:
+        """The mates of :meth:`known` (same arguments) that may lie within ``reach`` of
+        (x, y) along both axes, in the same order: with a mate table exactly those (a
+        few array operations), else all of them (a loop would cost as much as the
+        caller's own). Callers test each mate themselves, so the answer is the same
+        either way."""
         table = self._table
         if table is not None and max_age is None and extrapolation <= 0:
             poses = self.poses  # known() is the poses themselves here
             return [poses[name] for name in table.near(x, y, reach)]
-        short = -reach
-        return [
-            mate
-            for mate in self.known(now, max_age, extrapolation).values()
-            if short <= mate.x - x <= reach and short <= mate.y - y <= reach
-        ]
+        return self.known(now, max_age, extrapolation).values()
 
     def heard_within(self, seconds: float, now: float) -> bool:
         """Whether any mate's pose arrived less than ``seconds`` ago."""
