@@ -133,7 +133,17 @@ def main() -> None:
         import matplotlib.pyplot as plt
 
         fig, ax = plt.subplots(figsize=(5, 3.6))
-        ax.loglog([n for n, _ in points], [c for _, c in points], "o-")
+        ax.loglog([n for n, _ in points], [c for _, c in points], "o", label="measured")
+        if len(points) >= 2:
+            # The least-squares line in log-log space (its slope is the exponent).
+            k = fit_exponent(points)
+            xs = [math.log(n) for n, _ in points]
+            ys = [math.log(c) for _, c in points]
+            c0 = statistics.fmean(ys) - k * statistics.fmean(xs)
+            ends = [points[0][0], points[-1][0]]
+            ax.loglog(ends, [math.exp(c0 + k * math.log(n)) for n in ends], "--",
+                      label=f"fit: cost ~ N^{k:.2f}")  # fmt: skip
+            ax.legend()
         ax.set_xlabel("robots")
         ax.set_ylabel("CPU ms per 0.1 s step")
         ax.set_title("Simulation cost against team size")
