@@ -71,7 +71,7 @@ class StepBatch:
         #: The team's endpoints (agent ids) by number, and each one's number.
         self.members = members
         self.index = index
-        #: No sender has two messages in the batch (one message per sender and field).
+        #: No sender has two messages in the batch.
         self.distinct = len(set(senders)) == len(senders)
         self._objects: NDArray[np.object_] | None = None
         self._columns: dict[str, NDArray[Any]] = {}
