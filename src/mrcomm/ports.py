@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from enum import Enum
-from typing import Any, Protocol, overload
+from typing import Protocol, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -62,19 +62,20 @@ class StepBatch:
     def __init__(
         self,
         messages: Sequence[Message],
-        senders: Sequence[int],
-        members: Sequence[str],
+        senders: NDArray[np.intp],
+        members: NDArray[np.object_],
         index: Mapping[str, int],
     ) -> None:
         self.messages = messages
-        self.senders: NDArray[np.intp] = np.asarray(senders, dtype=np.intp)
-        #: The team's endpoints (agent ids) by number, and each one's number.
+        self.senders = senders
+        #: The team's endpoints (agent ids) by number, and each one's number (the bus's,
+        #: shared by all its batches).
         self.members = members
         self.index = index
         #: No sender has two messages in the batch.
-        self.distinct = len(set(senders)) == len(senders)
+        self.distinct = len(set(senders.tolist())) == len(senders)
         self._objects: NDArray[np.object_] | None = None
-        self._columns: dict[str, NDArray[Any]] = {}
+        self._columns: dict[str, NDArray[np.float64]] = {}
 
     def objects(self) -> NDArray[np.object_]:
         """The messages as an array (picking a receiver's share is then one call)."""
@@ -92,16 +93,6 @@ class StepBatch:
                 (getattr(m, field) for m in self.messages), np.float64, len(self.messages)
             )
             self._columns[field] = values
-        return values
-
-    def labels(self, field: str) -> NDArray[np.object_]:
-        """A field of every message as an array of Python objects (e.g. the senders)."""
-        key = "labels:" + field
-        values = self._columns.get(key)
-        if values is None:
-            values = np.empty(len(self.messages), dtype=object)
-            values[:] = [getattr(m, field) for m in self.messages]
-            self._columns[key] = values
         return values
 
 

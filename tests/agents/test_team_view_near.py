@@ -39,9 +39,10 @@ def _received(step: list[tuple[int, PoseMsg]]) -> Received:
     """The step as the bus hands it over: a batch of everyone's poses (the receiver's
     own included, as a batch has it) and the receiver's share of it, in order."""
     own = pose_of("robot_0", 20.0, 20.0)
-    members = tuple(f"robot_{s}" for s in range(MEMBERS))
-    index = {name: number for number, name in enumerate(members)}
-    batch = StepBatch([own, *(m for _, m in step)], [0, *(s for s, _ in step)], members, index)
+    members = np.array([f"robot_{s}" for s in range(MEMBERS)], dtype=object)
+    index = {name: number for number, name in enumerate(members.tolist())}
+    senders = np.array([0, *(s for s, _ in step)], dtype=np.intp)
+    batch = StepBatch([own, *(m for _, m in step)], senders, members, index)
     return Received(batch, np.arange(1, len(step) + 1))
 
 

@@ -52,10 +52,10 @@ class _MateTable:
         self.first: NDArray[np.int32] = np.full(members, _NEVER, dtype=np.int32)
         self._heard = 0  # mates heard so far
 
-    def hear(self, received: Received, now: float) -> None:
-        """Take a receiver's share of a batch with no sender twice."""
+    def hear(self, received: Received, senders: NDArray[np.intp], now: float) -> None:
+        """Take a receiver's share of a batch with no sender twice (``senders``: their
+        numbers)."""
         batch, rows = received.batch, received.rows
-        senders = batch.senders[rows]
         new = np.flatnonzero(self.first[senders] == _NEVER)
         if len(new):
             self.first[senders[new]] = np.arange(self._heard, self._heard + len(new))
@@ -80,8 +80,8 @@ class _MateTable:
         found = np.flatnonzero(inside)
         if len(found) > 1:
             found = found[np.argsort(self.first[found])]
-        names = self.names
-        return [names[i] for i in found.tolist()]
+        near: list[str] = self.names[found].tolist()
+        return near
 
 
 class _HeardTimes(Mapping[str, float]):
@@ -128,7 +128,6 @@ class TeamView:
         #: the mates' positions and heard times as arrays; None otherwise (then the
         #: heard times are a dict and :meth:`near` loops over the mates).
         self._table: _MateTable | None = None
-        self._batches_only = True
 
     def hear(self, message: PoseMsg, now: float) -> None:
         """A mate's pose arrived at ``now``."""
@@ -139,25 +138,26 @@ class TeamView:
         the same as hearing each in turn (the last of a mate's wins; mates keep the order
         they were first heard in): two dict updates, or with a mate table one dict
         update and a few array writes."""
-        if self._batches_only and isinstance(messages, Received) and messages.batch.distinct:
+        if isinstance(messages, Received) and messages.batch.distinct:
             batch = messages.batch
-            if not self.poses and len(batch.members) >= NEAR_ARRAYS_FROM:  # the first poses
+            # A table is made with the first poses: it then has every mate heard.
+            if not self.poses and len(batch.members) >= NEAR_ARRAYS_FROM:
                 self._table = _MateTable(batch)
                 self.heard = _HeardTimes(self._table, self.poses)
             if self._table is not None:
                 # A bus's share of a step batch never holds the receiver's own messages.
-                names: list[str] = batch.labels("sender")[messages.rows].tolist()
+                senders = batch.senders[messages.rows]
+                names: list[str] = batch.members[senders].tolist()
                 poses = cast("list[PoseMsg]", messages.messages())
                 self.poses.update(zip(names, poses, strict=True))
-                self._table.hear(messages, now)
+                self._table.hear(messages, senders, now)
                 return
-        elif self._batches_only:
-            # The table stays in step with the poses only if every pose comes in a batch.
-            self._batches_only = False
-            if self._table is not None:
-                self._heard = dict(self.heard)
-                self.heard = self._heard
-                self._table = None
+        elif self._table is not None:
+            # The table stays in step with the poses only if every pose comes in a batch:
+            # dropped for good (it is only made with the first poses).
+            self._heard = dict(self.heard)
+            self.heard = self._heard
+            self._table = None
         latest = {message.sender: message for message in messages}
         latest.pop(own, None)
         self.poses.update(latest)

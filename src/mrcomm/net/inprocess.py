@@ -117,6 +117,8 @@ class InProcessNetwork:
         relay: Relay | None = None,
     ) -> None:
         self.ids: tuple[str, ...] = tuple(agent_ids)
+        # The endpoints' names and numbers as step batches hand them to receivers.
+        self._members = np.array(self.ids, dtype=object)
         self._numbers = {agent: i for i, agent in enumerate(self.ids)}
         self.policy = policy
         self.channel = channel
@@ -257,7 +259,7 @@ class InProcessNetwork:
             takers = self._takers[topic] = _Takers.of(receivers)
         targets = takers.targets
         columns = np.array(targets)
-        rows = np.array(senders)
+        rows = np.array(senders, dtype=np.intp)
         others = rows[:, None] != columns[None, :]  # a sender does not hear itself
         if self.policy.exempt(topic):
             received = others
@@ -293,7 +295,7 @@ class InProcessNetwork:
         # get each receiver's messages in one call; the others, which may publish, are
         # called message by message, in order, as one message at a time would call them.
         if takers.batched:
-            batch = StepBatch(messages, senders, self.ids, self._numbers)
+            batch = StepBatch(messages, rows, self._members, self._numbers)
             by_receiver = np.nonzero(received.T)[1]  # receiver by receiver
             end = 0
             for column, takes in enumerate(takers.many):
