@@ -201,3 +201,23 @@ def test_incarnations_never_repeat_even_when_the_clock_steps_back(
     assert new_incarnation(tmp_path, "robot_2") < first  # its own history only
     # Random low bits: many starts in one millisecond are not all alike.
     assert len({new_incarnation(None, "robot_3") for _ in range(50)}) > 40
+
+
+def test_a_team_holds_back_the_members_it_is_told_to(tmp_path: Path) -> None:
+    """``start(hold=...)`` starts every process but those held; an unknown name is an
+    error before anything starts."""
+    from mrcomm.live.launcher import LiveTeam
+    from mrcomm.live.settings import LiveSettings
+    from mrcomm.net.zenoh_config import make_options
+    from mrcomm.run.config import make_config
+
+    from .helpers import S1
+
+    team = LiveTeam(LiveSettings(make_config(None, scenario=S1), make_options(), tmp_path))
+    with pytest.raises(ValueError, match="'robot_9'"):
+        team.start(hold=("robot_9",))
+    assert team.children == {}
+    with team:
+        team.start(hold=("robot_2", "robot_3"))
+        assert sorted(team.children) == ["robot_1", "world"]
+        assert set(team.ports) == set(team.names)  # the held know where to listen

@@ -67,6 +67,13 @@ def test_tls_needs_all_three_readable_pem_files(tmp_path: Path) -> None:
     tls = config_json(options)["transport/link/tls"]
     assert tls["enable_mtls"] is True and tls["root_ca_certificate"] == str(ca)
     assert options.listen == ("tls/127.0.0.1:1",)
+    # TLS links only: nothing listens in the clear, no plain link is opened or accepted
+    # (a session given no endpoint would listen on Zenoh's default, tcp/[::]:0).
+    assert config_json(options)["transport/link/protocols"] == ["tls"]
+    assert config_json(options)["listen/endpoints"] == ["tls/127.0.0.1:1"]
+    quiet = make_options(tls_ca=ca, tls_cert=cert, tls_key=key, connect=["127.0.0.1:2"])
+    assert config_json(quiet)["listen/endpoints"] == []
+    assert "transport/link/protocols" not in config_json(make_options())
     with pytest.raises(InputError, match="needs all of"):
         make_options(tls_ca=ca, tls_cert=cert)
     with pytest.raises(InputError, match="file not found") as err:

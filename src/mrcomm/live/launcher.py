@@ -24,7 +24,7 @@ import socket
 import subprocess
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
@@ -110,7 +110,12 @@ class LiveTeam:
         self.restarts: dict[str, int] = {}
 
     # -- processes ---------------------------------------------------------------------
-    def start(self) -> None:
+    def start(self, hold: Collection[str] = ()) -> None:
+        """Pick the ports and start every process but those named in ``hold`` (members
+        that join late: :meth:`spawn` them; the mission starts when all are present)."""
+        unknown = set(hold) - set(self.names) - set(self.pulses)
+        if unknown:
+            raise ValueError(f"no process {sorted(unknown)[0]!r} in this team")
         self.settings.record_dir.mkdir(parents=True, exist_ok=True)
         udp = self.settings.zenoh.protocol == "udp"
         if self.addresses is not None:
@@ -118,7 +123,8 @@ class LiveTeam:
         else:
             self.ports = {name: free_port(self.host, udp=udp) for name in self.names}
         for name in (*self.names, *self.pulses):
-            self.spawn(name)
+            if name not in hold:
+                self.spawn(name)
 
     def spawn(self, name: str) -> Child:
         """Start (or restart) process ``name`` on its port."""

@@ -201,6 +201,13 @@ def config_json(options: ZenohOptions) -> dict[str, Any]:
         settings["connect/endpoints"] = list(options.connect)
     if options.tls is not None:
         tls = options.tls
+        # TLS links only, both ways: without this a session that was given no listening
+        # endpoint listens in the clear on Zenoh's default (tcp/[::]:0), and peers that
+        # learn that locator by gossip connect to it over plain TCP, where no certificate
+        # says who is speaking (the access-control list then refuses everything from it).
+        settings["transport/link/protocols"] = ["tls"]
+        if not options.listen:
+            settings["listen/endpoints"] = []
         settings["transport/link/tls"] = {
             "root_ca_certificate": str(tls.ca),
             "listen_private_key": str(tls.key),
