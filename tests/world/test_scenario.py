@@ -274,3 +274,33 @@ def test_robot_radius_is_a_parameter(tmp_path: Path) -> None:
     assert len(load_scenario(path).tasks) == 3
     with pytest.raises(InputError, match="too close to a wall"):
         load_scenario(path, robot_radius=0.35)
+
+
+def test_the_robot_section_sets_the_radius_the_mission_is_checked_for(tmp_path: Path) -> None:
+    tasks = copy.deepcopy(TASKS)
+    tasks[1]["location"] = {"x": 3.0, "y": 0.4}  # 0.3 m from the wall (edge 0.1)
+    scenario = {**SCENARIO, "robot": {"radius": 0.35, "max_v": 0.3}}
+    with pytest.raises(InputError, match="too close to a wall"):
+        load_scenario(_write(tmp_path, scenario=scenario, tasks=tasks))
+    scenario["robot"] = {"radius": 0.15, "max_v": 0.3}
+    loaded = load_scenario(_write(tmp_path, scenario=scenario, tasks=tasks))
+    assert loaded.robot_radius == 0.15
+    assert loaded.robot_settings == (("radius", 0.15), ("max_v", 0.3))
+    assert load_scenario(_write(tmp_path)).robot_settings == ()
+
+
+@pytest.mark.parametrize(
+    ("robot", "field", "message"),
+    [
+        ({"max_v": "fast"}, "robot.max_v", "number"),
+        ([1, 2], "robot", "must be a mapping"),
+        ({"radius": -0.1}, "robot.radius", "must be > 0"),
+    ],
+)
+def test_a_bad_robot_section_is_a_one_line_error(
+    tmp_path: Path, robot: Any, field: str, message: str
+) -> None:
+    path = _write(tmp_path, scenario={**SCENARIO, "robot": robot})
+    with pytest.raises(InputError, match=message) as info:
+        load_scenario(path)
+    assert info.value.field == field and info.value.file == str(path)

@@ -246,9 +246,9 @@ def live(
     if lease is not None:
         check_positive(lease, "--lease")
     zenoh = make_options(team=team, protocol=protocol)
-    from mrcomm.world.scenario import load_scenario
+    from mrcomm.run.resources import checked_scenario
 
-    scenario = load_scenario(run.scenario)
+    scenario = checked_scenario(run.scenario)
     members = live_members(scenario)
     if operator is not None:
         from mrcomm.run.operator_plan import load_operator_plan

@@ -46,7 +46,7 @@ from mrcomm.errors import InputError, did_you_mean
 from mrcomm.experiment.generated import generated_scenarios
 from mrcomm.experiment.seeds import make_config_id, make_run_id, run_seed
 from mrcomm.run.config import LEGACY_OPTIONS, PARAM_SECTIONS, RunConfig, make_config
-from mrcomm.world.scenario import load_scenario
+from mrcomm.run.resources import checked_scenario
 from mrcomm.world.yamlfile import read_yaml, validation_error
 
 #: Factors that RunConfig.label() already spells out.
@@ -323,7 +323,7 @@ def _scenarios(model: ExperimentModel, path: Path) -> list[tuple[str, Path, str]
     """(as written, resolved path, scenario name) of each scenario, loaded and checked."""
     if isinstance(model.scenario, dict):
         made = generated_scenarios(model.scenario, path)
-        return [(str(p.relative_to(path.parent)), p, load_scenario(p).name) for p in made]
+        return [(str(p.relative_to(path.parent)), p, checked_scenario(p).name) for p in made]
     written = model.scenario if isinstance(model.scenario, list) else [model.scenario]
     if not written:
         raise InputError("empty factorial: no scenario given", file=path, field="scenario")
@@ -332,10 +332,13 @@ def _scenarios(model: ExperimentModel, path: Path) -> list[tuple[str, Path, str]
         field = f"scenario[{i}]" if isinstance(model.scenario, list) else "scenario"
         resolved = _resolve_path(text, path.parent, field, path)
         try:
-            name = load_scenario(resolved).name
+            name = checked_scenario(resolved).name
         except InputError as err:
+            # The scenario's own message, with the file and field it names.
+            where = "" if err.file in (None, str(resolved)) else f" (from {err.file})"
+            inner = f"{err.field}: {err.message}" if err.field else err.message
             raise InputError(
-                f"scenario {resolved}: {err.message}", file=path, field=field
+                f"scenario {resolved}{where}: {inner}", file=path, field=field
             ) from None
         found.append((text, resolved, name))
     names = [n for _, _, n in found]

@@ -103,20 +103,22 @@ class RobotParams:
 
     @classmethod
     def from_mapping(
-        cls, data: Mapping[str, Any], *, file: str | Path | None = None
+        cls, data: Mapping[str, Any], *, file: str | Path | None = None, section: str = ""
     ) -> RobotParams:
-        """Build parameters from a config mapping (missing keys keep their defaults)."""
+        """Build parameters from a config mapping (missing keys keep their defaults);
+        errors name the field as ``<section>.<key>`` when ``section`` is given."""
         known = [f.name for f in dataclasses.fields(cls)]
+        prefix = f"{section}." if section else ""
         kwargs: dict[str, Any] = {}
         for key, value in data.items():
             if key not in known:
                 raise InputError(
                     f"unknown robot parameter '{key}'{did_you_mean(str(key), known)}",
                     file=file,
-                    field=str(key),
+                    field=f"{prefix}{key}",
                 )
             kwargs[key] = value
         try:
             return cls(**kwargs)
         except InputError as err:
-            raise InputError(err.message, file=file, field=err.field) from None
+            raise InputError(err.message, file=file, field=f"{prefix}{err.field}") from None

@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from mrcomm.errors import InputError
 from mrcomm.net.signal.bundled import default_model
 from mrcomm.net.signal.svr import load_model
 from mrcomm.net.signal.table import RssiTable
@@ -27,8 +28,10 @@ class ScenarioResources:
     def load(
         cls, scenario_path: Path, robot_params: RobotParams | None = None
     ) -> ScenarioResources:
+        """The scenario with its robots' parameters (``robot_params``, else those its
+        ``robot`` section sets over the defaults) and their planner."""
         scenario = load_scenario(scenario_path)
-        params = robot_params or RobotParams()
+        params = robot_params or scenario_robot_params(scenario)
         return cls(scenario, params, GridPlanner(scenario.grid, params))
 
     def signal_table(self, model_path: Path | None) -> RssiTable:
@@ -45,3 +48,29 @@ class ScenarioResources:
         if trace is None:
             trace = self._traces[path] = RssiTrace.load(path)
         return trace
+
+
+def scenario_robot_params(scenario: Scenario) -> RobotParams:
+    """The defaults with what the scenario's ``robot`` section sets; a bad name or value
+    is a one-line InputError naming the scenario file and ``robot.<name>``."""
+    settings = dict(scenario.robot_settings)
+    params = RobotParams.from_mapping(settings, file=scenario.path, section="robot")
+    if "planner_resolution" in settings:
+        # The planning grid is made of whole map cells: say so rather than round.
+        cells = params.planner_resolution / scenario.grid.resolution
+        if cells < 1 - 1e-9 or abs(cells - round(cells)) > 1e-6:
+            raise InputError(
+                f"must be a whole multiple of the map's resolution "
+                f"({scenario.grid.resolution:g} m), got {params.planner_resolution:g}",
+                file=scenario.path,
+                field="robot.planner_resolution",
+            )
+    return params
+
+
+def checked_scenario(path: Path) -> Scenario:
+    """Load a scenario and check its ``robot`` section too (what a sweep or a live team
+    does before anything starts: the robots themselves are built later, elsewhere)."""
+    scenario = load_scenario(path)
+    scenario_robot_params(scenario)
+    return scenario

@@ -10,6 +10,10 @@ team (robot ids and start poses, in file order) and where the task assigner runs
       - {id: robot_1, pose: {x: 16.3, y: 16.7, theta: -1.2}}
     assigner: {host: robot_1}          # or {kind: base_station, position: {x: .., y: ..}}
                                        # or {kind: virtual}
+    robot: {max_v: 0.3, planner_resolution: 0.2}   # optional: the robots' parameters
+
+``robot`` sets parameters of the team's robots (their defaults are a Turtlebot 2's; the
+names and meanings are in docs/ROBOT.md); they are checked where the robots are built.
 
 A task file is a list of tasks in MRComm's task format (docs/ARCHITECTURE.md).
 :func:`load_scenario` checks the mission is feasible on its map (poses clear of walls,
@@ -128,6 +132,7 @@ class ScenarioModel(_Model):
     tasks: str = Field(min_length=1)
     robots: list[RobotModel] = Field(min_length=1)
     assigner: AssignerModel
+    robot: dict[str, Number] = Field(default_factory=dict)
 
 
 _TASK_LIST = list[TaskModel]
@@ -180,6 +185,8 @@ class Scenario:
     assigner: AssignerSpec
     description: str = ""
     robot_radius: float = ROBOT_RADIUS
+    #: The scenario's ``robot`` section: robot parameters it sets (name, value).
+    robot_settings: tuple[tuple[str, float], ...] = ()
 
     @property
     def team(self) -> tuple[str, ...]:
@@ -244,9 +251,10 @@ def _resolve(base: Path, name: str) -> Path:
     return path if path.is_absolute() else Path(os.path.normpath(base.parent / path))
 
 
-def load_scenario(path: str | Path, *, robot_radius: float = ROBOT_RADIUS) -> Scenario:
+def load_scenario(path: str | Path, *, robot_radius: float | None = None) -> Scenario:
     """Load a scenario file, its map and its task file, and check the mission is
-    feasible for robots of ``robot_radius``. Any problem is a one-line InputError."""
+    feasible for robots of ``robot_radius`` (default: the ``radius`` its ``robot``
+    section sets, else a Turtlebot 2's). Any problem is a one-line InputError."""
     file = Path(path)
     raw = read_yaml(file)
     if not isinstance(raw, dict):
@@ -271,6 +279,11 @@ def load_scenario(path: str | Path, *, robot_radius: float = ROBOT_RADIUS) -> Sc
             file=file,
             field="assigner.host",
         )
+
+    if robot_radius is None:
+        robot_radius = float(model.robot.get("radius", ROBOT_RADIUS))
+        if robot_radius <= 0:
+            raise InputError(f"must be > 0, got {robot_radius!r}", file=file, field="robot.radius")
 
     map_path = _resolve(file, model.map)
     if not map_path.is_file():
@@ -316,6 +329,7 @@ def load_scenario(path: str | Path, *, robot_radius: float = ROBOT_RADIUS) -> Sc
         assigner=assigner,
         description=model.description,
         robot_radius=robot_radius,
+        robot_settings=tuple(model.robot.items()),
     )
 
 
