@@ -71,6 +71,19 @@ def test_a_bad_robot_parameter_names_the_scenario_and_the_field(
         assert info.value.field == field and info.value.file == str(path)
 
 
+def test_a_planning_grid_too_coarse_for_the_doors_is_refused(tmp_path: Path) -> None:
+    """S1's start room has 0.8 m doors: open on a 0.2 m planning grid, closed on 0.25 m
+    cells (whole multiples of its 5 cm map both)."""
+    assert ScenarioResources.load(s1_with(tmp_path, {"planner_resolution": 0.2}))
+    path = s1_with(tmp_path, {"planner_resolution": 0.25})
+    for load in (ScenarioResources.load, checked_scenario):
+        with pytest.raises(
+            InputError, match=r"cannot be reached from robot 'robot_1'.*0\.25 m"
+        ) as info:
+            load(path)
+        assert info.value.field == "robot.planner_resolution"
+
+
 def test_run_and_sweep_reject_a_bad_robot_section_before_starting(tmp_path: Path) -> None:
     path = s1_with(tmp_path, {"max_vel": 0.3})
     code = [sys.executable, "-c", "from mrcomm.cli.main import app; app()"]

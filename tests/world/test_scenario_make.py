@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from mrcomm.errors import InputError
+from mrcomm.run.resources import checked_scenario
 from mrcomm.world.generate import make
 from mrcomm.world.generate.make import Request, make_scenario, parse_size
 from mrcomm.world.generate.maps import KINDS
@@ -33,8 +34,12 @@ def test_every_kind_and_start_loads_with_what_was_asked(
 ) -> None:
     width, height = SMALL[kind]
     request = Request(kind, width, height, 8, 12, start, "robot_3", 5, "gen")
-    scenario = load_scenario(make_scenario(request, tmp_path / "out"))
+    # Checked as the CLI does: every start and task reachable on the planning grid too.
+    scenario = load_scenario(make_scenario(request, tmp_path / "out", checked_scenario))
     assert len(scenario.robots) == 8 and len(scenario.tasks) == 12
+    # A campus's robots plan on 0.2 m cells (open ground, 1.2 m doors); the rest on 0.1 m.
+    coarse = {"planner_resolution": 0.2} if kind == "campus" else {}
+    assert dict(scenario.robot_settings) == coarse
     assert scenario.assigner.kind == "robot" and scenario.assigner.host == "robot_3"
     xs = [(r.pose.x, r.pose.y) for r in scenario.robots]
     gaps = [((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2) ** 0.5 for i, a in enumerate(xs)

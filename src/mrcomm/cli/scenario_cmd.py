@@ -49,13 +49,14 @@ def make(
     ] = None,
 ) -> None:
     """Generate a map, a scenario and a task file."""
+    from mrcomm.run.resources import checked_scenario
     from mrcomm.world.generate.make import Request, make_scenario, parse_size
 
     width, height = parse_size(size)
     request = Request(
         map_kind, width, height, robots, tasks, start, assigner, seed, name or out.name
     )
-    path = make_scenario(request, out)
+    path = make_scenario(request, out, checked_scenario)
     typer.echo(f"scenario {path} ({robots} robots, {tasks} tasks, {map_kind} {size} m)")
 
 

@@ -24,6 +24,7 @@ import pydantic
 from pydantic import BaseModel, ConfigDict, Field
 
 from mrcomm.errors import InputError
+from mrcomm.run.resources import checked_scenario
 from mrcomm.world.generate.make import Request, make_scenario, parse_size
 from mrcomm.world.yamlfile import validation_error
 
@@ -84,7 +85,7 @@ def generated_scenarios(raw: dict[str, Any], schema: Path) -> list[Path]:
                     f"cannot make {folder.parent}: {err.strerror}", file=schema, field="scenario"
                 ) from None
             try:
-                make_scenario(request, folder)
+                make_scenario(request, folder, checked_scenario)
             except InputError as err:
                 raise InputError(f"team size {n}: {err.one_line()}", file=schema,
                                  field="scenario") from None  # fmt: skip

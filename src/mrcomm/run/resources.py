@@ -6,6 +6,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+from scipy import ndimage
+
 from mrcomm.errors import InputError
 from mrcomm.net.signal.bundled import default_model
 from mrcomm.net.signal.svr import load_model
@@ -32,7 +35,9 @@ class ScenarioResources:
         ``robot`` section sets over the defaults) and their planner."""
         scenario = load_scenario(scenario_path)
         params = robot_params or scenario_robot_params(scenario)
-        return cls(scenario, params, GridPlanner(scenario.grid, params))
+        planner = GridPlanner(scenario.grid, params)
+        check_planning_reach(scenario, planner)
+        return cls(scenario, params, planner)
 
     def signal_table(self, model_path: Path | None) -> RssiTable:
         """The SSD lookup table of a signal model file (None: the bundled model)."""
@@ -68,9 +73,36 @@ def scenario_robot_params(scenario: Scenario) -> RobotParams:
     return params
 
 
+def check_planning_reach(scenario: Scenario, planner: GridPlanner) -> None:
+    """Every start and task in one connected region of the planning grid (A* moves to
+    the 8 neighbours). The loader checked this on the map for the robot's radius; a
+    planning cell is a block of map cells, free only when all of them are, so a
+    passage the map leaves open can be closed on a coarse planning grid."""
+    labels, _ = ndimage.label(~planner.blocked, structure=np.ones((3, 3), dtype=bool))
+
+    def region(x: float, y: float) -> int:
+        cell = planner.snap(x, y)
+        return 0 if cell is None else int(labels[cell])
+
+    first = scenario.robots[0]
+    home = region(first.pose.x, first.pose.y)
+    points = [(f"robot '{r.id}' starting", r.pose.x, r.pose.y) for r in scenario.robots]
+    points += [(f"task '{t.task_id}'", t.x, t.y) for t in scenario.tasks]
+    for what, x, y in points:
+        if home == 0 or region(x, y) != home:
+            raise InputError(
+                f"{what} at ({x:g}, {y:g}) cannot be reached from robot '{first.id}''s start "
+                f"on the {planner.resolution:g} m planning grid (a passage is too narrow for "
+                "its cells): choose a finer one",
+                file=scenario.path,
+                field="robot.planner_resolution",
+            )
+
+
 def checked_scenario(path: Path) -> Scenario:
-    """Load a scenario and check its ``robot`` section too (what a sweep or a live team
-    does before anything starts: the robots themselves are built later, elsewhere)."""
+    """Load a scenario and check what its robots need too: its ``robot`` section, and
+    that every start and task can be reached on their planning grid (what a sweep, a
+    live team or the scenario generator does before anything starts)."""
     scenario = load_scenario(path)
-    scenario_robot_params(scenario)
+    check_planning_reach(scenario, GridPlanner(scenario.grid, scenario_robot_params(scenario)))
     return scenario
