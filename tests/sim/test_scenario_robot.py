@@ -78,7 +78,7 @@ def test_a_planning_grid_too_coarse_for_the_doors_is_refused(tmp_path: Path) -> 
     path = s1_with(tmp_path, {"planner_resolution": 0.25})
     for load in (ScenarioResources.load, checked_scenario):
         with pytest.raises(
-            InputError, match=r"cannot be reached from robot 'robot_1'.*0\.25 m"
+            InputError, match=r"cannot be reached from the start of robot 'robot_1'.*0\.25 m"
         ) as info:
             load(path)
         assert info.value.field == "robot.planner_resolution"

@@ -91,9 +91,9 @@ def check_planning_reach(scenario: Scenario, planner: GridPlanner) -> None:
     for what, x, y in points:
         if home == 0 or region(x, y) != home:
             raise InputError(
-                f"{what} at ({x:g}, {y:g}) cannot be reached from robot '{first.id}''s start "
-                f"on the {planner.resolution:g} m planning grid (a passage is too narrow for "
-                "its cells): choose a finer one",
+                f"{what} at ({x:g}, {y:g}) cannot be reached from the start of robot "
+                f"'{first.id}' on the {planner.resolution:g} m planning grid (a passage is "
+                "too narrow for its cells): choose a finer one",
                 file=scenario.path,
                 field="robot.planner_resolution",
             )
