@@ -23,7 +23,7 @@ from .helpers import S1, journal, s1_variant
 from .netns import skip_unless_possible
 from .test_live_conformance import mrcomm
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.alone]
 
 
 def emulated(record_dir: Path, **options: Any) -> dict[str, Any]:

@@ -33,7 +33,7 @@ from mrcomm.run.config import make_config
 from .helpers import ROOT, S1, s1_variant, wait_for
 from .netns import Netns, skip_unless_possible
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.alone]
 
 PROBE = Path(__file__).with_name("probe_node.py")
 

@@ -282,7 +282,11 @@ class LiveTeam:
             except subprocess.TimeoutExpired:
                 lingered.add(child.name)
                 child.process.terminate()
-                child.process.wait(timeout=10)
+                try:
+                    child.process.wait(timeout=10)
+                except subprocess.TimeoutExpired:  # stuck closing its links: as stop() does
+                    child.process.kill()
+                    child.process.wait()
         self.died = [
             self.death(child)
             for child in self.children.values()
