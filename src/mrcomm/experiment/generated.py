@@ -55,7 +55,8 @@ class GeneratedScenarios(BaseModel):
 
 
 def generated_scenarios(raw: dict[str, Any], schema: Path) -> list[Path]:
-    """The scenario file of each team size, made on first use (one-line errors)."""
+    """The scenario file of each team size, made on first use, each checked as
+    :func:`~mrcomm.run.resources.checked_scenario` does (one-line errors)."""
     try:
         spec = GeneratedScenarios.model_validate(raw)
     except pydantic.ValidationError as err:
@@ -95,6 +96,12 @@ def generated_scenarios(raw: dict[str, Any], schema: Path) -> list[Path]:
                 file=schema,
                 field="scenario",
             )
+        else:
+            try:  # made by an earlier sweep: checked as a new one is before it is kept
+                checked_scenario(scenario)
+            except InputError as err:
+                raise InputError(f"team size {n}: {err.one_line()}", file=schema,
+                                 field="scenario") from None  # fmt: skip
         paths.append(scenario)
     return paths
 

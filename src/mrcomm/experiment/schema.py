@@ -47,6 +47,7 @@ from mrcomm.experiment.generated import generated_scenarios
 from mrcomm.experiment.seeds import make_config_id, make_run_id, run_seed
 from mrcomm.run.config import LEGACY_OPTIONS, PARAM_SECTIONS, RunConfig, make_config
 from mrcomm.run.resources import checked_scenario
+from mrcomm.world.scenario import load_scenario
 from mrcomm.world.yamlfile import read_yaml, validation_error
 
 #: Factors that RunConfig.label() already spells out.
@@ -322,8 +323,8 @@ def _resolve_path(value: Any, base: Path, field: str, path: Path) -> Path:
 def _scenarios(model: ExperimentModel, path: Path) -> list[tuple[str, Path, str]]:
     """(as written, resolved path, scenario name) of each scenario, loaded and checked."""
     if isinstance(model.scenario, dict):
-        made = generated_scenarios(model.scenario, path)
-        return [(str(p.relative_to(path.parent)), p, checked_scenario(p).name) for p in made]
+        made = generated_scenarios(model.scenario, path)  # each one checked there
+        return [(str(p.relative_to(path.parent)), p, load_scenario(p).name) for p in made]
     written = model.scenario if isinstance(model.scenario, list) else [model.scenario]
     if not written:
         raise InputError("empty factorial: no scenario given", file=path, field="scenario")
