@@ -53,7 +53,15 @@ def _random_utility(inputs: UtilityInputs) -> float:
 
 def test_determinism_catches_an_unseeded_random_source() -> None:
     spec = VariantSpec(kind="utility", name="dice", entry=_random_utility)
-    api, determinism = check_variant(spec, only=["api", "determinism"])
+    # The utility ignores the run's seed; Python's generator is seeded here only so that
+    # this test is repeatable: unseeded, the two runs of seed 3 came out alike by chance
+    # about once in 30 (33 outcomes in 40 runs, one of them 3 times).
+    state = random.getstate()
+    random.seed(1)
+    try:
+        api, determinism = check_variant(spec, only=["api", "determinism"])
+    finally:
+        random.setstate(state)
     assert api.passed, api.detail
     assert not determinism.passed and "different results" in determinism.detail
 
