@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 from pathlib import Path
 
@@ -55,3 +56,23 @@ def test_three_robots_cross_the_office(office: tuple[object, GridPlanner]) -> No
         for j in range(i + 1, 3):
             gaps = [math.dist(a[1:3], b[1:3]) for a, b in zip(traces[i], traces[j], strict=False)]
             assert min(gaps) >= 2 * P.radius
+
+
+def test_a_snapped_start_keeps_its_cell_free_of_a_mate_disc(
+    office: tuple[object, GridPlanner],
+) -> None:
+    """A robot in the inflated zone (deep in the office's east dead end, S1's task 7)
+    searches from the free cell it is snapped to; the disc around a mate 0.6 m away
+    must leave that cell open too, or every plan around the mate fails and the robot
+    cannot get past it (it used to: no path, a deadlock in the dead end)."""
+    _, planner = office
+    start, mate, goal = (47.32, 3.57), (46.95, 4.05), (47.5, 5.0)
+    assert not planner.is_free(*start)  # in the inflated zone: snapped
+    s_cell = planner.snap(*start)
+    assert s_cell is not None and math.dist(planner.cell_centre(*s_cell), mate) < 0.56
+    path = planner.plan(start, goal, obstacles=[mate])
+    assert path is not None
+    pts = np.array(path.waypoints)
+    for a, b in itertools.pairwise(pts[1:]):  # past the snapped start, clear of the mate
+        t = np.clip(np.dot(np.subtract(mate, a), b - a) / np.dot(b - a, b - a), 0, 1)
+        assert math.dist(mate, a + t * (b - a)) > 0.35

@@ -225,19 +225,21 @@ class GridPlanner:
         self,
         obstacles: Sequence[Point],
         radius: float,
-        start: Point,
+        starts: Sequence[Point],
         base: NDArray[np.float32],
         window: Window,
     ) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
         """Copies of the ``window`` of (``base`` weights, clearance) with discs around
-        ``obstacles`` blocked. A disc never covers the start, or the robot could not
-        leave its own cell."""
+        ``obstacles`` blocked. A disc never covers the start (``starts``: the robot's
+        position, and the centre of the free cell it was snapped to when it stands in
+        the inflated zone), or the robot could not leave its own cell."""
         wy0, wy1, wx0, wx1 = window
         weights = base[wy0:wy1, wx0:wx1].copy()
         clear = self._clear[wy0:wy1, wx0:wx1].copy()
         res = self.resolution
         for ox, oy in obstacles:
-            r = min(radius, math.hypot(start[0] - ox, start[1] - oy) - res)
+            near = min(math.hypot(sx - ox, sy - oy) for sx, sy in starts)
+            r = min(radius, near - res)
             if r <= 0:
                 continue
             iy, ix = self.cell_of(ox, oy)
@@ -265,6 +267,11 @@ class GridPlanner:
         """A* from ``s_cell`` to ``g_cell`` (the whole grid's result, searched on a
         window): the path's cells (whole-grid indices), the clearance it was planned
         on (of the window) and the window; None when there is no path."""
+        # A start in the inflated zone searches from the free cell it was snapped to:
+        # a mate's disc must leave that cell open too (in a dead end, say).
+        starts = [start]
+        if self.cell_of(*start) != s_cell:
+            starts.append(self.cell_centre(*s_cell))
         window = self._first_window(s_cell, g_cell)
         if not self._worth_it(window):
             window = self._whole()
@@ -272,7 +279,7 @@ class GridPlanner:
             y0, y1, x0, x1 = window
             if obstacles:
                 grid, clear = self._with_obstacles(
-                    obstacles, obstacle_radius, start, weights, window
+                    obstacles, obstacle_radius, starts, weights, window
                 )
                 if not (
                     grid[g_cell[0] - y0, g_cell[1] - x0] < np.inf
