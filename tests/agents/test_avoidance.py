@@ -7,7 +7,7 @@ import math
 
 from mrcomm.agents.avoidance import Avoidance
 from mrcomm.agents.collision import MateState
-from mrcomm.agents.executor import ExecutorParams
+from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.world.geometry import Pose
 
 HERE = Pose(0.0, 0.0, 0.0)

@@ -8,7 +8,8 @@ import math
 import msgspec
 import pytest
 
-from mrcomm.agents.executor import ExecutorParams, TaskExecutor
+from mrcomm.agents.executor import TaskExecutor
+from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.agents.team_view import TeamView
 from mrcomm.metrics import labels as L
 from mrcomm.world.geometry import Pose

@@ -29,13 +29,10 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 from mrcomm.agents.collision import Mate, classify, has_right_of_way
+from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.world.geometry import Pose
-
-if TYPE_CHECKING:
-    from mrcomm.agents.executor import ExecutorParams
 
 
 @dataclass(frozen=True)

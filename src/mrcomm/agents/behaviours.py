@@ -19,7 +19,7 @@ NB_SPEC = VariantSpec(
     kind="behaviour",
     name="nb",
     entry="mrcomm.agents.executor:TaskExecutor",
-    params="mrcomm.agents.executor:ExecutorParams",
+    params="mrcomm.agents.executor_params:ExecutorParams",
     summary="NB, no behaviour: each robot goes to its closest task and reports it once "
     "(plain publish); it ignores link quality",
     topics=("pose", "task_status"),

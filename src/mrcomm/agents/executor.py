@@ -18,14 +18,16 @@ import math
 from collections.abc import Callable, Collection, Mapping, Sequence
 from typing import Any, ClassVar, cast
 
-from pydantic import BaseModel, ConfigDict, Field
 from transitions import Machine
 
 from mrcomm.agents import agenda
 from mrcomm.agents.avoidance import Avoidance
-from mrcomm.agents.collision import CollisionParams, Mate
+from mrcomm.agents.collision import Mate
 from mrcomm.agents.commands import CommandInbox, command_team
+from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.agents.machine_table import StateEntry, build_table, quiet_rebinding
+from mrcomm.agents.making_way import aside_goals, in_way
+from mrcomm.agents.occupied_goal import OccupiedGoal
 from mrcomm.agents.team_view import TeamView
 from mrcomm.messaging.messages import (
     TOPIC_ASSIGNMENT,
@@ -44,8 +46,7 @@ from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ACTIVITY, Timeline
 from mrcomm.net.link_sensors import NoSensor
 from mrcomm.ports import Base, BatchHandler, Bus, LinkSensor, NavStatus
-from mrcomm.specs import parameter
-from mrcomm.world.geometry import Pose, wrap_angle
+from mrcomm.world.geometry import Pose
 
 NB_STATES = [
     "unassigned",
@@ -82,64 +83,6 @@ _ACTIVITY_OF_STATE = {
     "idle": L.IDLE,
     "clearing": L.MOVING,
 }
-
-
-class ExecutorParams(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-    pose_period: float = parameter(0.2, "time between pose messages (5 Hz)", "s", gt=0)
-    collision: CollisionParams = Field(
-        default_factory=CollisionParams, description="near-collision detection"
-    )
-    collision_pause: float = parameter(
-        1.0, "both robots of a near collision pause at least this long", "s", ge=0
-    )
-    give_way_timeout: float = parameter(
-        10.0, "the robot without right of way waits at most this long", "s", gt=0
-    )
-    clear_time: float = parameter(
-        0.5, "a conflict must be gone this long before moving on", "s", ge=0
-    )
-    resume_grace: float = parameter(
-        3.0, "no new conflict with the same mate right after resuming", "s", ge=0
-    )
-    max_grace: float = parameter(
-        24.0, "the grace doubles with each repeat up to this (breaks livelock)", "s", ge=0
-    )
-    repeat_window: float = parameter(
-        5.0, "near collisions with the same mate within this window are repeats", "s", ge=0
-    )
-    knot_pauses: int = parameter(
-        4,
-        "more pauses in a row than this, each soon after moving on, whoever the mate, "
-        "make a knot: the grace doubles for each one beyond (agents/avoidance.py)",
-        ge=1,
-    )
-    # What a robot knows of its mates ages: these two say how it treats an old pose.
-    # The defaults are the original robots' (a mate's last pose is used however old).
-    mate_max_age: float | None = parameter(
-        None,
-        "collision avoidance and making way ignore a mate whose last pose is older "
-        "than this (none: a pose never expires)",
-        "s",
-        gt=0,
-        allow_inf_nan=False,
-    )
-    mate_extrapolation: float = parameter(
-        0.0,
-        "a mate's pose is moved on along its heading at its speed for its age, "
-        "at most this long (0: used where it was)",
-        "s",
-        ge=0,
-    )
-    nav_retry_delay: float = parameter(
-        2.0, "wait after a navigation failure before choosing again", "s", ge=0
-    )
-    make_way_radius: float = parameter(
-        1.4, "a robot without a goal this close to a mate with one steps aside", "m", ge=0
-    )
-    make_way_step: float = parameter(1.5, "how far it steps aside", "m", gt=0)
-    make_way_timeout: float = parameter(6.0, "it gives up stepping aside after", "s", gt=0)
 
 
 class TaskExecutor:
@@ -199,6 +142,7 @@ class TaskExecutor:
         self._state_since = 0.0
         self.avoidance = Avoidance(self.robot_id, self.params, tie_break_rank)
         self._clearing_goals: list[tuple[float, float]] = []
+        self._occupied = OccupiedGoal(self.params.occupied_goal)
         self._execute_until = 0.0
         self._agenda_reported = False
         with quiet_rebinding():
@@ -279,6 +223,10 @@ class TaskExecutor:
             self._moved_once = True
             self.timeline.event(L.STARTED_MOVING, self._now)
             self.timeline.set_state(ACTIVITY, L.MOVING, self._now)
+        standing = self.base.speed < self.params.collision.moving_speed
+        if status is NavStatus.ACTIVE and standing and self._goal_occupied():
+            self.base.cancel()
+            status = NavStatus.SUCCEEDED
         if status is NavStatus.SUCCEEDED:
             assert self.goal is not None
             self.timeline.event(L.ARRIVED, self._now, task_id=self.goal.task_id)
@@ -290,6 +238,17 @@ class TaskExecutor:
             self.trigger("nav_fail")
         else:
             self._check_collisions()
+
+    def _goal_occupied(self) -> bool:
+        """A mate has stood on the goal, this robot standing before it, too long."""
+        goal, pose = self.goal, self.base.pose
+        assert goal is not None
+        params = self.params.occupied_goal
+        near = self._mates_near(pose, params.reach + params.radius)
+        taker = self._occupied.check(self._now, pose, (goal.x, goal.y), near)
+        if taker is not None:
+            self.timeline.event(L.GOAL_OCCUPIED, self._now, task_id=goal.task_id, mate=taker.robot)
+        return taker is not None
 
     def _step_executing(self) -> None:
         if self._now + 1e-9 < self._execute_until:
@@ -350,26 +309,13 @@ class TaskExecutor:
     def in_way_of(self, mate: Mate) -> bool:
         """This robot (without a goal of its own, or following) stands close to a mate
         that has a goal: ahead of it, or next to it while it is stuck."""
-        if mate.goal_dist < 0:
-            return False
-        pose = self.base.pose
-        dx, dy = pose.x - mate.x, pose.y - mate.y
-        if math.hypot(dx, dy) > self.params.make_way_radius:
-            return False
-        ahead = abs(wrap_angle(math.atan2(dy, dx) - mate.theta)) < math.radians(75)
-        return ahead or mate.v < self.params.collision.moving_speed
+        params = self.params
+        return in_way(self.base.pose, mate, params.make_way_radius, params.collision.moving_speed)
 
     def step_aside(self, mate: Mate) -> None:
         """Step aside of the mate's heading (left, right, then straight away from it);
         the base snaps each candidate to free space and aborts unreachable ones."""
-        pose = self.base.pose
-        away = math.atan2(pose.y - mate.y, pose.x - mate.x)
-        side = 1.0 if wrap_angle(away - mate.theta) >= 0 else -1.0
-        angles = [mate.theta + side * math.pi / 2, mate.theta - side * math.pi / 2, away]
-        step = self.params.make_way_step
-        self._clearing_goals = [
-            (pose.x + step * math.cos(a), pose.y + step * math.sin(a)) for a in angles
-        ]
+        self._clearing_goals = aside_goals(self.base.pose, mate, self.params.make_way_step)
         self.timeline.event(L.MADE_WAY, self._now, mate=mate.robot)
         self.base.navigate_to(*self._clearing_goals.pop(0))
         self.trigger("make_way")

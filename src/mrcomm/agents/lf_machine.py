@@ -9,7 +9,8 @@ from typing import Any
 
 from pydantic import field_validator
 
-from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS, ExecutorParams
+from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS
+from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.metrics import labels as L
 from mrcomm.specs import parameter
 

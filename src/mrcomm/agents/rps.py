@@ -39,12 +39,8 @@ from typing import Any, Literal
 
 import msgspec
 
-from mrcomm.agents.executor import (
-    NB_STATES,
-    NB_TRANSITIONS,
-    ExecutorParams,
-    TaskExecutor,
-)
+from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS, TaskExecutor
+from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.messaging.messages import (
     TOPIC_TASK_STATUS,
     Assignment,

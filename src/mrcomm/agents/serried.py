@@ -32,7 +32,8 @@ import math
 from typing import Any
 
 from mrcomm.agents.aon_statuses import AonStatuses
-from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS, ExecutorParams
+from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS
+from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.messaging.messages import TaskState, TaskStatus
 from mrcomm.metrics import labels as L
 from mrcomm.ports import NavStatus

@@ -18,6 +18,7 @@ NEAR_COLLISION = "near_collision"
 NAV_ABORTED = "nav_aborted"
 AGENDA_COMPLETE = "agenda_complete"
 MADE_WAY = "made_way"  # stepped aside for a team mate
+GOAL_OCCUPIED = "goal_occupied"  # arrived before its goal: a mate stood on it too long
 OPERATOR_COMMAND = "operator_command"  # an operator's command reached the robot
 TASK_DROPPED = "task_dropped"  # reached a task the operator had reassigned meanwhile
 

@@ -1,0 +1,33 @@
+"""Making way: when a robot stands in a mate's way, and where it steps aside to.
+
+Pure geometry on the robot's pose and the mate's last pose message; the executor
+decides when to ask (an idle robot, a follower) and drives to the places given here.
+"""
+
+from __future__ import annotations
+
+import math
+
+from mrcomm.agents.collision import Mate
+from mrcomm.world.geometry import Pose, wrap_angle
+
+
+def in_way(pose: Pose, mate: Mate, radius: float, moving_speed: float) -> bool:
+    """A robot at ``pose`` is within ``radius`` of a mate that has a goal: ahead of it,
+    or next to it while the mate stands (slower than ``moving_speed``)."""
+    if mate.goal_dist < 0:
+        return False
+    dx, dy = pose.x - mate.x, pose.y - mate.y
+    if math.hypot(dx, dy) > radius:
+        return False
+    ahead = abs(wrap_angle(math.atan2(dy, dx) - mate.theta)) < math.radians(75)
+    return ahead or mate.v < moving_speed
+
+
+def aside_goals(pose: Pose, mate: Mate, step: float) -> list[tuple[float, float]]:
+    """Where to step aside, in order of preference: ``step`` to the side of the mate's
+    heading the robot is on, to the other side, then straight away from the mate."""
+    away = math.atan2(pose.y - mate.y, pose.x - mate.x)
+    side = 1.0 if wrap_angle(away - mate.theta) >= 0 else -1.0
+    angles = [mate.theta + side * math.pi / 2, mate.theta - side * math.pi / 2, away]
+    return [(pose.x + step * math.cos(a), pose.y + step * math.sin(a)) for a in angles]
