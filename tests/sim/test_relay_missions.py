@@ -20,7 +20,7 @@ LINE = ROOT / "tests" / "data" / "line" / "line.yaml"
 @pytest.mark.slow
 def test_a_ten_robot_team_relays_statuses_over_several_hops() -> None:
     config = make_config(
-        None, scenario=S2, network="ah", behaviour="nb", spl=0, seed=2, max_time=900,
+        None, scenario=S2, network="ah", behaviour="nb", spl=0, seed=3, max_time=900,
         params={"network": {"relay": True}},
     )  # fmt: skip
     summary = run_mission(config).summary()

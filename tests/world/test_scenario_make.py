@@ -37,9 +37,8 @@ def test_every_kind_and_start_loads_with_what_was_asked(
     # Checked as the CLI does: every start and task reachable on the planning grid too.
     scenario = load_scenario(make_scenario(request, tmp_path / "out", checked_scenario))
     assert len(scenario.robots) == 8 and len(scenario.tasks) == 12
-    # A campus's robots plan on 0.2 m cells (open ground, 1.2 m doors); the rest on 0.1 m.
-    coarse = {"planner_resolution": 0.2} if kind == "campus" else {}
-    assert dict(scenario.robot_settings) == coarse
+    # Every generated scenario's robots plan on 0.2 m cells (its passages stay open).
+    assert dict(scenario.robot_settings) == {"planner_resolution": 0.2}
     assert scenario.assigner.kind == "robot" and scenario.assigner.host == "robot_3"
     xs = [(r.pose.x, r.pose.y) for r in scenario.robots]
     gaps = [((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2) ** 0.5 for i, a in enumerate(xs)

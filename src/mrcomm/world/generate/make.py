@@ -50,10 +50,12 @@ FINE_AREA = 150.0 * 150.0
 #: bytes a cell at its peak (distance transform, regions), so this is ~1.6 GB.
 MAX_CELLS = 25_000_000
 TASK_TYPES = ("SENSOR_SWEEP", "INSPECT")
-#: Map kinds whose robots plan on a coarser grid than the default 0.1 m (m): a campus's
-#: open ground and 1.2 m doors stay open at 0.2 m, and its routes of 100 m and more are
-#: planned about twice as fast (a whole multiple of both map resolutions).
-PLANNING_RESOLUTION = {"campus": 0.2}
+#: The planning grid of every generated scenario's robots (m; the robots' default is
+#: 0.1 m): every passage a generator draws stays open at 0.2 m (a 0.9 m door leaves a
+#: 0.44 m band of centres 0.23 m from both jambs, which always holds a whole cell), and
+#: A* searches a quarter of the cells — the bulk of a large team's planning time (a
+#: whole multiple of both map resolutions, 5 and 10 cm).
+PLANNING_RESOLUTION = 0.2
 _SIZE = re.compile(r"^\s*([0-9]+(?:\.[0-9]+)?)\s*[xX]\s*([0-9]+(?:\.[0-9]+)?)\s*$")
 
 
@@ -262,8 +264,7 @@ def _write(
         ],
         "assigner": assigner_spec(request.assigner, request.robots, base),
     }
-    if request.kind in PLANNING_RESOLUTION:
-        scenario["robot"] = {"planner_resolution": PLANNING_RESOLUTION[request.kind]}
+    scenario["robot"] = {"planner_resolution": PLANNING_RESOLUTION}
     atomic_write_text(
         directory / f"{name}.yaml",
         comment + yaml.safe_dump(scenario, sort_keys=False, default_flow_style=None, width=100),
