@@ -150,9 +150,10 @@ PLANNER_TWO_ROOMS = GridPlanner(TWO_ROOMS, P)
 
 def test_a_memo_answers_a_repeated_search_as_the_search_would() -> None:
     """A robot's plan memo: asked again from the same planning cell to the same goal cell
-    (a robot resuming where it paused) it gives the path a search gives, without one;
-    another start cell, other costs or mates to plan around search again; a goal with no
-    path stays without one."""
+    (a robot resuming where it paused), or around mates that block the same cells (a
+    robot held by mates that do not move), it gives the path a search gives, without
+    one; another start cell, other costs or other blocked cells search again; a goal
+    with no path stays without one."""
     planner = GridPlanner(two_rooms(door=0.8), P)
     searches: list[int] = []
     search = planner._search
@@ -174,9 +175,25 @@ def test_a_memo_answers_a_repeated_search_as_the_search_would() -> None:
     noisy = planner.tie_break_weights(np.random.default_rng(1), 0.5)
     planner.plan((2.0, 1.0), (9.0, 4.0), weights=noisy, memo=memo)  # other costs
     assert len(searches) == 4
-    planner.plan((2.0, 1.0), (9.0, 4.0), obstacles=[(5.0, 2.5)], weights=noisy, memo=memo)
-    planner.plan((2.0, 1.0), (9.0, 4.0), obstacles=[(5.0, 2.5)], weights=noisy, memo=memo)
-    assert len(searches) == 6  # mates are never remembered
+    # Around mates: the same blocked cells are answered from the memo, other ones (a
+    # mate moved) are searched; the search without mates stays remembered meanwhile.
+    mate = [(3.5, 2.0)]  # in the way, in the first room
+    around = planner.plan((2.0, 1.0), (9.0, 4.0), obstacles=mate, weights=noisy, memo=memo)
+    assert around is not None and len(searches) == 5
+    assert planner.plan((2.0, 1.0), (9.0, 4.0), obstacles=mate, weights=noisy, memo=memo) == around
+    assert len(searches) == 5
+    assert around == planner.plan((2.0, 1.0), (9.0, 4.0), obstacles=mate, weights=noisy)
+    assert len(searches) == 6
+    moved = [(3.5, 2.6)]
+    planner.plan((2.0, 1.0), (9.0, 4.0), obstacles=moved, weights=noisy, memo=memo)
+    assert len(searches) == 7
+    planner.plan((2.0, 1.0), (9.0, 4.0), weights=noisy, memo=memo)
+    assert len(searches) == 7
+    # A mate in the only door: no path, remembered as such.
+    door = [(5.05, 2.5)]
+    assert planner.plan((2.0, 1.0), (9.0, 4.0), obstacles=door, memo=memo) is None
+    assert planner.plan((2.0, 1.0), (9.0, 4.0), obstacles=door, memo=memo) is None
+    assert len(searches) == 8
     sealed = GridPlanner(sealed_rooms(), P)
     none = PlanMemo()
     assert sealed.plan((1.0, 1.0), (9.0, 4.0), memo=none) is None

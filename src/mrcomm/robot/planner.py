@@ -67,17 +67,34 @@ class PlannedPath:
         return self.waypoints[-1]
 
 
-class PlanMemo:
-    """One robot's last search without mates: its start and goal cells, the cell costs
-    it ran on and the waypoint cells it found (None: no path). A robot that resumes
-    where it paused (a knot of mates stops it again before it has left its planning
-    cell) asks for the same search again; its answer depends on nothing else, so it is
-    not searched again. Owned by the robot, never by the shared planner."""
+#: One mate's blocked disc on the planning grid: the rows y0:y1 and columns x0:x1 of the
+#: whole grid it may touch and which of those cells it blocks.
+Disc = tuple[int, int, int, int, NDArray[np.bool_]]
 
+
+class PlanMemo:
+    """One robot's last search without mates and its last search around mates: for
+    each, what the search depended on (start and goal cells; the cells the mates
+    blocked), the cell costs it ran on and the waypoint cells it found (None: no path).
+    A robot that resumes where it paused (a knot of mates stops it again before it has
+    left its planning cell) asks for the same search again, and one held by mates that
+    do not move asks again every re-plan interval for the same search around them —
+    which in a crowded office finds no path nearly every time, after expanding every
+    cell it can reach. Each answer depends on nothing else, so it is not searched
+    again. Owned by the robot, never by the shared planner."""
+
+    __slots__ = ("around", "plain")
+
+    def __init__(self) -> None:
+        self.plain = _Remembered()
+        self.around = _Remembered()
+
+
+class _Remembered:
     __slots__ = ("cells", "key", "weights")
 
     def __init__(self) -> None:
-        self.key: tuple[tuple[int, int], tuple[int, int]] | None = None
+        self.key: object = None
         self.weights: NDArray[np.float32] | None = None
         self.cells: NDArray[np.int32] | None = None
 
@@ -221,22 +238,17 @@ class GridPlanner:
         cells = self.shape[0] * self.shape[1]
         return cells >= WINDOW_FROM_CELLS and (y1 - y0) * (x1 - x0) < WINDOW_FRACTION * cells
 
-    def _with_obstacles(
-        self,
-        obstacles: Sequence[Point],
-        radius: float,
-        starts: Sequence[Point],
-        base: NDArray[np.float32],
-        window: Window,
-    ) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
-        """Copies of the ``window`` of (``base`` weights, clearance) with discs around
-        ``obstacles`` blocked. A disc never covers the start (``starts``: the robot's
-        position, and the centre of the free cell it was snapped to when it stands in
-        the inflated zone), or the robot could not leave its own cell."""
-        wy0, wy1, wx0, wx1 = window
-        weights = base[wy0:wy1, wx0:wx1].copy()
-        clear = self._clear[wy0:wy1, wx0:wx1].copy()
+    def _discs(
+        self, obstacles: Sequence[Point], radius: float, starts: Sequence[Point]
+    ) -> list[Disc]:
+        """The cells each of ``obstacles`` blocks: a disc of ``radius``, never covering
+        the start (``starts``: the robot's position, and the centre of the free cell it
+        was snapped to when it stands in the inflated zone), or the robot could not
+        leave its own cell."""
         res = self.resolution
+        hc, wc = self.shape
+        cx, cy = self.cell_centre(0, 0)
+        discs: list[Disc] = []
         for ox, oy in obstacles:
             near = min(math.hypot(sx - ox, sy - oy) for sx, sy in starts)
             r = min(radius, near - res)
@@ -244,15 +256,30 @@ class GridPlanner:
                 continue
             iy, ix = self.cell_of(ox, oy)
             m = math.ceil(r / res) + 1
-            y0, y1 = max(iy - m, wy0), min(iy + m + 1, wy1)
-            x0, x1 = max(ix - m, wx0), min(ix + m + 1, wx1)
+            y0, y1 = max(iy - m, 0), min(iy + m + 1, hc)
+            x0, x1 = max(ix - m, 0), min(ix + m + 1, wc)
             if y0 >= y1 or x0 >= x1:
                 continue
             yy, xx = np.ogrid[y0:y1, x0:x1]
-            cx, cy = self.cell_centre(0, 0)
             inside = ((cx + xx * res - ox) ** 2 + (cy + yy * res - oy) ** 2) <= r * r
-            weights[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0][inside] = np.inf
-            clear[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0][inside] = -1.0
+            discs.append((y0, y1, x0, x1, inside))
+        return discs
+
+    def _with_discs(
+        self, discs: Sequence[Disc], base: NDArray[np.float32], window: Window
+    ) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+        """Copies of the ``window`` of (``base`` weights, clearance) with ``discs``
+        blocked."""
+        wy0, wy1, wx0, wx1 = window
+        weights = base[wy0:wy1, wx0:wx1].copy()
+        clear = self._clear[wy0:wy1, wx0:wx1].copy()
+        for y0, y1, x0, x1, inside in discs:
+            cy0, cy1, cx0, cx1 = max(y0, wy0), min(y1, wy1), max(x0, wx0), min(x1, wx1)
+            if cy0 >= cy1 or cx0 >= cx1:
+                continue
+            part = inside[cy0 - y0 : cy1 - y0, cx0 - x0 : cx1 - x0]
+            weights[cy0 - wy0 : cy1 - wy0, cx0 - wx0 : cx1 - wx0][part] = np.inf
+            clear[cy0 - wy0 : cy1 - wy0, cx0 - wx0 : cx1 - wx0][part] = -1.0
         return weights, clear
 
     def _search(
@@ -260,27 +287,19 @@ class GridPlanner:
         s_cell: tuple[int, int],
         g_cell: tuple[int, int],
         weights: NDArray[np.float32],
-        obstacles: Sequence[Point],
-        obstacle_radius: float,
-        start: Point,
+        discs: Sequence[Disc],
     ) -> tuple[NDArray[np.int32], NDArray[np.float32], Window] | None:
-        """A* from ``s_cell`` to ``g_cell`` (the whole grid's result, searched on a
-        window): the path's cells (whole-grid indices), the clearance it was planned
-        on (of the window) and the window; None when there is no path."""
-        # A start in the inflated zone searches from the free cell it was snapped to:
-        # a mate's disc must leave that cell open too (in a dead end, say).
-        starts = [start]
-        if self.cell_of(*start) != s_cell:
-            starts.append(self.cell_centre(*s_cell))
+        """A* from ``s_cell`` to ``g_cell`` with ``discs`` blocked (the whole grid's
+        result, searched on a window): the path's cells (whole-grid indices), the
+        clearance it was planned on (of the window) and the window; None when there is
+        no path."""
         window = self._first_window(s_cell, g_cell)
         if not self._worth_it(window):
             window = self._whole()
         while True:
             y0, y1, x0, x1 = window
-            if obstacles:
-                grid, clear = self._with_obstacles(
-                    obstacles, obstacle_radius, starts, weights, window
-                )
+            if discs:
+                grid, clear = self._with_discs(discs, weights, window)
                 if not (
                     grid[g_cell[0] - y0, g_cell[1] - x0] < np.inf
                     and grid[s_cell[0] - y0, s_cell[1] - x0] < np.inf
@@ -328,8 +347,8 @@ class GridPlanner:
         nearest free cell first (on the static map: a mate on the goal means no path).
         ``weights``: the run's own cell costs (:meth:`tie_break_weights`) instead of the
         planner's; passed in, never stored, because the planner is shared. ``memo``: the
-        robot's :class:`PlanMemo` (a search without mates from the start cell and to the
-        goal cell of its last one is answered from it).
+        robot's :class:`PlanMemo` (a search asked again, without mates or around the
+        same blocked cells, is answered from it).
         """
         s_cell = self._snap(*start, self._clear)
         g_cell = self._snap(*goal, self._clear)
@@ -340,23 +359,28 @@ class GridPlanner:
         if obstacle_radius is None:
             p = self.params
             obstacle_radius = 2 * p.radius + p.block_margin + self.resolution
-        remembered = (
-            memo is not None
-            and not obstacles
-            and memo.key == (s_cell, g_cell)
-            and memo.weights is weights
-        )
-        if remembered:
-            assert memo is not None
-            cells = memo.cells
+        discs: list[Disc] = []
+        if obstacles:
+            # A start in the inflated zone searches from the free cell it was snapped
+            # to: a mate's disc must leave that cell open too (in a dead end, say).
+            starts = [start]
+            if self.cell_of(*start) != s_cell:
+                starts.append(self.cell_centre(*s_cell))
+            discs = self._discs(obstacles, obstacle_radius, starts)
+        # The search depends on the start and goal cells, the costs and the cells the
+        # mates block, nothing else: a memo answers a search asked again.
+        key = (s_cell, g_cell, tuple((*d[:4], d[4].tobytes()) for d in discs))
+        slot = None if memo is None else (memo.around if obstacles else memo.plain)
+        if slot is not None and slot.key == key and slot.weights is weights:
+            cells = slot.cells
         else:
-            found = self._search(s_cell, g_cell, weights, obstacles, obstacle_radius, start)
+            found = self._search(s_cell, g_cell, weights, discs)
             cells = None
             if found is not None:
                 raw, clear, window = found
                 cells = raw[self._simplify(raw, clear, (window[0], window[2]))]
-            if memo is not None and not obstacles:
-                memo.key, memo.weights, memo.cells = (s_cell, g_cell), weights, cells
+            if slot is not None:
+                slot.key, slot.weights, slot.cells = key, weights, cells
         if cells is None:
             return None
         pts: list[Point] = [self.cell_centre(int(iy), int(ix)) for iy, ix in cells.tolist()]
