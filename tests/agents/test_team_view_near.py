@@ -66,6 +66,8 @@ def test_the_arrays_find_the_near_mates_the_loop_finds() -> None:
         loop.hear_all([m for _, m in step], float(now), "robot_0")
         assert arrays._table is not None and loop._table is None
         assert list(arrays.poses.items()) == list(loop.poses.items())
+        assert len(arrays.poses) == len(loop.poses) and "robot_0" not in arrays.poses
+        assert arrays.poses.get("robot_0") is None and arrays.poses.get("nobody") is None
         assert list(arrays.heard.items()) == list(loop.heard.items())
         assert arrays.heard.get("robot_0") is None and arrays.age("robot_0", now) == math.inf
         for seconds in (0.5, 1.0, 2.5):
@@ -103,8 +105,13 @@ def test_the_arrays_are_dropped_once_a_pose_arrives_otherwise() -> None:
     view.hear_all(_received(steps[0]), 0.0, "robot_0")
     assert view._table is not None
     heard = list(view.heard.items())
+    poses = list(view.poses.items())
     view.hear(steps[1][0][1], 1.0)
-    assert view._table is None
+    assert view._table is None and isinstance(view.poses, dict)
+    late = steps[1][0][1]
+    assert list(view.poses.items())[: len(poses)] == [
+        (m, late if m == late.sender else p) for m, p in poses
+    ]
     assert list(view.heard.items())[: len(heard)] == [
         (m, 1.0 if m == steps[1][0][1].sender else t) for m, t in heard
     ]

@@ -132,7 +132,6 @@ class TaskExecutor:
         self.completed: list[str] = []
         self.known_done: set[str] = set()  # task ids any robot reported complete
         self.team_view = TeamView()
-        self.mates = self.team_view.poses  # each mate's last received pose
         self.goal: TaskSpec | None = None
         self._now = 0.0
         self._t0: float | None = None  # assignment received: mission start for this robot
@@ -163,6 +162,11 @@ class TaskExecutor:
         self.commands = CommandInbox(bus, incarnation, self._command_team, self.on_command)
 
     # -- the agent's life ----------------------------------------------------------
+    @property
+    def mates(self) -> Mapping[str, PoseMsg]:
+        """Each mate's last received pose (:attr:`TeamView.poses`)."""
+        return self.team_view.poses
+
     @property
     def done(self) -> bool:
         """Nothing left to do: agenda complete and nothing left to communicate."""

@@ -33,12 +33,13 @@ _NEVER = np.iinfo(np.int32).max
 
 
 class _MateTable:
-    """Each mate's last heard position and when it was heard, as arrays indexed by the
-    numbers the bus gives the team's endpoints, and the order mates were first heard in
-    (the order of :attr:`TeamView.poses`). Kept while every pose arrives in a step batch
-    (:class:`~mrcomm.ports.Received`), so that hearing a batch and finding the mates
-    near a point cost a few array operations, not a loop over the whole team. The
-    endpoints' names and numbers are the bus's, shared by every view."""
+    """Each mate's last pose message, position and when it was heard, as arrays indexed
+    by the numbers the bus gives the team's endpoints, and the order mates were first
+    heard in (the order of :attr:`TeamView.poses`). Kept while every pose arrives in a
+    step batch (:class:`~mrcomm.ports.Received`), so that hearing a batch and finding
+    the mates near a point cost a few array operations, not a loop over the whole team
+    (hearing ~1,000 poses a round into a dict per receiver was the O(N²) left in a team
+    of 1,000). The endpoints' names and numbers are the bus's, shared by every view."""
 
     def __init__(self, batch: StepBatch) -> None:
         members = len(batch.members)
@@ -48,9 +49,12 @@ class _MateTable:
         self.ys: NDArray[np.float64] = np.full(members, np.nan)
         #: When each member's last pose arrived (NaN: never).
         self.heard_at: NDArray[np.float64] = np.full(members, np.nan)
+        #: Each member's last pose message (None: never heard).
+        self.pose: NDArray[np.object_] = np.full(members, None, dtype=object)
         #: The order members were first heard in (_NEVER: not yet).
         self.first: NDArray[np.int32] = np.full(members, _NEVER, dtype=np.int32)
-        self._heard = 0  # mates heard so far
+        self.heard_count = 0  # mates heard so far
+        self._order: list[str] = []  # their names in that order (for heard_count mates)
 
     def hear(self, received: Received, senders: NDArray[np.intp], now: float) -> None:
         """Take a receiver's share of a batch with no sender twice (``senders``: their
@@ -58,11 +62,19 @@ class _MateTable:
         batch, rows = received.batch, received.rows
         new = np.flatnonzero(self.first[senders] == _NEVER)
         if len(new):
-            self.first[senders[new]] = np.arange(self._heard, self._heard + len(new))
-            self._heard += len(new)
+            self.first[senders[new]] = np.arange(self.heard_count, self.heard_count + len(new))
+            self.heard_count += len(new)
+        self.pose[senders] = batch.objects()[rows]
         self.xs[senders] = batch.column("x")[rows]
         self.ys[senders] = batch.column("y")[rows]
         self.heard_at[senders] = now
+
+    def order(self) -> list[str]:
+        """The mates heard, in the order they were first heard."""
+        if len(self._order) != self.heard_count:
+            heard = np.flatnonzero(self.first != _NEVER)
+            self._order = self.names[heard[np.argsort(self.first[heard])]].tolist()
+        return self._order
 
     def heard(self, mate: str) -> float | None:
         """When ``mate``'s last pose arrived (None: never)."""
@@ -84,13 +96,36 @@ class _MateTable:
         return near
 
 
+class _TablePoses(Mapping[str, PoseMsg]):
+    """:attr:`TeamView.poses` read from a :class:`_MateTable`: each mate's last pose
+    message, mates in the order they were first heard (as the dict it stands for)."""
+
+    __slots__ = ("_table",)
+
+    def __init__(self, table: _MateTable) -> None:
+        self._table = table
+
+    def __getitem__(self, mate: str) -> PoseMsg:
+        number = self._table.number.get(mate)
+        pose = None if number is None else self._table.pose[number]
+        if pose is None:
+            raise KeyError(mate)
+        return cast("PoseMsg", pose)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._table.order())
+
+    def __len__(self) -> int:
+        return self._table.heard_count
+
+
 class _HeardTimes(Mapping[str, float]):
     """:attr:`TeamView.heard` read from a :class:`_MateTable`: when each mate's last
     pose arrived, mates in the order they were first heard (that of the poses)."""
 
     __slots__ = ("_poses", "_table")
 
-    def __init__(self, table: _MateTable, poses: dict[str, PoseMsg]) -> None:
+    def __init__(self, table: _MateTable, poses: Mapping[str, PoseMsg]) -> None:
         self._table = table
         self._poses = poses
 
@@ -116,8 +151,11 @@ class TeamView:
     what keeps hearing a pose cheap (most of a large team's work)."""
 
     def __init__(self) -> None:
-        #: Each mate's last pose message (a :class:`Mate` as collision avoidance reads it).
-        self.poses: dict[str, PoseMsg] = {}
+        #: Each mate's last pose message (a :class:`Mate` as collision avoidance reads
+        #: it), mates in the order they were first heard; read-only (a dict, or read
+        #: from the mate table while there is one).
+        self._poses: dict[str, PoseMsg] = {}
+        self.poses: Mapping[str, PoseMsg] = self._poses
         self._heard: dict[str, float] = {}
         #: When each mate's last pose arrived (the receiver's clock); read-only.
         self.heard: Mapping[str, float] = self._heard
@@ -136,31 +174,30 @@ class TeamView:
     def hear_all(self, messages: Sequence[PoseMsg], now: float, own: str) -> None:
         """Poses that arrived together, in order (the robot's own, ``own``, left out):
         the same as hearing each in turn (the last of a mate's wins; mates keep the order
-        they were first heard in): two dict updates, or with a mate table one dict
-        update and a few array writes."""
+        they were first heard in): two dict updates, or with a mate table a few array
+        writes."""
         if isinstance(messages, Received) and messages.batch.distinct:
             batch = messages.batch
             # A table is made with the first poses: it then has every mate heard.
             if not self.poses and len(batch.members) >= NEAR_ARRAYS_FROM:
                 self._table = _MateTable(batch)
+                self.poses = _TablePoses(self._table)
                 self.heard = _HeardTimes(self._table, self.poses)
             if self._table is not None:
                 # A bus's share of a step batch never holds the receiver's own messages.
-                senders = batch.senders[messages.rows]
-                names: list[str] = batch.members[senders].tolist()
-                poses = cast("list[PoseMsg]", messages.messages())
-                self.poses.update(zip(names, poses, strict=True))
-                self._table.hear(messages, senders, now)
+                self._table.hear(messages, batch.senders[messages.rows], now)
                 return
         elif self._table is not None:
             # The table stays in step with the poses only if every pose comes in a batch:
             # dropped for good (it is only made with the first poses).
+            self._poses = dict(self.poses)
+            self.poses = self._poses
             self._heard = dict(self.heard)
             self.heard = self._heard
             self._table = None
         latest = {message.sender: message for message in messages}
         latest.pop(own, None)
-        self.poses.update(latest)
+        self._poses.update(latest)
         self._heard.update(dict.fromkeys(latest, now))
 
     def role(self, mate: str) -> str | None:
