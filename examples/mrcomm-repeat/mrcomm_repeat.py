@@ -14,8 +14,7 @@ from __future__ import annotations
 
 from typing import ClassVar
 
-from mrcomm.agents.executor import TaskExecutor
-from mrcomm.agents.executor_params import ExecutorParams
+from mrcomm.agents.executor import ExecutorParams, TaskExecutor
 from mrcomm.messaging.messages import TOPIC_TASK_STATUS, TaskState, TaskStatus
 from mrcomm.specs import VariantSpec, parameter
 
