@@ -265,7 +265,9 @@ class GridPlanner:
             x0, x1 = max(ix - m, 0), min(ix + m + 1, wc)
             if y0 >= y1 or x0 >= x1:
                 continue
-            yy, xx = np.ogrid[y0:y1, x0:x1]
+            # (np.ogrid's rows and columns, made directly: the same numbers, less work)
+            yy = np.arange(y0, y1)[:, None]
+            xx = np.arange(x0, x1)[None, :]
             inside = ((cx + xx * res - ox) ** 2 + (cy + yy * res - oy) ** 2) <= r * r
             discs.append((y0, y1, x0, x1, inside))
         return discs
