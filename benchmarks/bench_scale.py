@@ -10,7 +10,8 @@ interleaved over ``--repeats`` rounds (the median is reported), and the machine'
 is printed with them.
 
 With ``--old DIR`` (a ``git worktree`` of an earlier commit) every case also runs on
-that tree's code, interleaved with this one's, and the table gets both and their ratio.
+that tree's code and its own bundled scenario file (this tree's when it has none),
+interleaved with this one's, and the table gets both and their ratio.
 
 Run: ``.venv/bin/python benchmarks/bench_scale.py [--repeats 3] [--sim-time 120]
 [--only s2 --only s3] [--figure docs/figures/scale.png] [--old /tmp/mrcomm-old]``
@@ -99,7 +100,9 @@ def main() -> None:
         for name in names:  # interleaved: background load falls on every case alike
             results[name].append(run_case(SCENARIOS[name][1], args.sim_time))
             if args.old is not None:
-                before[name].append(run_case(SCENARIOS[name][1], args.sim_time, args.old))
+                own = args.old / SCENARIOS[name][1].relative_to(ROOT)
+                path = own if own.exists() else SCENARIOS[name][1]
+                before[name].append(run_case(path, args.sim_time, args.old))
     print(f"load after: {os.getloadavg()}")
     if args.old is not None:
         print(f"| scenario | robots | CPU s, {args.old} | CPU s, this tree | this / old |")
