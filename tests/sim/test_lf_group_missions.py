@@ -52,11 +52,12 @@ def test_ten_robots_in_groups_of_four_get_three_leaders() -> None:
 def test_ten_robots_in_groups_complete_and_every_status_reaches_the_assigner() -> None:
     """S2 · LF · AH · SLT · SPL 25 · seed 1: one leader for ten robots reached the time
     limit with 3 of 20 tasks; in groups, with reporting back, it completes every task
-    and every completion reaches the assigner (on robot_1) well within the limit."""
+    and every completion reaches the assigner (on robot_1) within the limit (1,800 s:
+    ended at ~1,400 s when S2 planned on 0.1 m cells, 1,598 s on 0.2 m cells)."""
     config = make_config(
         None, scenario=S2, behaviour="lf", network="ah", threshold="slt", spl=25, seed=1
     )
     mission = run_mission(config).summary()["mission"]
     assert not mission["timed_out"]
     assert mission["successful"] and mission["tasks_completed"] == 20
-    assert mission["end_time"] < 1500.0
+    assert mission["end_time"] < 1700.0
