@@ -123,11 +123,10 @@ class _HeardTimes(Mapping[str, float]):
     """:attr:`TeamView.heard` read from a :class:`_MateTable`: when each mate's last
     pose arrived, mates in the order they were first heard (that of the poses)."""
 
-    __slots__ = ("_poses", "_table")
+    __slots__ = ("_table",)
 
-    def __init__(self, table: _MateTable, poses: Mapping[str, PoseMsg]) -> None:
+    def __init__(self, table: _MateTable) -> None:
         self._table = table
-        self._poses = poses
 
     def __getitem__(self, mate: str) -> float:
         heard = self._table.heard(mate)
@@ -136,10 +135,10 @@ class _HeardTimes(Mapping[str, float]):
         return heard
 
     def __iter__(self) -> Iterator[str]:
-        return iter(self._poses)
+        return iter(self._table.order())
 
     def __len__(self) -> int:
-        return len(self._poses)
+        return self._table.heard_count
 
 
 class TeamView:
@@ -182,7 +181,7 @@ class TeamView:
             if not self.poses and len(batch.members) >= NEAR_ARRAYS_FROM:
                 self._table = _MateTable(batch)
                 self.poses = _TablePoses(self._table)
-                self.heard = _HeardTimes(self._table, self.poses)
+                self.heard = _HeardTimes(self._table)
             if self._table is not None:
                 # A bus's share of a step batch never holds the receiver's own messages.
                 self._table.hear(messages, batch.senders[messages.rows], now)

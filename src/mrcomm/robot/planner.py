@@ -376,8 +376,12 @@ class GridPlanner:
             discs = self._discs(obstacles, obstacle_radius, starts)
         # The search depends on the start and goal cells, the costs and the cells the
         # mates block, nothing else: a memo answers a search asked again.
-        key = (s_cell, g_cell, tuple((*d[:4], d[4].tobytes()) for d in discs))
         slot = None if memo is None else (memo.around if obstacles else memo.plain)
+        key = (
+            None
+            if slot is None
+            else (s_cell, g_cell, tuple((*d[:4], d[4].tobytes()) for d in discs))
+        )
         if slot is not None and slot.key == key and slot.weights is weights:
             cells = slot.cells
         else:

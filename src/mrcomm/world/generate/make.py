@@ -168,7 +168,7 @@ def make_scenario(
         # Drawn and written in a helper so the grid it held is freed before the loader
         # reads the map again (a 300 m campus holds ~1 GB while it is drawn).
         _generate(request, staging)
-        check(staging / f"{request.name}.yaml")  # reachability, by the loader itself
+        check(staging / f"{request.name}.yaml")  # reachability: on the map, and as asked
         try:
             if out.exists():
                 out.rmdir()
