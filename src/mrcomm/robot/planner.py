@@ -34,6 +34,7 @@ import numpy as np
 import pyastar2d
 from numpy.typing import NDArray
 
+from mrcomm.heap import keep_freed_blocks
 from mrcomm.robot.params import RobotParams
 from mrcomm.world.geometry import polyline_length
 from mrcomm.world.occupancy import OccupancyGrid
@@ -110,6 +111,9 @@ class GridPlanner:
     after construction (a re-plan around mates draws them into copies)."""
 
     def __init__(self, grid: OccupancyGrid, params: RobotParams) -> None:
+        # Each search allocates two arrays over the grid: without this, most of a short
+        # search's time is the page faults of freshly mapped memory (see mrcomm.heap).
+        keep_freed_blocks()
         self.grid = grid
         self.params = params
         k = max(1, round(params.planner_resolution / grid.resolution))
@@ -424,14 +428,16 @@ class GridPlanner:
             return list(range(n))
         comfort = self.inflation + self.params.wall_cost_range
         tol = 0.5 * self.resolution
-        c = clear[raw[:, 0] - corner[0], raw[:, 1] - corner[1]].tolist()
+        # The raw cells' clearance, and one cell more for the span minima (see below).
+        c = np.append(clear[raw[:, 0] - corner[0], raw[:, 1] - corner[1]], np.inf)
+        c = c.astype(np.float64)
         centres = raw.astype(np.float64) + 0.5
         keep = {0, n - 1}
         spans = [(0, n - 1)]
         while spans:
             starts = np.array([i for i, _ in spans])
             ends = np.array([j for _, j in spans])
-            need = np.array([min(min(c[i : j + 1]), comfort) - tol for i, j in spans])
+            need = self._needs(c, starts, ends, comfort, tol)
             ok = self._segments_ok(centres, clear, corner, starts, ends, need)
             nxt: list[tuple[int, int]] = []
             for (i, j), valid in zip(spans, ok.tolist(), strict=True):
@@ -452,19 +458,33 @@ class GridPlanner:
             mids = list(range(parity, len(kept) - 1, 2))
             if not mids:
                 continue
-            spans = [(kept[k - 1], kept[k + 1]) for k in mids]
-            need = np.array([min(min(c[i : j + 1]), comfort) - tol for i, j in spans])
-            ok = self._segments_ok(
-                centres,
-                clear,
-                corner,
-                np.array([i for i, _ in spans]),
-                np.array([j for _, j in spans]),
-                need,
-            )
+            starts = np.array([kept[k - 1] for k in mids])
+            ends = np.array([kept[k + 1] for k in mids])
+            need = self._needs(c, starts, ends, comfort, tol)
+            ok = self._segments_ok(centres, clear, corner, starts, ends, need)
             drop = {kept[k] for k, valid in zip(mids, ok.tolist(), strict=True) if valid}
             kept = [k for k in kept if k not in drop]
         return kept
+
+    @staticmethod
+    def _needs(
+        c: NDArray[np.float64],
+        starts: NDArray[np.int64],
+        ends: NDArray[np.int64],
+        comfort: float,
+        tol: float,
+    ) -> NDArray[np.float64]:
+        """The clearance each shortcut from cell ``starts[k]`` to ``ends[k]`` must keep:
+        the least clearance of the raw cells from start to end inclusive (``c``: theirs,
+        and one more cell after the last), capped at ``comfort``, less ``tol``."""
+        # reduceat over [start, end + 1) for each span: the even entries of an
+        # interleaved index list (the odd ones, from one span's end to the next span's
+        # start, are discarded; spans may share an end, which reduceat allows).
+        bounds = np.empty(2 * len(starts), dtype=np.int64)
+        bounds[0::2] = starts
+        bounds[1::2] = ends + 1
+        least = np.minimum.reduceat(c, bounds)[0::2]
+        return np.minimum(least, comfort) - tol
 
     @staticmethod
     def _farthest(centres: NDArray[np.float64], i: int, j: int) -> int:
