@@ -305,16 +305,19 @@ class TaskExecutor:
         # Only mates within the make-way radius can be in the way (in_way_of tests it).
         pose = self.base.pose
         for mate in self._mates_near(pose, self.params.make_way_radius):
-            if self.in_way_of(mate):
+            if self.in_way_of(mate, pose):
                 self.step_aside(mate)
                 return
 
     # -- making way ------------------------------------------------------------------
-    def in_way_of(self, mate: Mate) -> bool:
+    def in_way_of(self, mate: Mate, pose: Pose | None = None) -> bool:
         """This robot (without a goal of its own, or following) stands close to a mate
-        that has a goal: ahead of it, or next to it while it is stuck."""
+        that has a goal: ahead of it, or next to it while it is stuck. ``pose``: the
+        robot's, when the caller has read it already (a loop over mates reads it once)."""
         params = self.params
-        return in_way(self.base.pose, mate, params.make_way_radius, params.collision.moving_speed)
+        if pose is None:
+            pose = self.base.pose
+        return in_way(pose, mate, params.make_way_radius, params.collision.moving_speed)
 
     def step_aside(self, mate: Mate) -> None:
         """Step aside of the mate's heading (left, right, then straight away from it);

@@ -521,11 +521,11 @@ class LeaderFollowerExecutor(AonStatuses):
             return
         # A waiting follower steps aside for the leader, and for any mate it blocks
         # (e.g. a follower stuck behind it on its way into the leader's sight).
+        pose = self.base.pose
         for mate in self.mates.values():
-            if self.in_way_of(mate):
+            if self.in_way_of(mate, pose):
                 self.step_aside(mate)
                 return
-        pose = self.base.pose
         far = self.link_sensor.warning(self.leader or "", pose, target[0], target[1], self._now)
         if far or math.hypot(target[0] - pose.x, target[1] - pose.y) > self.lf.refollow_distance:
             self._follow_target = target
