@@ -269,13 +269,19 @@ class InProcessNetwork:
             received = in_range
             loss = self.policy.loss_percent / 100.0
             if loss > 0.0 and topic in self.policy.lossy_topics:
-                received = in_range.copy()
-                for column, receiver in enumerate(targets):
-                    reached = in_range[:, column]
-                    k = int(np.count_nonzero(reached))
-                    if k:
-                        kept = self._streams[receiver].take(k) >= loss
-                        received[reached, column] = kept
+                # Each receiver draws one number per message in range, in message order:
+                # receiver by receiver, as the transposed mask lists them.
+                reached = in_range.T
+                streams = self._streams
+                draws = [
+                    streams[receiver].take(k)
+                    for receiver, k in zip(targets, reached.sum(axis=1).tolist(), strict=True)
+                    if k
+                ]
+                if draws:
+                    kept = reached.copy()
+                    kept[reached] = np.concatenate(draws) >= loss
+                    received = kept.T
         decided = others.sum(axis=0).tolist()
         reached_n = in_range.sum(axis=0).tolist()
         received_n = received.sum(axis=0).tolist()
