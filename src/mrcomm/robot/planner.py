@@ -432,15 +432,25 @@ class GridPlanner:
         c = np.append(clear[raw[:, 0] - corner[0], raw[:, 1] - corner[1]], np.inf)
         c = c.astype(np.float64)
         centres = raw.astype(np.float64) + 0.5
+        # Whether the shortcut over each span tested so far is valid (a function of the
+        # span alone): the passes after Douglas-Peucker often ask about a span it asked.
+        tested: dict[tuple[int, int], bool] = {}
+
+        def test(spans: list[tuple[int, int]]) -> list[bool]:
+            new = [span for span in spans if span not in tested]
+            if new:
+                starts = np.array([i for i, _ in new])
+                ends = np.array([j for _, j in new])
+                need = self._needs(c, starts, ends, comfort, tol)
+                ok = self._segments_ok(centres, clear, corner, starts, ends, need)
+                tested.update(zip(new, ok.tolist(), strict=True))
+            return [tested[span] for span in spans]
+
         keep = {0, n - 1}
         spans = [(0, n - 1)]
         while spans:
-            starts = np.array([i for i, _ in spans])
-            ends = np.array([j for _, j in spans])
-            need = self._needs(c, starts, ends, comfort, tol)
-            ok = self._segments_ok(centres, clear, corner, starts, ends, need)
             nxt: list[tuple[int, int]] = []
-            for (i, j), valid in zip(spans, ok.tolist(), strict=True):
+            for (i, j), valid in zip(spans, test(spans), strict=True):
                 if valid or j - i <= 1:
                     continue
                 m = self._farthest(centres, i, j)
@@ -458,11 +468,8 @@ class GridPlanner:
             mids = list(range(parity, len(kept) - 1, 2))
             if not mids:
                 continue
-            starts = np.array([kept[k - 1] for k in mids])
-            ends = np.array([kept[k + 1] for k in mids])
-            need = self._needs(c, starts, ends, comfort, tol)
-            ok = self._segments_ok(centres, clear, corner, starts, ends, need)
-            drop = {kept[k] for k, valid in zip(mids, ok.tolist(), strict=True) if valid}
+            spans = [(kept[k - 1], kept[k + 1]) for k in mids]
+            drop = {kept[k] for k, valid in zip(mids, test(spans), strict=True) if valid}
             kept = [k for k in kept if k not in drop]
         return kept
 
