@@ -27,8 +27,10 @@ from mrcomm.ports import Received, StepBatch
 #: (:class:`_MateTable`) when its poses come in step batches, and :meth:`TeamView.near`
 #: answers from it: below it a loop over the mates costs less than the table's upkeep
 #: and numpy's per-call overhead (measured: the loop ~0.05 us per mate; the table ~9 us
-#: per query and ~6-15 us per batch heard, whatever the team's size).
-NEAR_ARRAYS_FROM = 200
+#: per query and ~6-15 us per batch heard, whatever the team's size). Measured side by
+#: side on the generated scenarios: with a table, S3 (30 robots) took 1.32 times as
+#: long and S4 (100 robots) 0.93 times (``benchmarks/bench_scale.py``).
+NEAR_ARRAYS_FROM = 64
 _NEVER = np.iinfo(np.int32).max
 
 
