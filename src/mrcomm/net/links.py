@@ -274,8 +274,6 @@ class LinkRecorder:
         n = len(ids)
         self._skip = skip or set()
         self.robots = robots
-        self.min_separation = np.full(robots, np.inf)
-        self.max_separation = np.zeros(robots)
         self._off_robots = ~np.eye(robots, dtype=np.bool_)
         self.rssi_period = rssi_period
         self._next_rssi = 0.0
@@ -320,12 +318,6 @@ class LinkRecorder:
         if now >= self._next_group:
             self._next_group += GROUP_PERIOD
             self.largest_group.append((now, largest_group(state.connected[:n, :n])))
-        if n >= 2:
-            d = state.distance[:n, :n]
-            closest = np.where(self._off_robots, d, np.inf).min(axis=1)
-            furthest = np.where(self._off_robots, d, -np.inf).max(axis=1)
-            np.minimum(self.min_separation, closest, out=self.min_separation)
-            np.maximum(self.max_separation, furthest, out=self.max_separation)
         if state.rssi is None:
             return []
         np.fmin(self.min_rssi, state.rssi, out=self.min_rssi)
@@ -387,13 +379,29 @@ class LinkRecorder:
             "largest_group_min": round(min(sizes) / self.robots, 6),
         }
 
-    def separation(self, robot: int) -> tuple[float | None, float | None]:
-        """Robot ``robot``'s closest and furthest team mate over the run, m (6
-        decimals; None without a team mate)."""
-        return (
-            _rounded(self.min_separation[robot]),
-            _rounded(self.max_separation[robot]),
+    @property
+    def min_separation(self) -> NDArray[np.float64]:
+        """Each robot's closest team mate over the run, m (inf without one): the least
+        of its pairs' minimum distances, which is the least over the steps of its
+        closest mate in each, exactly (a minimum of minima), kept for free."""
+        n = self.robots
+        return np.where(self._off_robots, self.min_distance[:n, :n], np.inf).min(
+            axis=1, initial=np.inf
         )
+
+    @property
+    def max_separation(self) -> NDArray[np.float64]:
+        """Each robot's furthest team mate over the run, m (0 without one)."""
+        n = self.robots
+        return np.where(self._off_robots, self.max_distance[:n, :n], 0.0).max(
+            axis=1, initial=0.0
+        )
+
+    def separations(self) -> list[tuple[float | None, float | None]]:
+        """Each robot's closest and furthest team mate over the run, m (6 decimals; None
+        without a team mate)."""
+        closest, furthest = self.min_separation.tolist(), self.max_separation.tolist()
+        return [(_rounded(a), _rounded(b)) for a, b in zip(closest, furthest, strict=True)]
 
     def summaries(self) -> dict[str, dict[str, Any]]:
         """Per ordered pair ``"a->b"``: distances, lowest RSSI, time in warning, warnings,

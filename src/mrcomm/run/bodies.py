@@ -73,8 +73,9 @@ class RobotBodies:
     def truth(self, recorder: LinkRecorder) -> dict[str, RobotTruth]:
         """Each robot's ground truth at the end of the run."""
         out: dict[str, RobotTruth] = {}
+        separations = recorder.separations()
         for i, (rid, base) in enumerate(self.bases.items()):
-            closest, furthest = recorder.separation(i)
+            closest, furthest = separations[i]
             out[rid] = RobotTruth(
                 distance=round(base.odometry_distance, 6),
                 min_separation=closest,
