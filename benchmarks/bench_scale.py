@@ -2,7 +2,9 @@
 
 For each bundled scenario (S1: 3 robots, S2: 10, S3: 30, S4: 100, campus1000: 1000) it
 simulates NB · WLAN · SPL 25 for a fixed mission time (``--sim-time``, default 120 s:
-long enough that every robot plans and drives, short enough for 1000 robots) in a fresh
+long enough that every robot plans and drives, short enough for 1000 robots; with
+``--whole``, each mission to its end: its first minutes, when every robot plans its
+first routes, cost the most per simulated second) in a fresh
 child process pinned to one core, and reports the real-time factor (simulated s per
 wall s), CPU time, the cost per step, the peak resident memory of the child, and the
 fitted exponent of cost per step against N (log-log least squares). Cases are run
@@ -13,7 +15,7 @@ With ``--old DIR`` (a ``git worktree`` of an earlier commit) every case also run
 that tree's code and its own bundled scenario file (this tree's when it has none),
 interleaved with this one's, and the table gets both and their ratio.
 
-Run: ``.venv/bin/python benchmarks/bench_scale.py [--repeats 3] [--sim-time 120]
+Run: ``.venv/bin/python benchmarks/bench_scale.py [--repeats 3] [--sim-time 120 | --whole]
 [--only s2 --only s3] [--figure docs/figures/scale.png] [--old /tmp/mrcomm-old]``
 """
 
@@ -46,12 +48,14 @@ from mrcomm.run.resources import ScenarioResources
 from mrcomm.sim.mission import Mission
 scenario, sim_time = sys.argv[1], float(sys.argv[2])
 resources = ScenarioResources.load(scenario)
+# sim_time 0: the whole mission, to its end or the scenario's time limit.
+limit = {"max_time": sim_time} if sim_time > 0 else {}
 config = make_config(None, scenario=scenario, network="wlan", spl=25.0, behaviour="nb",
-                     threshold="none", max_time=sim_time, seed=1)
+                     threshold="none", seed=1, **limit)
 mission = Mission(config, resources)
 wall0, cpu0 = time.perf_counter(), time.process_time()
 steps = 0
-while mission.now < sim_time - 1e-9 and not mission.done:
+while (sim_time <= 0 or mission.now < sim_time - 1e-9) and not mission.done:
     mission.step()
     steps += 1
 wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
@@ -88,12 +92,16 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--sim-time", type=float, default=120.0)
     parser.add_argument("--only", action="append", choices=sorted(SCENARIOS))
+    parser.add_argument("--whole", action="store_true", help="each mission to its end")
     parser.add_argument("--figure", type=Path)
     parser.add_argument("--old", type=Path, help="an earlier tree to run side by side")
     args = parser.parse_args()
     names = args.only or list(SCENARIOS)
+    if args.whole:
+        args.sim_time = 0.0
+    span = "whole missions" if args.whole else f"{args.sim_time:g} s simulated"
     print(f"Python {platform.python_version()}, {os.cpu_count()} CPUs, pinned to one core; "
-          f"NB · WLAN · SPL 25, {args.sim_time:g} s simulated; load {os.getloadavg()}")  # fmt: skip
+          f"NB · WLAN · SPL 25, {span}; load {os.getloadavg()}")  # fmt: skip
     results: dict[str, list[dict[str, float]]] = {name: [] for name in names}
     before: dict[str, list[dict[str, float]]] = {name: [] for name in names}
     for _ in range(args.repeats):
@@ -112,8 +120,9 @@ def main() -> None:
             new_cpu = statistics.median(r["cpu"] for r in results[name])
             print(f"| {name} | {SCENARIOS[name][0]} | {old_cpu:.2f} | {new_cpu:.2f} "
                   f"| {new_cpu / old_cpu:.2f} |")  # fmt: skip
-    print("| scenario | robots | real-time factor | wall s | CPU s | ms per step | peak MB |")
-    print("|---|---|---|---|---|---|---|")
+    print("| scenario | robots | simulated s | real-time factor | wall s | CPU s | ms per step "
+          "| peak MB |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|---|")
     points = []
     for name in names:
         runs = results[name]
@@ -125,7 +134,7 @@ def main() -> None:
         per_step = cpu / steps * 1000
         n = SCENARIOS[name][0]
         points.append((n, per_step))
-        print(f"| {name} | {n} | {sim / wall:.3g}x | {wall:.2f} | {cpu:.2f} | "
+        print(f"| {name} | {n} | {sim:g} | {sim / wall:.3g}x | {wall:.2f} | {cpu:.2f} | "
               f"{per_step:.2f} | {peak:.0f} |")  # fmt: skip
     if len(points) >= 2:
         print(f"cost per step ~ N^{fit_exponent(points):.2f} (log-log least squares)")
