@@ -393,9 +393,7 @@ class LinkRecorder:
     def max_separation(self) -> NDArray[np.float64]:
         """Each robot's furthest team mate over the run, m (0 without one)."""
         n = self.robots
-        return np.where(self._off_robots, self.max_distance[:n, :n], 0.0).max(
-            axis=1, initial=0.0
-        )
+        return np.where(self._off_robots, self.max_distance[:n, :n], 0.0).max(axis=1, initial=0.0)
 
     def separations(self) -> list[tuple[float | None, float | None]]:
         """Each robot's closest and furthest team mate over the run, m (6 decimals; None
