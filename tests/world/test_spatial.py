@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from mrcomm.world.spatial import neighbours
+from mrcomm.world.spatial import MATRIX_UP_TO, _by_grid, _by_matrix, neighbours
 
 
 def brute(points: list[tuple[float, float]], radii: list[float]) -> list[list[int]]:
@@ -41,3 +41,14 @@ def test_boundary_and_cell_edges() -> None:
 def test_empty_and_zero_radius() -> None:
     assert neighbours([], []) == []
     assert neighbours([(0.0, 0.0), (0.0, 0.0), (1.0, 0.0)], [0.0] * 3) == [[1], [0], []]
+
+
+def test_matrix_and_grid_give_the_same_answers() -> None:
+    # Small teams take all pairs at once, large ones the grid: the same neighbours, in
+    # the same order, down to points exactly at the radius.
+    rng = np.random.default_rng(11)
+    for n in (2, 30, MATRIX_UP_TO, MATRIX_UP_TO + 1):
+        xy = np.round(rng.uniform(-20.0, 20.0, size=(n, 2)), 1)  # many exact ties
+        points = [(float(x), float(y)) for x, y in xy]
+        radii = rng.choice([0.0, 1.0, 2.5, 3.0], size=n).tolist()
+        assert _by_matrix(points, radii) == _by_grid(points, radii) == brute(points, radii)

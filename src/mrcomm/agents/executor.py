@@ -304,7 +304,12 @@ class TaskExecutor:
             return
         # Only mates within the make-way radius can be in the way (in_way_of tests it).
         pose = self.base.pose
-        for mate in self._mates_near(pose, self.params.make_way_radius):
+        radius = self.params.make_way_radius
+        x, y = pose.x, pose.y
+        for mate in self._mates_near(pose, radius):
+            # (Farther than the radius along an axis: not in its way, without a call.)
+            if abs(mate.x - x) > radius or abs(mate.y - y) > radius:
+                continue
             if self.in_way_of(mate, pose):
                 self.step_aside(mate)
                 return
