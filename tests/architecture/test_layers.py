@@ -19,7 +19,6 @@ SRC = Path(__file__).resolve().parents[2] / "src" / "mrcomm"
 RANKS = {
     "errors": 0,
     "fileio": 0,
-    "heap": 0,
     "output_paths": 0,
     "seeding": 0,
     "specs": 0,

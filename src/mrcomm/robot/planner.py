@@ -34,7 +34,6 @@ import numpy as np
 import pyastar2d
 from numpy.typing import NDArray
 
-from mrcomm.heap import keep_freed_blocks
 from mrcomm.robot.params import RobotParams
 from mrcomm.world.geometry import polyline_length
 from mrcomm.world.occupancy import OccupancyGrid
@@ -111,9 +110,6 @@ class GridPlanner:
     after construction (a re-plan around mates draws them into copies)."""
 
     def __init__(self, grid: OccupancyGrid, params: RobotParams) -> None:
-        # Each search allocates two arrays over the grid: without this, most of a short
-        # search's time is the page faults of freshly mapped memory (see mrcomm.heap).
-        keep_freed_blocks()
         self.grid = grid
         self.params = params
         k = max(1, round(params.planner_resolution / grid.resolution))
