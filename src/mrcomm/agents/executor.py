@@ -302,12 +302,12 @@ class TaskExecutor:
         if self._new_tasks and self.agenda:  # given tasks while making way, say
             self._plan_new_tasks()
             return
-        # Only mates within the make-way radius can be in the way (in_way_of tests it).
+        # Only mates within the make-way radius can be in the way: those farther along
+        # an axis are passed over here, without a call (in_way_of tests the rest).
         pose = self.base.pose
         radius = self.params.make_way_radius
         x, y = pose.x, pose.y
         for mate in self._mates_near(pose, radius):
-            # (Farther than the radius along an axis: not in its way, without a call.)
             if abs(mate.x - x) > radius or abs(mate.y - y) > radius:
                 continue
             if self.in_way_of(mate, pose):

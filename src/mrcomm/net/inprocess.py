@@ -261,29 +261,25 @@ class InProcessNetwork:
         columns = np.array(targets)
         rows = np.array(senders, dtype=np.intp)
         others = rows[:, None] != columns[None, :]  # a sender does not hear itself
-        if self.policy.exempt(topic):
-            received = others
-            in_range = others
-        else:
-            in_range = self._links[rows[:, None], columns[None, :]] & others
-            received = in_range
-            loss = self.policy.loss_percent / 100.0
-            if loss > 0.0 and topic in self.policy.lossy_topics:
-                # Each receiver draws one number per message in range, in message order:
-                # receiver by receiver, as the transposed mask lists them.
-                reached = in_range.T
-                streams = self._streams
-                draws = [
-                    streams[receiver].take(k)
-                    for receiver, k in zip(targets, reached.sum(axis=1).tolist(), strict=True)
-                    if k
-                ]
-                if draws:
-                    kept = reached.copy()
-                    kept[reached] = np.concatenate(draws) >= loss
-                    received = kept.T
+        exempt = self.policy.exempt(topic)
+        in_range = others if exempt else self._links[rows[:, None], columns[None, :]] & others
+        received = in_range
         decided = others.sum(axis=0).tolist()
         reached_n = in_range.sum(axis=0).tolist()
+        loss = self.policy.loss_percent / 100.0
+        if not exempt and loss > 0.0 and topic in self.policy.lossy_topics:
+            # Each receiver draws one number per message in range, in message order:
+            # receiver by receiver, as the transposed mask lists them.
+            streams = self._streams
+            draws = [
+                streams[receiver].take(k)
+                for receiver, k in zip(targets, reached_n, strict=True)
+                if k
+            ]
+            if draws:
+                kept = in_range.T.copy()
+                kept[in_range.T] = np.concatenate(draws) >= loss
+                received = kept.T
         received_n = received.sum(axis=0).tolist()
         counts = self._topic_counts(topic)
         for column, receiver in enumerate(targets):

@@ -425,8 +425,9 @@ class GridPlanner:
         comfort = self.inflation + self.params.wall_cost_range
         tol = 0.5 * self.resolution
         # The raw cells' clearance, and one cell more for the span minima (see below).
-        c = np.append(clear[raw[:, 0] - corner[0], raw[:, 1] - corner[1]], np.inf)
-        c = c.astype(np.float64)
+        c = np.append(clear[raw[:, 0] - corner[0], raw[:, 1] - corner[1]], np.inf).astype(
+            np.float64
+        )
         centres = raw.astype(np.float64) + 0.5
         # Whether the shortcut over each span tested so far is valid (a function of the
         # span alone): the passes after Douglas-Peucker often ask about a span it asked.
