@@ -81,3 +81,18 @@ def test_array_distances_match_the_pairs() -> None:
             links_module.ARRAY_PAIRS = 64
     np.testing.assert_allclose(results[0], results[1], rtol=1e-14)
     assert np.isnan(results[0][3, 0]) and results[0][3, 3] == 0.0
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 63, 64, 65, 130, 201])
+def test_distance_matrix_is_the_whole_hypot_bit_for_bit(n: int) -> None:
+    # The triangle computed a block at a time and mirrored is exactly the whole matrix
+    # (rows of blocks of DISTANCE_BLOCK; a node without a position is NaN).
+    rng = np.random.default_rng(n)
+    at = rng.normal(0.0, 100.0, (n, 2))
+    if n > 2:
+        at[n // 2] = np.nan
+        at[1] = at[0]  # two robots at the same point
+    whole = np.hypot(at[:, 0, None] - at[None, :, 0], at[:, 1, None] - at[None, :, 1])
+    np.fill_diagonal(whole, 0.0)
+    got = links_module.distance_matrix(at)
+    assert got.tobytes() == whole.tobytes()

@@ -27,6 +27,18 @@ def test_the_recorder_keeps_each_close_interval_with_its_closest_approach() -> N
     assert recorder.encounters(end=0.6) == [("a", "b", 0.1, 0.4, 0.4), ("a", "b", 0.5, 0.6, 1.0)]
 
 
+def test_the_recorder_names_every_close_pair_at_once() -> None:
+    # Pairs are found in the whole matrix and numbered as the upper triangle runs.
+    recorder = ProximityRecorder(ROBOTS, radius=1.0)
+    recorder.record(_distances(3.0, ac=0.5, bc=0.7), 0.0)
+    recorder.record(_distances(0.2, ac=0.6, bc=2.0), 0.1)
+    assert recorder.encounters(end=0.2) == [
+        ("a", "c", 0.0, 0.2, 0.5),
+        ("b", "c", 0.0, 0.1, 0.7),
+        ("a", "b", 0.1, 0.2, 0.2),
+    ]
+
+
 def _judged(*events: tuple[float, str]) -> Timeline:
     timeline = Timeline("a")
     for t, mate in events:
