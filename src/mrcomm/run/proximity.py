@@ -70,20 +70,15 @@ class ProximityRecorder:
     def record(self, distance: np.ndarray, now: float) -> None:
         """One step: ``distance`` holds the true distances between nodes (robots first,
         in team order), from ``now`` on."""
-        n = len(self.robots)
-        if n < 2:
+        i, j = self._pairs
+        if len(i) == 0:
             return
-        # Few pairs are ever this close: find them in the whole matrix (one comparison)
-        # rather than gathering the upper triangle's n(n-1)/2 cells first. Row-major,
-        # as the triangle's pair numbers run.
-        i, j = np.nonzero(distance[:n, :n] <= self.radius)
-        upper = i < j
-        i, j = i[upper], j[upper]
-        near = i * n - i * (i + 1) // 2 + (j - i - 1)  # the pair's number in the triangle
+        d = distance[i, j]
+        near = np.flatnonzero(d <= self.radius)
         near_set = set(near.tolist())
         for k in [k for k in self._since if k not in near_set]:
             self._close(k, now)
-        for k, dk in zip(near.tolist(), distance[i, j].tolist(), strict=True):
+        for k, dk in zip(near.tolist(), d[near].tolist(), strict=True):
             if k not in self._since:
                 self._since[k] = now
                 self._closest[k] = dk
