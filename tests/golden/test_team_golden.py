@@ -40,7 +40,7 @@ def test_a_team_view_on_arrays_gives_the_recorded_run(
     calls = 0
     near = team_view._MateTable.near
 
-    def counted(self: team_view._MateTable, x: float, y: float, reach: float) -> list[str]:
+    def counted(self: team_view._MateTable, x: float, y: float, reach: float) -> list[Any]:
         nonlocal calls
         calls += 1
         return near(self, x, y, reach)

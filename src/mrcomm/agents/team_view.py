@@ -85,16 +85,16 @@ class _MateTable:
             return None
         return float(self.heard_at[number])
 
-    def near(self, x: float, y: float, reach: float) -> list[str]:
-        """The mates whose last position is within ``reach`` of (x, y) along both axes
-        (the same test as ``-reach <= mate.x - x <= reach``, exactly), in the order they
-        were first heard."""
+    def near(self, x: float, y: float, reach: float) -> list[PoseMsg]:
+        """The last pose messages of the mates whose last position is within ``reach``
+        of (x, y) along both axes (the same test as ``-reach <= mate.x - x <= reach``,
+        exactly), in the order they were first heard."""
         inside = np.abs(self.xs - x) <= reach
         inside &= np.abs(self.ys - y) <= reach
         found = np.flatnonzero(inside)
         if len(found) > 1:
             found = found[np.argsort(self.first[found])]
-        near: list[str] = self.names[found].tolist()
+        near: list[PoseMsg] = self.pose[found].tolist()
         return near
 
 
@@ -258,8 +258,7 @@ class TeamView:
         either way."""
         table = self._table
         if table is not None and max_age is None and extrapolation <= 0:
-            poses = self.poses  # known() is the poses themselves here
-            return [poses[name] for name in table.near(x, y, reach)]
+            return table.near(x, y, reach)  # known() is the poses themselves here
         return self.known(now, max_age, extrapolation).values()
 
     def heard_within(self, seconds: float, now: float) -> bool:
