@@ -28,7 +28,7 @@ def test_the_recorder_keeps_each_close_interval_with_its_closest_approach() -> N
 
 
 def test_the_recorder_names_every_close_pair_at_once() -> None:
-    # Pairs are found in the whole matrix and numbered as the upper triangle runs.
+    # Several pairs close at once: each interval is its own pair's, in order of start.
     recorder = ProximityRecorder(ROBOTS, radius=1.0)
     recorder.record(_distances(3.0, ac=0.5, bc=0.7), 0.0)
     recorder.record(_distances(0.2, ac=0.6, bc=2.0), 0.1)
