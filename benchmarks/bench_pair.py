@@ -6,7 +6,7 @@ On a shared VM whose speed drifts by 10-30 % within minutes, runs one after the 
 moment meet the same drift, and swapping cores each round cancels a difference
 between the cores. Needs two cores (Linux, ``taskset``).
 
-Each child is :data:`bench_scale.CHILD` (NB · WLAN · SPL 25 · seed 1, the simulated
+Each child is ``bench_scale.start_case``'s (NB · WLAN · SPL 25 · seed 1, the simulated
 time given) with ``PYTHONPATH`` set to the tree's ``src``.
 
 Run: ``.venv/bin/python benchmarks/bench_pair.py /tmp/mrcomm-old . --scenario campus1000
@@ -16,30 +16,13 @@ Run: ``.venv/bin/python benchmarks/bench_pair.py /tmp/mrcomm-old . --scenario ca
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import statistics
-import subprocess
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_scale import CHILD, ROOT, SCENARIOS
-
-
-def start(tree: Path, scenario: Path, sim_time: float, core: int) -> subprocess.Popen[str]:
-    env = dict(os.environ, PYTHONPATH=str(tree.resolve() / "src"))
-    command = ["taskset", "-c", str(core), sys.executable, "-c", CHILD, str(scenario)]
-    return subprocess.Popen(
-        [*command, str(sim_time)], stdout=subprocess.PIPE, text=True, cwd=ROOT, env=env
-    )
-
-
-def cpu_of(child: subprocess.Popen[str]) -> float:
-    out, _ = child.communicate()
-    if child.returncode != 0:
-        raise SystemExit(f"a child failed (exit {child.returncode})")
-    return float(json.loads(out.strip().splitlines()[-1])["cpu"])
+from bench_scale import SCENARIOS, result_of, start_case
 
 
 def main() -> None:
@@ -57,9 +40,9 @@ def main() -> None:
     rounds: list[tuple[float, float]] = []
     for k in range(args.rounds):
         cores = (0, 1) if k % 2 == 0 else (1, 0)
-        a = start(args.first, scenario, args.sim_time, cores[0])
-        b = start(args.second, scenario, args.sim_time, cores[1])
-        rounds.append((cpu_of(a), cpu_of(b)))
+        a = start_case(scenario, args.sim_time, args.first, cores[0])
+        b = start_case(scenario, args.sim_time, args.second, cores[1])
+        rounds.append((result_of(a)["cpu"], result_of(b)["cpu"]))
         print(f"round {k + 1}: CPU s {rounds[-1][0]:.2f} / {rounds[-1][1]:.2f}", flush=True)
     ratio = statistics.median(b / a for a, b in rounds)
     first = statistics.median(a for a, _ in rounds)

@@ -65,16 +65,31 @@ print(json.dumps({"sim": mission.now, "wall": wall, "cpu": cpu, "steps": steps,
 """
 
 
-def run_case(path: Path, sim_time: float, tree: Path | None = None) -> dict[str, float]:
-    """One case in a fresh process; ``tree``: run that source tree's code instead."""
+def start_case(
+    path: Path, sim_time: float, tree: Path | None = None, core: int = 0
+) -> subprocess.Popen[str]:
+    """One case in a fresh process pinned to ``core`` (Linux); ``tree``: run that
+    source tree's code instead."""
     command = [sys.executable, "-c", CHILD, str(path), str(sim_time)]
     if sys.platform.startswith("linux"):
-        command = ["taskset", "-c", "0", *command]
+        command = ["taskset", "-c", str(core), *command]
     env = dict(os.environ)
     if tree is not None:
-        env["PYTHONPATH"] = str(tree / "src")
-    done = subprocess.run(command, capture_output=True, text=True, check=True, cwd=ROOT, env=env)
-    return dict(json.loads(done.stdout.strip().splitlines()[-1]))
+        env["PYTHONPATH"] = str(tree.resolve() / "src")
+    return subprocess.Popen(command, stdout=subprocess.PIPE, text=True, cwd=ROOT, env=env)
+
+
+def result_of(child: subprocess.Popen[str]) -> dict[str, float]:
+    """What a case started by :func:`start_case` reported (wall, cpu, steps, peak_mb)."""
+    out, _ = child.communicate()
+    if child.returncode != 0:
+        raise SystemExit(f"a benchmark child failed (exit {child.returncode})")
+    return dict(json.loads(out.strip().splitlines()[-1]))
+
+
+def run_case(path: Path, sim_time: float, tree: Path | None = None) -> dict[str, float]:
+    """One case in a fresh process on core 0, waited for."""
+    return result_of(start_case(path, sim_time, tree))
 
 
 def fit_exponent(points: list[tuple[int, float]]) -> float:

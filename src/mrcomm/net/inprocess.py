@@ -265,7 +265,7 @@ class InProcessNetwork:
         in_range = others if exempt else self._links[rows[:, None], columns[None, :]] & others
         received = in_range
         decided = others.sum(axis=0).tolist()
-        reached_n = in_range.sum(axis=0).tolist()
+        reached_n = decided if exempt else in_range.sum(axis=0).tolist()
         loss = self.policy.loss_percent / 100.0
         if not exempt and loss > 0.0 and topic in self.policy.lossy_topics:
             # Each receiver draws one number per message in range, in message order:
@@ -280,7 +280,8 @@ class InProcessNetwork:
                 kept = in_range.T.copy()
                 kept[in_range.T] = np.concatenate(draws) >= loss
                 received = kept.T
-        received_n = received.sum(axis=0).tolist()
+        # (A mask that lost nothing has the counts already taken.)
+        received_n = reached_n if received is in_range else received.sum(axis=0).tolist()
         counts = self._topic_counts(topic)
         for column, receiver in enumerate(targets):
             if not decided[column]:
