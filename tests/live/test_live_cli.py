@@ -151,9 +151,20 @@ def test_team_init_add_and_show(tmp_path: Path) -> None:
     assert [p.name for p in tmp_path.iterdir()] == ["team"]  # no staging left behind
 
 
-def test_two_agents_cannot_claim_the_same_id(tmp_path: Path) -> None:
+@pytest.mark.parametrize("linked", [True, False], ids=["linked", "not_linked_to_the_first"])
+def test_two_agents_cannot_claim_the_same_id(linked: bool, tmp_path: Path) -> None:
+    """The second agent is refused whether or not its own link to the first is up when
+    it checks. Without gossip it never links to the first (Zenoh peers do not forward
+    each other's tokens): the state a loaded machine leaves it in during its check,
+    where only the world's roster names the first. Before the world answered, that
+    second agent joined as a duplicate and ran on (it once did so in CI)."""
     world_port, agent_port = free_port("127.0.0.1"), free_port("127.0.0.1")
     common = ["--record-dir", str(tmp_path)]
+    unlinked: list[str] = []
+    if not linked:
+        config = tmp_path.parent / f"{tmp_path.name}-no-gossip.json5"
+        config.write_text("{scouting: {gossip: {enabled: false}}}")
+        unlinked = ["--zenoh-config", str(config)]
     world = subprocess.Popen(
         [sys.executable, "-c", CODE, "world", str(S1), "--listen",
          f"tcp/127.0.0.1:{world_port}", "--start-timeout", "120", "--insecure", *common],
@@ -169,7 +180,7 @@ def test_two_agents_cannot_claim_the_same_id(tmp_path: Path) -> None:
         wait_for(lambda: list(tmp_path.glob("robot_1.*.jsonl")), 60, "robot_1 to join")
         second = mrcomm(
             "agent", str(S1), "--robot", "robot_1", "--connect",
-            f"tcp/127.0.0.1:{world_port}", "--insecure", *common,
+            f"tcp/127.0.0.1:{world_port}", "--insecure", *unlinked, *common,
         )  # fmt: skip
         one_line_error(second, "--robot", "'robot_1' is already running", "same id")
         assert first.poll() is None  # the first one carries on

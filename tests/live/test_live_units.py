@@ -13,7 +13,15 @@ import pytest
 
 from mrcomm.live.collect import _timeline, read_journals
 from mrcomm.live.journal import Journal, TimelineTail
-from mrcomm.live.protocol import BaseCommand, BaseState, SyncReply, SyncRequest
+from mrcomm.live.protocol import (
+    BaseCommand,
+    BaseState,
+    Roster,
+    SyncReply,
+    SyncRequest,
+    encoder,
+    roster_of,
+)
 from mrcomm.live.remote_base import RemoteBase
 from mrcomm.live.resync import Resync, reply_for
 from mrcomm.messaging.messages import TOPIC_ASSIGNMENT, Assignment, Message, TaskSpec, TaskStatus
@@ -221,3 +229,17 @@ def test_a_team_holds_back_the_members_it_is_told_to(tmp_path: Path) -> None:
         team.start(hold=("robot_2", "robot_3"))
         assert sorted(team.children) == ["robot_1", "world"]
         assert set(team.ports) == set(team.names)  # the held know where to listen
+
+
+def test_a_roster_answer_that_does_not_decode_names_nobody() -> None:
+    """The world's roster names who is present; answers are merged, and one that is not
+    a roster (another process answering on the key) counts for nothing."""
+    enc = encoder()
+    world = enc.encode(Roster({"robot_1": (7,), "robot_2": (3, 9)}))
+    other = enc.encode(Roster({"robot_1": (5,)}))
+    assert roster_of([world, b"\x00not a roster", other]) == {
+        "robot_1": (5, 7),
+        "robot_2": (3, 9),
+    }
+    assert roster_of([]) == {}
+    assert roster_of([enc.encode({"present": "everyone"})]) == {}

@@ -26,10 +26,7 @@ vanished or that fell silent are gone for the behaviour (``live.mates``).
 
 from __future__ import annotations
 
-import signal
-import threading
 import time
-from types import FrameType
 from typing import Any
 
 from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
@@ -50,6 +47,7 @@ from mrcomm.live.operator_host import OperatorHost, place_operator
 from mrcomm.live.protocol import (
     CH_AGENT_STATE,
     CH_BASE_CMD,
+    CH_ROSTER,
     CH_SYNC_REPLY,
     CH_SYNC_REQUEST,
     CH_TICK,
@@ -61,11 +59,13 @@ from mrcomm.live.protocol import (
     Tick,
     decoder_of,
     encoder,
+    roster_of,
 )
 from mrcomm.live.recorder import AgentRecorder
 from mrcomm.live.resync import Resync, reply_for
 from mrcomm.live.robot_base import AgentBase, open_base
 from mrcomm.live.settings import LiveSettings, config_crc
+from mrcomm.live.stop_signals import Stopped, stop_on_signals
 from mrcomm.live.tick_guard import IMPLAUSIBLE_TICK, TickGuard, tick_limit
 from mrcomm.messaging.messages import TOPIC_RSSI, RssiMsg, decode
 from mrcomm.messaging.topics import Lane
@@ -93,10 +93,6 @@ ASSIGNMENT_WAIT = 3.0  # simulated s without an assignment before asking for it
 SYNC_WAIT = 2.0  # simulated s a (re)joining robot waits for the team's answers
 LATE_JOIN = 1.0  # a first tick later than this (simulated s) means a late join
 _CH_PULSE = "pulse"  # inbox channel of this robot's own pulse readings
-
-
-class _Stop(Exception):
-    """SIGTERM / SIGINT: finish cleanly."""
 
 
 def team_processes(scenario: Scenario) -> tuple[str, ...]:
@@ -242,16 +238,15 @@ class AgentProcess:
 
     # -- life cycle --------------------------------------------------------------------
     def run(self) -> int:
-        previous = _install_stop_handlers()
-        try:
-            self._subscribe()
-            self._join()
-            self._loop()
-        except _Stop:
-            self.journal.write("stopped", time=self.now, wall=time.time())
-        finally:
-            self._finish()
-            _restore_handlers(previous)
+        with stop_on_signals():
+            try:
+                self._subscribe()
+                self._join()
+                self._loop()
+            except Stopped:
+                self.journal.write("stopped", time=self.now, wall=time.time())
+            finally:
+                self._finish()
         return 0
 
     def _subscribe(self) -> None:
@@ -293,12 +288,16 @@ class AgentProcess:
             if item is not None and item.channel == "presence":
                 self._on_presence(item.value)
         self._wait_for_base(deadline)
+        # Our own query sees only the peers we are linked to yet (Zenoh peers learn of
+        # each other by gossip and do not forward tokens); the world sees everyone.
+        seen = roster_of(self.infra.ask(self.infra.key(WORLD_ID, CH_ROSTER)))
         for agent in self.hosted:
-            others = [i for i in self.node.present(agent) if i != self.incarnation]
+            others = sorted({*self.node.present(agent), *seen.get(agent, ())} - {self.incarnation})
             if others:
                 raise InputError(
-                    f"{agent!r} is already running (incarnation {others[0]}): "
-                    "two agents cannot claim the same id",
+                    f"{agent!r} is already running (incarnation {others[0]}): two agents "
+                    "cannot claim the same id (a process that died out of reach is "
+                    f"present until its link lease, {self.node.options.link_lease:g} s, ends)",
                     field="--robot",
                 )
         self.journal.start(
@@ -569,23 +568,6 @@ class AgentProcess:
         if self.infra is not self.node:
             self.infra.close()
         self.node.close()
-
-
-def _install_stop_handlers() -> dict[int, Any]:
-    def stop(signum: int, frame: FrameType | None) -> None:
-        raise _Stop()
-
-    previous: dict[int, Any] = {}
-    if threading.current_thread() is not threading.main_thread():
-        return previous  # a console's page runs the main thread and its signals
-    for sig in (signal.SIGTERM, signal.SIGINT):
-        previous[sig] = signal.signal(sig, stop)
-    return previous
-
-
-def _restore_handlers(previous: dict[int, Any]) -> None:
-    for sig, handler in previous.items():
-        signal.signal(sig, handler)
 
 
 def run_agent(settings: LiveSettings, agent: str, incarnation: int | None = None) -> int:

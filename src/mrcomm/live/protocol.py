@@ -27,6 +27,8 @@ CH_BASE_CMD = "base_cmd"
 CH_AGENT_STATE = "agent_state"
 CH_SYNC_REQUEST = "sync_request"
 CH_SYNC_REPLY = "sync_reply"
+#: The world answers queries on its ``roster`` key: who is present as it sees them.
+CH_ROSTER = "roster"
 
 
 class BaseState(msgspec.Struct, frozen=True, array_like=True):
@@ -100,6 +102,15 @@ class SyncReply(msgspec.Struct, frozen=True):
     assignment: Assignment | None = None
 
 
+class Roster(msgspec.Struct, frozen=True):
+    """The world's answer to a joining agent: every member's live incarnations as the
+    world sees their liveliness tokens. Every agent is connected to the world, so this
+    is the one view that does not wait for the joining peer's own links to the others
+    (Zenoh peers learn of each other by gossip and do not forward each other's tokens)."""
+
+    present: dict[str, tuple[int, ...]]
+
+
 def encoder() -> msgspec.msgpack.Encoder:
     return msgspec.msgpack.Encoder()
 
@@ -107,3 +118,17 @@ def encoder() -> msgspec.msgpack.Encoder:
 def decoder_of(kind: type[Any]) -> Any:
     """``bytes -> kind`` for :meth:`ZenohNode.listen`."""
     return msgspec.msgpack.Decoder(kind).decode
+
+
+def roster_of(answers: list[bytes]) -> dict[str, tuple[int, ...]]:
+    """Every incarnation the :class:`Roster` answers name, per member (an answer that
+    does not decode names none)."""
+    present: dict[str, set[int]] = {}
+    for answer in answers:
+        try:
+            roster = msgspec.msgpack.decode(answer, type=Roster)
+        except (msgspec.DecodeError, msgspec.ValidationError):
+            continue
+        for agent, incarnations in roster.present.items():
+            present.setdefault(agent, set()).update(incarnations)
+    return {agent: tuple(sorted(i)) for agent, i in present.items()}

@@ -35,11 +35,13 @@ from mrcomm.live.kernel_links import KernelLinks
 from mrcomm.live.protocol import (
     CH_AGENT_STATE,
     CH_BASE_CMD,
+    CH_ROSTER,
     CH_TICK,
     WORLD_ID,
     AgentState,
     BaseCommand,
     BaseState,
+    Roster,
     Tick,
     decoder_of,
     encoder,
@@ -119,6 +121,9 @@ class WorldProcess:
         self.base_commands = 0  # base commands applied from agents over Zenoh
         self.states: dict[str, AgentState] = {}
         self.present: dict[str, set[int]] = {}
+        #: ``present`` as joining agents are told it (replaced whole on every change:
+        #: Zenoh's threads read it to answer their queries).
+        self._roster = self._enc.encode(Roster({}))
         self.now = 0.0
         self._done_since: tuple[float, float] | None = None
         self.wall_start = 0.0
@@ -138,6 +143,7 @@ class WorldProcess:
             self.node.listen(f"{prefix}/*/{CH_BASE_CMD}", CH_BASE_CMD, decoder_of(BaseCommand))
             self.node.listen(f"{prefix}/*/{CH_AGENT_STATE}", CH_AGENT_STATE, decoder_of(AgentState))
             self.node.watch_presence()
+            self.node.answer(self.node.key(WORLD_ID, CH_ROSTER), lambda: self._roster)
             self.node.prepare(self.node.key(WORLD_ID, CH_TICK), Lane.BEST_EFFORT)
             if self.radio_pulse is not None:
                 self.pulse_endpoints = {
@@ -249,6 +255,8 @@ class WorldProcess:
             self.states[state.agent] = state
         elif item.channel == "presence":
             track_presence(self.present, item.value, self.journal, self.now)
+            live = {agent: tuple(sorted(i)) for agent, i in self.present.items() if i}
+            self._roster = self._enc.encode(Roster(live))
 
     def _apply(self, command: BaseCommand) -> None:
         base = self.bases.get(command.robot)

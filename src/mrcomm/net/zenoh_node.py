@@ -14,6 +14,8 @@
   does not decode is refused there and counted (:attr:`ZenohNode.refused`);
 * liveliness tokens ``mrcomm/<team>/<agent>/alive/<incarnation>`` for team discovery:
   members appear and disappear as their sessions come and go;
+* queries (:meth:`ZenohNode.answer`, :meth:`ZenohNode.ask`): one process answers on a
+  key of its own with what it knows (the world's roster of who is present);
 * :meth:`ZenohNode.reopen`: a fresh session in place of one whose transports may be
   stale (the process was stopped past the link lease), everything declared again.
 
@@ -297,6 +299,24 @@ class ZenohNode:
                 f"{self.prefix}/{agent}/alive/*", on_token, history=True
             )
         )
+
+    # -- queries -----------------------------------------------------------------------
+    def answer(self, key: str, reply: Callable[[], bytes]) -> None:
+        """Answer every query on ``key`` with ``reply()``. It is called on Zenoh's
+        threads: it must only read a value the owning thread replaces whole."""
+        self._declared.append(lambda: self._answer(key, reply))
+        self._answer(key, reply)
+
+    def _answer(self, key: str, reply: Callable[[], bytes]) -> None:
+        def on_query(query: Any) -> None:
+            query.reply(key, reply())
+
+        self._subscribers.append(self.session.declare_queryable(key, on_query))
+
+    def ask(self, key: str, timeout: float = 1.0) -> list[bytes]:
+        """The payloads of every answer to a query on ``key`` (none: nobody answers)."""
+        replies = self.session.get(key, timeout=timeout)
+        return [reply.ok.payload.to_bytes() for reply in replies if reply.ok is not None]
 
     def present(self, agent: str, timeout: float = 1.0) -> list[int]:
         """Incarnations of ``agent`` whose tokens are alive now (a liveliness query)."""
