@@ -62,7 +62,7 @@ class _MateTable:
         """Take a receiver's share of a batch with no sender twice (``senders``: their
         numbers)."""
         batch, rows = received.batch, received.rows
-        new = np.flatnonzero(self.first[senders] == _NEVER)
+        new = (self.first[senders] == _NEVER).nonzero()[0]  # the methods: no wrappers
         if len(new):
             self.first[senders[new]] = np.arange(self.heard_count, self.heard_count + len(new))
             self.heard_count += len(new)
@@ -91,9 +91,9 @@ class _MateTable:
         exactly), in the order they were first heard."""
         inside = np.abs(self.xs - x) <= reach
         inside &= np.abs(self.ys - y) <= reach
-        found = np.flatnonzero(inside)
+        found = inside.nonzero()[0]  # np.flatnonzero's work, without its wrappers' 1 µs
         if len(found) > 1:
-            found = found[np.argsort(self.first[found])]
+            found = found[self.first[found].argsort()]
         near: list[PoseMsg] = self.pose[found].tolist()
         return near
 
