@@ -11,6 +11,7 @@ from typing import Any
 
 import pytest
 
+from mrcomm.live.agent import drain
 from mrcomm.live.collect import _timeline, read_journals
 from mrcomm.live.journal import Journal, TimelineTail
 from mrcomm.live.protocol import (
@@ -243,3 +244,47 @@ def test_a_roster_answer_that_does_not_decode_names_nobody() -> None:
     }
     assert roster_of([]) == {}
     assert roster_of([enc.encode({"present": "everyone"})]) == {}
+
+
+class _Flood:
+    """An inbox that never runs dry (a process flooded on its return from a stop), on a
+    clock that advances 10 ms per item handled."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+        self.taken = 0
+        self.waits: list[float | None] = []
+
+    def poll(self, timeout: float | None) -> Any:
+        self.waits.append(timeout)
+        return object()
+
+    def handle(self, item: Any) -> bool:
+        self.taken += 1
+        self.now += 0.01
+        return False
+
+    def clock(self) -> float:
+        return self.now
+
+
+def test_draining_a_flood_returns_to_the_heartbeat_in_time() -> None:
+    """However many items keep arriving, a drain returns once its time is up, so the
+    agent's loop beats (and notices it was away) between drains."""
+    flood = _Flood()
+    drain(flood.poll, flood.handle, 0.125, flood.clock)
+    assert flood.taken == 13  # 0.13 s of handling: the first past 0.125 s ends it
+    assert flood.waits[0] == 0.125 and set(flood.waits[1:]) == {None}
+
+
+def test_a_drain_stops_at_once_when_told_and_when_nothing_comes() -> None:
+    items = [1, 2, 3]
+    handled: list[Any] = []
+
+    def poll(timeout: float | None) -> Any:
+        return items.pop(0) if items else None
+
+    drain(poll, lambda item: handled.append(item) or item == 2, 10.0)
+    assert handled == [1, 2] and items == [3]  # the mission ended with item 2
+    drain(poll, handled.append, 10.0)  # type: ignore[arg-type]
+    assert handled == [1, 2, 3] and items == []  # drained: nothing more came

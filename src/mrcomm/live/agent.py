@@ -27,6 +27,7 @@ vanished or that fell silent are gone for the behaviour (``live.mates``).
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from typing import Any
 
 from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
@@ -324,13 +325,12 @@ class AgentProcess:
     def _loop(self) -> None:
         while not self.ended:
             self._heartbeat()
-            item = self.node.poll(HEARTBEAT_PERIOD / 2)
-            while item is not None:
-                self._on_item(item)
-                if self.ended:
-                    return
-                item = self.node.poll(None)
+            drain(self.node.poll, self._handle, HEARTBEAT_PERIOD / 2)
             self.journal.flush()
+
+    def _handle(self, item: Incoming) -> bool:
+        self._on_item(item)
+        return self.ended
 
     def _on_item(self, item: Incoming) -> None:
         channel = item.channel
@@ -568,6 +568,25 @@ class AgentProcess:
         if self.infra is not self.node:
             self.infra.close()
         self.node.close()
+
+
+def drain(
+    poll: Callable[[float | None], Incoming | None],
+    handle: Callable[[Incoming], bool],
+    wait: float,
+    clock: Callable[[], float] = time.monotonic,
+) -> None:
+    """Handle what arrives within ``wait`` wall s, then return even while more keeps
+    coming (``handle``: True to stop at once), so that the caller's heartbeat and its
+    check for having been away run between drains: a stopped process is flooded on its
+    return, and draining until the inbox was empty held a loaded one there for 600 s of
+    mission time, cut off from its mates (its session not reopened), not beating."""
+    until = clock() + wait
+    item = poll(wait)
+    while item is not None:
+        if handle(item) or clock() >= until:
+            return
+        item = poll(None)
 
 
 def run_agent(settings: LiveSettings, agent: str, incarnation: int | None = None) -> int:
