@@ -11,7 +11,6 @@ from typing import Any
 
 import pytest
 
-from mrcomm.live.agent import drain
 from mrcomm.live.collect import _timeline, read_journals
 from mrcomm.live.journal import Journal, TimelineTail
 from mrcomm.live.protocol import (
@@ -27,6 +26,7 @@ from mrcomm.live.remote_base import RemoteBase
 from mrcomm.live.resync import Resync, reply_for
 from mrcomm.messaging.messages import TOPIC_ASSIGNMENT, Assignment, Message, TaskSpec, TaskStatus
 from mrcomm.metrics.timeline import ACTIVITY, Timeline
+from mrcomm.net.zenoh_node import drain
 from mrcomm.ports import Base, NavStatus
 from mrcomm.world.geometry import Pose
 

@@ -27,7 +27,6 @@ vanished or that fell silent are gone for the behaviour (``live.mates``).
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from typing import Any
 
 from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
@@ -76,7 +75,7 @@ from mrcomm.net.link_sensors import MeasuredSensor
 from mrcomm.net.pulse import pulse_id
 from mrcomm.net.zenoh_bus import LinkRules, PositionBook, ZenohBus
 from mrcomm.net.zenoh_config import check_key_chunk
-from mrcomm.net.zenoh_node import Incoming, Presence, ZenohNode
+from mrcomm.net.zenoh_node import Incoming, Presence, ZenohNode, drain
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.wiring import (
     aon_options,
@@ -329,6 +328,7 @@ class AgentProcess:
             self.journal.flush()
 
     def _handle(self, item: Incoming) -> bool:
+        """Handle one item; True once the mission has ended."""
         self._on_item(item)
         return self.ended
 
@@ -568,25 +568,6 @@ class AgentProcess:
         if self.infra is not self.node:
             self.infra.close()
         self.node.close()
-
-
-def drain(
-    poll: Callable[[float | None], Incoming | None],
-    handle: Callable[[Incoming], bool],
-    wait: float,
-    clock: Callable[[], float] = time.monotonic,
-) -> None:
-    """Handle what arrives within ``wait`` wall s, then return even while more keeps
-    coming (``handle``: True to stop at once), so that the caller's heartbeat and its
-    check for having been away run between drains: a stopped process is flooded on its
-    return, and draining until the inbox was empty held a loaded one there for 600 s of
-    mission time, cut off from its mates (its session not reopened), not beating."""
-    until = clock() + wait
-    item = poll(wait)
-    while item is not None:
-        if handle(item) or clock() >= until:
-            return
-        item = poll(None)
 
 
 def run_agent(settings: LiveSettings, agent: str, incarnation: int | None = None) -> int:

@@ -29,7 +29,7 @@ from collections.abc import Callable
 from mrcomm.errors import InputError
 from mrcomm.live.agent import HEARTBEAT_PERIOD, SNAPSHOT_PERIOD, AgentProcess
 from mrcomm.live.settings import LiveSettings
-from mrcomm.net.zenoh_node import Incoming
+from mrcomm.net.zenoh_node import Incoming, drain
 
 _EPS = 1e-6  # of a step: a time read as 2.9999999 steps is step 3
 
@@ -128,14 +128,10 @@ class HostClockAgent(AgentProcess):
         while not self.ended:
             self._heartbeat()
             wait = min(HEARTBEAT_PERIOD / 2, self.clock.until_next())
-            item = self.node.poll(wait)
-            while item is not None:
-                self._on_item(item)
-                if self.ended:
-                    return
-                if self.clock.due():
-                    break  # a flood of messages must not hold the step back
-                item = self.node.poll(None)
+            # A flood of messages must not hold the step back: a due step ends the drain.
+            drain(self.node.poll, lambda item: self._handle(item) or self.clock.due(), wait)
+            if self.ended:
+                return
             now = self.clock.take()
             if now is not None:
                 self._host_step(now)

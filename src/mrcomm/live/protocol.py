@@ -124,9 +124,10 @@ def roster_of(answers: list[bytes]) -> dict[str, tuple[int, ...]]:
     """Every incarnation the :class:`Roster` answers name, per member (an answer that
     does not decode names none)."""
     present: dict[str, set[int]] = {}
+    decode = decoder_of(Roster)
     for answer in answers:
         try:
-            roster = msgspec.msgpack.decode(answer, type=Roster)
+            roster = decode(answer)
         except (msgspec.DecodeError, msgspec.ValidationError):
             continue
         for agent, incarnations in roster.present.items():

@@ -16,6 +16,7 @@
   members appear and disappear as their sessions come and go;
 * queries (:meth:`ZenohNode.answer`, :meth:`ZenohNode.ask`): one process answers on a
   key of its own with what it knows (the world's roster of who is present);
+* :func:`drain`: the owning thread's way of emptying the inbox, in bounded time;
 * :meth:`ZenohNode.reopen`: a fresh session in place of one whose transports may be
   stale (the process was stopped past the link lease), everything declared again.
 
@@ -138,6 +139,8 @@ class ZenohNode:
             inbox if inbox is not None else queue.SimpleQueue()
         )
         self._publishers: dict[tuple[str, Lane], Any] = {}
+        #: Every declared subscriber, presence watch and queryable: kept, as Zenoh
+        #: undeclares what is dropped.
         self._subscribers: list[Any] = []
         self._tokens: dict[str, Any] = {}
         self._workers = {
@@ -395,6 +398,26 @@ class ZenohNode:
             worker.stop(timeout=2.0)
         with contextlib.suppress(self._zenoh.ZError):
             self.session.close()
+
+
+def drain(
+    poll: Callable[[float | None], Incoming | None],
+    handle: Callable[[Incoming], bool],
+    wait: float,
+    clock: Callable[[], float] = time.monotonic,
+) -> None:
+    """Handle what :meth:`ZenohNode.poll` brings within ``wait`` wall s, then return
+    even while more keeps coming (``handle``: True to stop at once), so that a live
+    agent's heartbeat and its check for having been away run between drains: a stopped
+    process is flooded on its return, and draining until the inbox was empty held a
+    loaded one there for 600 s of mission time, cut off from its mates (its session not
+    reopened), not beating."""
+    until = clock() + wait
+    item = poll(wait)
+    while item is not None:
+        if handle(item) or clock() >= until:
+            return
+        item = poll(None)
 
 
 def _open_error(err: BaseException) -> str:
