@@ -42,8 +42,13 @@ def main() -> None:
         cores = (0, 1) if k % 2 == 0 else (1, 0)
         a = start_case(scenario, args.sim_time, args.first, cores[0])
         b = start_case(scenario, args.sim_time, args.second, cores[1])
-        rounds.append((result_of(a)["cpu"], result_of(b)["cpu"]))
-        print(f"round {k + 1}: CPU s {rounds[-1][0]:.2f} / {rounds[-1][1]:.2f}", flush=True)
+        ra, rb = result_of(a), result_of(b)
+        rounds.append((ra["cpu"], rb["cpu"]))
+        print(
+            f"round {k + 1}: CPU s {ra['cpu']:.2f} / {rb['cpu']:.2f}, "
+            f"wall s {ra['wall']:.2f} / {rb['wall']:.2f}",
+            flush=True,
+        )
     ratio = statistics.median(b / a for a, b in rounds)
     first = statistics.median(a for a, _ in rounds)
     second = statistics.median(b for _, b in rounds)
