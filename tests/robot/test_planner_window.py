@@ -73,13 +73,13 @@ def test_a_window_too_small_for_its_path_is_searched_again(
     planner = ScenarioResources.load(SCENARIOS / "s2" / "s2.yaml").planner
     monkeypatch.setattr(planner_module, "WINDOW_FROM_CELLS", 0)
     searched: list[tuple[int, int, int, int]] = []
-    real = planner_module.pyastar2d.astar_path
+    real = planner_module.astar_cells
 
-    def recording(grid, start, goal, allow_diagonal):  # type: ignore[no-untyped-def]
+    def recording(grid, start, goal):  # type: ignore[no-untyped-def]
         searched.append(grid.shape)
-        return real(grid, start, goal, allow_diagonal=allow_diagonal)
+        return real(grid, start, goal)
 
-    monkeypatch.setattr(planner_module.pyastar2d, "astar_path", recording)
+    monkeypatch.setattr(planner_module, "astar_cells", recording)
     rng = np.random.default_rng(3)
     points = _free_points(planner, rng, 200)
     again = 0
@@ -117,3 +117,26 @@ def test_campus_plans_on_windows_are_the_whole_grid_plans(
     whole = _plans(planner, pairs, mates)
     assert windowed == whole
     assert sum(p is not None for p in whole) > len(whole) // 2
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_astar_cells_is_pyastar2ds_search(seed: int) -> None:
+    """The direct call finds pyastar2d's own path, on a whole grid and on a window of it
+    (a slice that is not contiguous in memory), and no path where there is none."""
+    import pyastar2d
+
+    rng = np.random.default_rng(seed)
+    weights = (1.0 + 3.0 * rng.random((60, 80))).astype(np.float32)
+    weights[rng.random((60, 80)) < 0.25] = np.inf
+    for grid in (weights, weights[5:55, 10:70]):
+        free = np.argwhere(np.isfinite(grid))
+        for _ in range(20):
+            s, g = (tuple(int(v) for v in free[rng.integers(len(free))]) for _ in range(2))
+            ours = planner_module.astar_cells(grid, s, g)
+            theirs = pyastar2d.astar_path(grid, s, g, allow_diagonal=True)
+            assert (ours is None) == (theirs is None)
+            if ours is not None:
+                np.testing.assert_array_equal(ours, theirs)
+    walled = np.ones((5, 5), dtype=np.float32)
+    walled[:, 2] = np.inf
+    assert planner_module.astar_cells(walled, (0, 0), (4, 4)) is None

@@ -31,7 +31,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import pyastar2d
+import pyastar2d.astar
 from numpy.typing import NDArray
 
 from mrcomm.robot.params import RobotParams
@@ -57,6 +57,24 @@ FIRST_STRETCH = 1.5
 #: does not make mates bigger (with one 0.2 m cell, 10 robots on the generated office
 #: S2 found fewer ways round each other and LF knotted at a junction in 3 of 15 runs).
 MATE_DISC_SLACK = 0.1
+
+
+def astar_cells(
+    weights: NDArray[np.float32], start: tuple[int, int], goal: tuple[int, int]
+) -> NDArray[np.int32] | None:
+    """pyastar2d's 8-connected A* from cell ``start`` to cell ``goal`` of ``weights``
+    (float32, every cost >= 1): the path's cells, or None. The same C search
+    ``pyastar2d.astar_path`` calls, without that wrapper's per-call scan for the least
+    weight (ours are >= 1 by construction) and its copy of the grid: the C code reads
+    the array's memory directly, so it gets a C-contiguous one (``ravel`` copies only a
+    window's slice; the copy a re-plan around mates draws is passed as it is)."""
+    h, w = weights.shape
+    flat = weights.ravel()
+    assert flat.dtype == np.float32 and flat.flags.c_contiguous
+    path: NDArray[np.int32] | None = pyastar2d.astar.astar(
+        flat, h, w, start[0] * w + start[1], goal[0] * w + goal[1], True, 0
+    )
+    return path
 
 
 @dataclass(frozen=True)
@@ -314,11 +332,8 @@ class GridPlanner:
                     return None
             else:
                 grid, clear = weights[y0:y1, x0:x1], self._clear[y0:y1, x0:x1]
-            raw = pyastar2d.astar_path(
-                grid,
-                (s_cell[0] - y0, s_cell[1] - x0),
-                (g_cell[0] - y0, g_cell[1] - x0),
-                allow_diagonal=True,
+            raw = astar_cells(
+                grid, (s_cell[0] - y0, s_cell[1] - x0), (g_cell[0] - y0, g_cell[1] - x0)
             )
             whole = window == self._whole()
             if raw is None:
