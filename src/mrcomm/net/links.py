@@ -42,9 +42,8 @@ SPARSE_FROM = 30
 #: In a sparse summary, the robot pairs that came at least this close (m) once, ...
 SPARSE_NEAR_M = 10.0
 #: From this many pairs on, a model that casts no rays computes its distances as one
-#: numpy array (numpy's hypot, the C library's, which can differ from Python's
-#: ``math.hypot`` in the last bit: a team this large is never one of the original
-#: robots' missions).
+#: numpy array (``sqrt(dx² + dy²)``, which can differ from Python's ``math.hypot`` in
+#: the last bit: a team this large is never one of the original robots' missions).
 ARRAY_PAIRS = 64
 #: An end that moved at least this far (m) has moved.
 _MOVED = 1e-12
@@ -58,17 +57,25 @@ def distance_matrix(at: FloatArray) -> FloatArray:
     """(n, n) distances between the rows (x, y) of ``at``, 0 on the diagonal (NaN for a
     row without a position).
 
-    Only the upper triangle is computed, a block of rows at a time, and mirrored: a
-    pair's two differences are each other's negation (exact in floating point) and hypot
-    takes their magnitudes, so the lower triangle is the upper one, bit for bit. Half
-    the work of the whole matrix, whose hypot (~20 ns a value) was most of a large
-    team's link model: ~20 ms a step for 1,000 robots."""
+    Each distance is ``sqrt(dx * dx + dy * dy)``: numpy's SIMD square root, ~4 ns a
+    value, where ``hypot`` (the C library's, which guards against overflow that map
+    coordinates never come near) took ~20 ns. It is within one unit in the last place
+    of ``hypot`` (a sixth of the values differ by that). Only the upper triangle is
+    computed, a block of rows at a time, and mirrored: a pair's two differences are each
+    other's negation and their squares are equal, so the lower triangle is the upper
+    one, bit for bit. For 1,000 robots, 3.7 ms a step (the whole matrix with hypot: 20
+    ms; its triangle: 12.5 ms)."""
     n = len(at)
     out = np.empty((n, n))
     x, y = at[:, 0], at[:, 1]
     for a in range(0, n, DISTANCE_BLOCK):
         b = min(n, a + DISTANCE_BLOCK)
-        block = np.hypot(x[a:b, None] - x[None, a:], y[a:b, None] - y[None, a:])
+        dx = x[a:b, None] - x[None, a:]
+        dy = y[a:b, None] - y[None, a:]
+        dx *= dx
+        dy *= dy
+        dx += dy
+        block = np.sqrt(dx, out=dx)
         out[a:b, a:] = block
         out[a:, a:b] = block.T
     np.fill_diagonal(out, 0.0)
