@@ -145,3 +145,16 @@ def test_the_bundled_scenarios_are_what_their_commands_make(tmp_path: Path, name
 def test_the_thousand_robot_campus_loads() -> None:
     scenario = load_scenario(ROOT / "data" / "scenarios" / "campus1000" / "campus1000.yaml")
     assert len(scenario.robots) == 1000 and len(scenario.tasks) == 2000
+
+
+def test_large_maps_repair_routes_and_the_bundled_ones_are_as_made() -> None:
+    """Maps of 200 x 200 m and more get route repair; S2-S4 search whole routes again,
+    as their completion was measured with; the bundled campus has the repair line."""
+    from mrcomm.world.generate.make import REPAIR_HORIZON, robot_section
+
+    assert robot_section(199.0, 200.0) == {"planner_resolution": 0.2}
+    assert robot_section(200.0, 200.0) == {"planner_resolution": 0.2, "repair_horizon": 10.0}
+    bundled = Path(__file__).resolve().parents[2] / "data" / "scenarios"
+    for name, repair in (("s2", False), ("s3", False), ("s4", False), ("campus1000", True)):
+        settings = dict(load_scenario(bundled / name / f"{name}.yaml").robot_settings)
+        assert settings.get("repair_horizon") == (REPAIR_HORIZON if repair else None), name

@@ -30,6 +30,7 @@ from mrcomm.robot.kinematics import integrate, limit_velocity, wrap
 from mrcomm.robot.noise import AmclError, LocalisationError, NormalStream, Odometry
 from mrcomm.robot.params import RobotParams
 from mrcomm.robot.planner import GridPlanner, PlanMemo, PlannedPath
+from mrcomm.robot.repair import repaired_route
 from mrcomm.robot.variation import RobotVariation
 from mrcomm.world.geometry import Pose
 from mrcomm.world.occupancy import OccupancyGrid
@@ -114,6 +115,9 @@ class SimBase:
         self._goal: Point | None = None  # as requested
         self._target: Point | None = None  # as planned (snapped out of the inflated zone)
         self._follower: PathFollower | None = None
+        # The route cancel() gave up, with the goal it was for: asked for the same goal
+        # again (resuming after giving way), a base with a repair horizon repairs it.
+        self._left: tuple[Point, PathFollower] | None = None
         self._now = 0.0
         # Stuck detection: where and when the robot last made progress.
         self._anchor_x = 0.0
@@ -153,11 +157,16 @@ class SimBase:
     def navigate_to(self, x: float, y: float) -> None:
         """Plan to (x, y) from the current estimate and start following (replaces any
         current goal). No path -> status ABORTED at once."""
-        self._goal = self._target = (float(x), float(y))
+        goal = (float(x), float(y))
+        route = self._follower if self._goal == goal else None
+        if route is None and self._left is not None and self._left[0] == goal:
+            route = self._left[1]
+        self._left = None
+        self._goal = self._target = goal
         self._in_row = 0
         self._progress_mark = self._odo.distance
         self._anchor_t = None
-        path = self._plan(())
+        path = self._replan((), route)
         if path is None:
             self._abort()
             return
@@ -165,6 +174,8 @@ class SimBase:
 
     def cancel(self) -> None:
         """Drop the goal; the robot brakes to a stop within its acceleration limits."""
+        if self._goal is not None and self._follower is not None:
+            self._left = (self._goal, self._follower)
         self._goal = self._target = None
         self._follower = None
         self._mode = _IDLE
@@ -343,6 +354,21 @@ class SimBase:
             start, self._goal, obstacles, weights=self._weights, memo=self._plan_memo
         )
 
+    def _replan(self, obstacles: Sequence[Point], route: PathFollower | None) -> PlannedPath | None:
+        """The way to the goal round ``obstacles``: ``route`` repaired when the params
+        give a repair horizon (robot/repair.py), else (or when the repair finds no way)
+        the whole route searched again."""
+        horizon = self.params.repair_horizon
+        if horizon > 0.0 and route is not None:
+            loc = self._loc
+            start = (self._x + loc.ex, self._y + loc.ey)
+            path = repaired_route(
+                self.planner, start, route, horizon, obstacles, self._weights, self._plan_memo
+            )
+            if path is not None:
+                return path
+        return self._plan(obstacles)
+
     def _follow(self, path: PlannedPath) -> None:
         self._target = path.goal
         self._follower = PathFollower(path.waypoints, self.params)
@@ -446,7 +472,7 @@ class SimBase:
         if static and now - self._last_replan >= p.replan_interval:
             self._last_replan = now
             self.replans += 1
-            path = self._plan(self._mates_in_range(ex, ey, others))
+            path = self._replan(self._mates_in_range(ex, ey, others), follower)
             limit = p.max_detour_ratio * follower.remaining_length(ex, ey) + 1.0
             if path is not None and path.length <= limit:
                 self._follow(path)

@@ -137,6 +137,25 @@ class PathFollower:
         bx, by = pts[seg]
         return math.hypot(bx - x, by - y) + sum(self._seglen[seg + 1 :])
 
+    def ahead(self, x: float, y: float, distance: float) -> tuple[Point, list[Point]] | None:
+        """The point ``distance`` m along the path from (x, y) (via the current target
+        waypoint, as :meth:`remaining_length` measures) and the waypoints after it, to
+        the goal; None when less than ``distance`` of the path is left."""
+        pts = self._pts
+        k = self.seg
+        ax, ay = x, y
+        left = distance
+        while k <= self._last:
+            bx, by = pts[k]
+            length = math.hypot(bx - ax, by - ay)
+            if length >= left:
+                f = left / length if length > 0.0 else 0.0
+                return (ax + f * (bx - ax), ay + f * (by - ay)), pts[k:]
+            left -= length
+            ax, ay = bx, by
+            k += 1
+        return None
+
     def clearance_ahead(self, ox: float, oy: float, x: float, y: float, horizon: float) -> float:
         """Distance from point (ox, oy) to the next ``horizon`` metres of path ahead of
         the robot at (x, y); ``inf`` when the point lies behind the robot."""

@@ -59,6 +59,10 @@ class RobotParams:
     hold_distance: float = 0.65  # wait when a blocking mate's centre is this close (m)
     replan_interval: float = 1.0  # at most one re-plan around mates per interval (s)
     max_detour_ratio: float = 3.0  # reject a re-planned path longer than this x current
+    # Re-plans around mates, and a route resumed for the same goal, search only to the
+    # point this far (m) along the route and keep the rest (robot/repair.py); 0: search
+    # the whole route again.
+    repair_horizon: float = 0.0
 
     # --- stuck recovery ---
     stuck_timeout: float = 5.0  # ACTIVE and not moving for this long means stuck (s)

@@ -313,13 +313,15 @@ class GridPlanner:
         g_cell: tuple[int, int],
         weights: NDArray[np.float32],
         discs: Sequence[Disc],
+        local: bool = False,
     ) -> tuple[NDArray[np.int32], NDArray[np.float32], Window] | None:
         """A* from ``s_cell`` to ``g_cell`` with ``discs`` blocked (the whole grid's
         result, searched on a window): the path's cells (whole-grid indices), the
         clearance it was planned on (of the window) and the window; None when there is
-        no path."""
+        no path. ``local``: search the first window only, whatever the grid's size, and
+        return its path (None when it holds none), not necessarily the whole grid's."""
         window = self._first_window(s_cell, g_cell)
-        if not self._worth_it(window):
+        if not local and not self._worth_it(window):
             window = self._whole()
         while True:
             y0, y1, x0, x1 = window
@@ -335,7 +337,7 @@ class GridPlanner:
             raw = astar_cells(
                 grid, (s_cell[0] - y0, s_cell[1] - x0), (g_cell[0] - y0, g_cell[1] - x0)
             )
-            whole = window == self._whole()
+            whole = local or window == self._whole()
             if raw is None:
                 if whole:
                     return None
@@ -360,6 +362,7 @@ class GridPlanner:
         obstacle_radius: float | None = None,
         weights: NDArray[np.float32] | None = None,
         memo: PlanMemo | None = None,
+        local: bool = False,
     ) -> PlannedPath | None:
         """Shortest safe path from ``start`` to ``goal``, or None when there is none.
 
@@ -370,7 +373,10 @@ class GridPlanner:
         ``weights``: the run's own cell costs (:meth:`tie_break_weights`) instead of the
         planner's; passed in, never stored, because the planner is shared. ``memo``: the
         robot's :class:`PlanMemo` (a search asked again, without mates or around the
-        same blocked cells, is answered from it).
+        same blocked cells, is answered from it). ``local``: a short way to a point
+        near by (a route's repair, see :class:`~mrcomm.robot.base.SimBase`), searched
+        on the small window around start and goal only; None when that window holds
+        none (the way round may lie farther out: the caller plans the whole route).
         """
         s_cell = self._snap(*start, self._clear)
         g_cell = self._snap(*goal, self._clear)
@@ -395,12 +401,12 @@ class GridPlanner:
         key = (
             None
             if slot is None
-            else (s_cell, g_cell, tuple((*d[:4], d[4].tobytes()) for d in discs))
+            else (s_cell, g_cell, local, tuple((*d[:4], d[4].tobytes()) for d in discs))
         )
         if slot is not None and slot.key == key and slot.weights is weights:
             cells = slot.cells
         else:
-            found = self._search(s_cell, g_cell, weights, discs)
+            found = self._search(s_cell, g_cell, weights, discs, local)
             cells = None
             if found is not None:
                 raw, clear, window = found

@@ -56,6 +56,14 @@ TASK_TYPES = ("SENSOR_SWEEP", "INSPECT")
 #: A* searches a quarter of the cells — the bulk of a large team's planning time (a
 #: whole multiple of both map resolutions, 5 and 10 cm).
 PLANNING_RESOLUTION = 0.2
+#: Maps of at least this area (m²) get route repair (``robot.repair_horizon``,
+#: robot/repair.py): on them a route is hundreds of metres long, and searching it all
+#: again for each mate met was most of a large team's time. Smaller maps (S2–S4) search
+#: whole routes again, as their completion was measured with.
+REPAIR_FROM_M2 = 40_000.0
+#: How far along its route (m) a robot's repairs rejoin it: five sensing ranges, past
+#: any mate it is planning round.
+REPAIR_HORIZON = 10.0
 _SIZE = re.compile(r"^\s*([0-9]+(?:\.[0-9]+)?)\s*[xX]\s*([0-9]+(?:\.[0-9]+)?)\s*$")
 
 
@@ -264,11 +272,19 @@ def _write(
         ],
         "assigner": assigner_spec(request.assigner, request.robots, base),
     }
-    scenario["robot"] = {"planner_resolution": PLANNING_RESOLUTION}
+    scenario["robot"] = robot_section(request.width, request.height)
     atomic_write_text(
         directory / f"{name}.yaml",
         comment + yaml.safe_dump(scenario, sort_keys=False, default_flow_style=None, width=100),
     )
+
+
+def robot_section(width: float, height: float) -> dict[str, float]:
+    """The ``robot`` section of a generated scenario of this size (m)."""
+    robot = {"planner_resolution": PLANNING_RESOLUTION}
+    if width * height >= REPAIR_FROM_M2:
+        robot["repair_horizon"] = REPAIR_HORIZON
+    return robot
 
 
 def tasks_from_locations(locations: list[tuple[float, float]]) -> str:
