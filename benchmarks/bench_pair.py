@@ -7,7 +7,9 @@ moment meet the same drift, and swapping cores each round cancels a difference
 between the cores. Needs two cores (Linux, ``taskset``).
 
 Each child is ``bench_scale.start_case``'s (NB · WLAN · SPL 25 · seed 1, the simulated
-time given) with ``PYTHONPATH`` set to the tree's ``src``.
+time given) with ``PYTHONPATH`` set to the tree's ``src``, on the tree's own bundled
+scenario file (this one's when it has none): a scenario's ``robot`` section may name
+parameters an older tree does not know.
 
 Run: ``.venv/bin/python benchmarks/bench_pair.py /tmp/mrcomm-old . --scenario campus1000
 --sim-time 20 --rounds 4``
@@ -22,7 +24,7 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_scale import SCENARIOS, result_of, start_case
+from bench_scale import ROOT, SCENARIOS, result_of, start_case
 
 
 def main() -> None:
@@ -36,12 +38,17 @@ def main() -> None:
     if (os.cpu_count() or 1) < 2:
         raise SystemExit("needs two cores")
     scenario = SCENARIOS[args.scenario][1]
+    first_own, second_own = (
+        tree / scenario.relative_to(ROOT) for tree in (args.first, args.second)
+    )
+    first_path = first_own if first_own.exists() else scenario
+    second_path = second_own if second_own.exists() else scenario
     print(f"{args.scenario}, {args.sim_time:g} s simulated; load {os.getloadavg()}")
     rounds: list[tuple[float, float]] = []
     for k in range(args.rounds):
         cores = (0, 1) if k % 2 == 0 else (1, 0)
-        a = start_case(scenario, args.sim_time, args.first, cores[0])
-        b = start_case(scenario, args.sim_time, args.second, cores[1])
+        a = start_case(first_path, args.sim_time, args.first, cores[0])
+        b = start_case(second_path, args.sim_time, args.second, cores[1])
         ra, rb = result_of(a), result_of(b)
         rounds.append((ra["cpu"], rb["cpu"]))
         print(
