@@ -77,8 +77,12 @@ class LossStream:
         self._buffer: list[float] | None = []
         self._next = 0
 
-    def _refill(self) -> None:
-        self._array = self._rng.random(_UNIFORM_BATCH)
+    def _refill(self, wanted: int = 0) -> None:
+        # Any batch size gives the same values in the same order (the generator's
+        # doubles one after the other; only this stream draws from it). A receiver in a
+        # large team takes ~1,000 at a time: its batches hold four takes, so most takes
+        # are a slice of one batch rather than a draw and a concatenation.
+        self._array = self._rng.random(max(_UNIFORM_BATCH, 4 * wanted))
         self._buffer = None
         self._next = 0
 
@@ -97,7 +101,7 @@ class LossStream:
         parts = []
         while k > 0:
             if self._next >= len(self._array):
-                self._refill()
+                self._refill(k)
             end = min(len(self._array), self._next + k)
             parts.append(self._array[self._next : end])
             k -= end - self._next
