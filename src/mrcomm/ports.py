@@ -57,7 +57,17 @@ class StepBatch:
     same every step), and columns of a message field as arrays, made once for all
     receivers of the batch. A receiver gets its share as :class:`Received`."""
 
-    __slots__ = ("_columns", "_objects", "distinct", "index", "members", "messages", "senders")
+    __slots__ = (
+        "_columns",
+        "_objects",
+        "distinct",
+        "ever_count",
+        "ever_sent",
+        "index",
+        "members",
+        "messages",
+        "senders",
+    )
 
     def __init__(
         self,
@@ -65,6 +75,7 @@ class StepBatch:
         senders: NDArray[np.intp],
         members: NDArray[np.object_],
         index: Mapping[str, int],
+        ever_sent: NDArray[np.bool_] | None = None,
     ) -> None:
         self.messages = messages
         self.senders = senders
@@ -74,6 +85,11 @@ class StepBatch:
         self.index = index
         #: No sender has two messages in the batch.
         self.distinct = len(set(senders.tolist())) == len(senders)
+        #: Which members have sent on the topic, in this batch or an earlier one, and
+        #: how many (None, -1: not kept). The bus's own array, read while the batch is
+        #: delivered: a receiver that has heard them all finds no new sender in it.
+        self.ever_sent = ever_sent
+        self.ever_count = -1 if ever_sent is None else int(np.count_nonzero(ever_sent))
         self._objects: NDArray[np.object_] | None = None
         self._columns: dict[str, NDArray[np.float64]] = {}
 

@@ -8,6 +8,8 @@ import math
 from collections.abc import Collection
 
 import numpy as np
+import pytest
+from numpy.typing import NDArray
 
 from mrcomm.agents.collision import Mate
 from mrcomm.agents.team_view import NEAR_ARRAYS_FROM, TeamView
@@ -35,14 +37,17 @@ def _steps(seed: int) -> list[list[tuple[int, PoseMsg]]]:
     return steps
 
 
-def _received(step: list[tuple[int, PoseMsg]]) -> Received:
+def _received(step: list[tuple[int, PoseMsg]], ever: NDArray[np.bool_] | None = None) -> Received:
     """The step as the bus hands it over: a batch of everyone's poses (the receiver's
-    own included, as a batch has it) and the receiver's share of it, in order."""
+    own included, as a batch has it) and the receiver's share of it, in order. ``ever``:
+    the bus's record of who has sent so far, updated with this batch (None: not kept)."""
     own = pose_of("robot_0", 20.0, 20.0)
     members = np.array([f"robot_{s}" for s in range(MEMBERS)], dtype=object)
     index = {name: number for number, name in enumerate(members.tolist())}
     senders = np.array([0, *(s for s, _ in step)], dtype=np.intp)
-    batch = StepBatch([own, *(m for _, m in step)], senders, members, index)
+    if ever is not None:
+        ever[senders] = True
+    batch = StepBatch([own, *(m for _, m in step)], senders, members, index, ever)
     return Received(batch, np.arange(1, len(step) + 1))
 
 
@@ -57,12 +62,16 @@ def test_without_a_table_every_known_mate_is_a_candidate() -> None:
     assert [m.robot for m in view.near(0.0, 0.0, 1.0, 0.0, None, 0.0)] == ["robot_1", "robot_2"]
 
 
-def test_the_arrays_find_the_near_mates_the_loop_finds() -> None:
+@pytest.mark.parametrize("kept", [False, True])
+def test_the_arrays_find_the_near_mates_the_loop_finds(kept: bool) -> None:
+    """Also when the bus keeps who has sent (a table that has heard them all then skips
+    looking for new mates: the order they were first heard in stays the loop's)."""
     arrays, loop = TeamView(), TeamView()
     rng = np.random.default_rng(7)
+    ever = np.zeros(MEMBERS, dtype=np.bool_) if kept else None
     checked = 0
     for now, step in enumerate(_steps(3)):
-        arrays.hear_all(_received(step), float(now), "robot_0")
+        arrays.hear_all(_received(step, ever), float(now), "robot_0")
         loop.hear_all([m for _, m in step], float(now), "robot_0")
         assert arrays._table is not None and loop._table is None
         assert list(arrays.poses.items()) == list(loop.poses.items())

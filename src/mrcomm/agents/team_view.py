@@ -43,8 +43,9 @@ class _MateTable:
     (hearing ~1,000 poses a round into a dict per receiver was the O(N²) left in a team
     of 1,000). The endpoints' names and numbers are the bus's, shared by every view."""
 
-    def __init__(self, batch: StepBatch) -> None:
+    def __init__(self, batch: StepBatch, own: str) -> None:
         members = len(batch.members)
+        self.own = batch.index.get(own, -1)  # the receiver's number (-1: none)
         self.names = batch.members
         self.number = batch.index
         self.xs: NDArray[np.float64] = np.full(members, np.nan)
@@ -62,10 +63,17 @@ class _MateTable:
         """Take a receiver's share of a batch with no sender twice (``senders``: their
         numbers)."""
         batch, rows = received.batch, received.rows
-        new = (self.first[senders] == _NEVER).nonzero()[0]  # the methods: no wrappers
-        if len(new):
-            self.first[senders[new]] = np.arange(self.heard_count, self.heard_count + len(new))
-            self.heard_count += len(new)
+        ever = batch.ever_sent
+        # Once every member that ever sent (but the receiver) has been heard, no sender
+        # is new: the check is skipped (3.5 us of a ~20 us share of 750 poses).
+        if ever is None or self.heard_count < batch.ever_count - int(
+            self.own >= 0 and ever[self.own]
+        ):
+            new = (self.first[senders] == _NEVER).nonzero()[0]  # the methods: no wrappers
+            if len(new):
+                first = np.arange(self.heard_count, self.heard_count + len(new))
+                self.first[senders[new]] = first
+                self.heard_count += len(new)
         self.pose[senders] = batch.objects()[rows]
         self.xs[senders] = batch.column("x")[rows]
         self.ys[senders] = batch.column("y")[rows]
@@ -181,7 +189,7 @@ class TeamView:
             batch = messages.batch
             # A table is made with the first poses: it then has every mate heard.
             if not self.poses and len(batch.members) >= NEAR_ARRAYS_FROM:
-                self._table = _MateTable(batch)
+                self._table = _MateTable(batch, own)
                 self.poses = _TablePoses(self._table)
                 self.heard = _HeardTimes(self._table)
             if self._table is not None:

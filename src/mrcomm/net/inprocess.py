@@ -33,6 +33,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mrcomm.messaging.messages import Message
 from mrcomm.net.delivery import (
@@ -127,6 +128,8 @@ class InProcessNetwork:
         # topic -> receiver index -> handlers
         self._subs: dict[str, dict[int, list[Handler]]] = {}
         self._takers: dict[str, _Takers] = {}  # each topic's, made on its first batch
+        # topic -> which endpoints have sent on it in a step batch (StepBatch.ever_sent)
+        self._ever_sent: dict[str, NDArray[np.bool_]] = {}
         self._outbox: list[_Queued] = []
         n = len(self.ids)
         self._links = np.ones((n, n), dtype=bool)
@@ -298,7 +301,11 @@ class InProcessNetwork:
         # get each receiver's messages in one call; the others, which may publish, are
         # called message by message, in order, as one message at a time would call them.
         if takers.batched:
-            batch = StepBatch(messages, rows, self._members, self._numbers)
+            ever = self._ever_sent.get(topic)
+            if ever is None:
+                ever = self._ever_sent[topic] = np.zeros(len(self._members), dtype=np.bool_)
+            ever[rows] = True
+            batch = StepBatch(messages, rows, self._members, self._numbers, ever)
             by_receiver = np.nonzero(received.T)[1]  # receiver by receiver
             end = 0
             for column, takes in enumerate(takers.many):
