@@ -89,7 +89,7 @@ def comparable(result: Any) -> dict[str, Any]:
             }
             for rid, tl in result.timelines.items()
         },
-        "trajectories": result.trajectories,
+        "trajectories": {rid: list(t) for rid, t in result.trajectories.items()},
         "rssi": result.rssi_series,
     }
     blob = json.dumps(hidden, sort_keys=True, default=str).encode()

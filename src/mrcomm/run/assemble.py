@@ -74,7 +74,7 @@ class RunFacts:
     counts_by_agent: dict[str, dict[str, dict[str, float]]]
     aon: dict[str, AonAgentFacts]
     links: dict[str, dict[str, Any]]
-    trajectories: dict[str, list[tuple[float, float, float]]]
+    trajectories: Mapping[str, Sequence[tuple[float, float, float]]]
     #: (time, from, to, rssi dBm) samples of robot pairs.
     rssi_series: list[tuple[float, str, str, float]]
     #: (robot a, robot b, state, start, end): when each pair's link warned or was out of

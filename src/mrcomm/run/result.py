@@ -3,6 +3,7 @@ message counts, AON statistics, link summaries, timelines and trajectories."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -24,7 +25,9 @@ class MissionResult:
     sim_time_s: float
     wall_time_s: float
     timelines: dict[str, Timeline]
-    trajectories: dict[str, list[tuple[float, float, float]]]
+    #: Each robot's sampled (t, x, y): a :class:`~mrcomm.run.trajectory.Trajectory` from
+    #: the simulation, lists from a live run's journals.
+    trajectories: Mapping[str, Sequence[tuple[float, float, float]]]
     scenario: Scenario
     #: (time, from, to, rssi dBm) for robot pairs at 2 Hz, when the threshold has RSSI.
     rssi_series: list[tuple[float, str, str, float]]

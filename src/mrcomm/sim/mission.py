@@ -34,6 +34,7 @@ from mrcomm.run.operator_plan import OperatorPlan, ScriptedOperator
 from mrcomm.run.proximity import make_proximity
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.result import MissionResult
+from mrcomm.run.trajectory import Trajectory
 from mrcomm.run.wiring import (
     build_executor,
     build_link_sensor,
@@ -114,9 +115,7 @@ class Mission:
                 reassignable=config.spec("behaviour").accepts_reassignment,
             )
             self.script = ScriptedOperator(self.operator, operator)
-        self.trajectories: dict[str, list[tuple[float, float, float]]] = {
-            rid: [] for rid in self.robot_ids
-        }
+        self.trajectories = {rid: Trajectory() for rid in self.robot_ids}
         self.now = 0.0
         self.steps = 0
         self.finished = False
@@ -186,8 +185,9 @@ class Mission:
 
     # -- per-step bookkeeping ------------------------------------------------------------
     def _sample_trajectories(self, now: float) -> None:
+        t = round(now, 3)
         for rid, (x, y) in self.bodies.sample().items():
-            self.trajectories[rid].append((round(now, 3), x, y))
+            self.trajectories[rid].append((t, x, y))
 
     # -- results -------------------------------------------------------------------------
     def result(self) -> MissionResult:
