@@ -66,11 +66,11 @@ def astar_cells(
     (float32, every cost >= 1): the path's cells, or None. The same C search
     ``pyastar2d.astar_path`` calls, without that wrapper's per-call scan for the least
     weight (ours are >= 1 by construction) and its copy of the grid: the C code reads
-    the array's memory directly, so it gets a C-contiguous one (``ravel`` copies only a
-    window's slice; the copy a re-plan around mates draws is passed as it is)."""
+    the array's memory directly as float32, so it gets a C-contiguous float32 array
+    (copied only when it is not one already: a window's slice; the copy a re-plan
+    around mates draws is passed as it is)."""
     h, w = weights.shape
-    flat = weights.ravel()
-    assert flat.dtype == np.float32 and flat.flags.c_contiguous
+    flat = np.ascontiguousarray(weights, dtype=np.float32).ravel()
     path: NDArray[np.int32] | None = pyastar2d.astar.astar(
         flat, h, w, start[0] * w + start[1], goal[0] * w + goal[1], True, 0
     )
