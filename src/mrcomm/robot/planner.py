@@ -337,13 +337,15 @@ class GridPlanner:
             raw = astar_cells(
                 grid, (s_cell[0] - y0, s_cell[1] - x0), (g_cell[0] - y0, g_cell[1] - x0)
             )
-            whole = local or window == self._whole()
+            # The answer stands as it is for a local search or one on the whole grid;
+            # otherwise it must be shown to be the whole grid's.
+            final = local or window == self._whole()
             if raw is None:
-                if whole:
+                if final:
                     return None
                 window = self._whole()
                 continue
-            if not whole:
+            if not final:
                 cost = float(grid[raw[1:, 0], raw[1:, 1]].astype(np.float64).sum())
                 need = self._window_for(s_cell, g_cell, cost)
                 if not (need[0] >= y0 and need[1] <= y1 and need[2] >= x0 and need[3] <= x1):
