@@ -21,7 +21,8 @@ pytestmark = needs_ros2
 
 class Agent:
     """A Nav2Base for robot_1, synchronised with the stepped world: after each step it
-    waits until that step's pose has arrived, then takes it (as an agent step does)."""
+    waits until that step's pose and odometry have arrived, then takes them (as an agent
+    step does). They are two topics, and DDS does not order one against the other."""
 
     def __init__(self, world: SteppedWorld, domain: int, frame: str = "map") -> None:
         from mrcomm.ros2.nav2_base import Nav2Base
@@ -33,11 +34,11 @@ class Agent:
         self.base = Nav2Base.open("robot_1", start, names, world.resources.planner, domain)
 
     def spin(self) -> None:
-        seen = self.base.pose_messages
+        base, now = self.base, self.world.now - 1e-6
         deadline = time.monotonic() + 2.0
-        while self.base.pose_messages == seen and time.monotonic() < deadline:
+        while (base.pose_stamp < now or base.odom_stamp < now) and (time.monotonic() < deadline):
             time.sleep(0.001)  # the ROS thread delivers; polled with a deadline
-        self.base.sync()
+        base.sync()
 
     def drive(self, until: NavStatus | None = None, steps: int = 600) -> int:
         def done() -> bool:

@@ -72,6 +72,10 @@ class Nav2Base(ReportedBase):
         self._status = NavStatus.IDLE
         self._handles: dict[int, Any] = {}  # goal token -> ClientGoalHandle (ROS thread)
         self.pose_messages = 0  #: amcl_pose messages received
+        # The header stamps (s) of the latest amcl_pose and odom: two topics, which DDS
+        # does not order one against the other, so one may be a step behind the other.
+        self.pose_stamp = -math.inf
+        self.odom_stamp = -math.inf
         self.goals_sent = 0
         self.goals_rejected = 0
 
@@ -211,6 +215,7 @@ class Nav2Base(ReportedBase):
         pose = Pose(p.position.x, p.position.y, yaw_of(p.orientation))
         with self._lock:
             self._latest_pose = pose
+        self.pose_stamp = _seconds(message.header.stamp)
         self.pose_messages += 1
 
     def _on_odom(self, message: Any) -> None:
@@ -222,3 +227,9 @@ class Nav2Base(ReportedBase):
                 self._latest_odometry += math.hypot(xy[0] - lx, xy[1] - ly)
             self._last_odom_xy = xy
             self._latest_speed = message.twist.twist.linear.x
+        self.odom_stamp = _seconds(message.header.stamp)
+
+
+def _seconds(stamp: Any) -> float:
+    """A ``builtin_interfaces/Time`` in seconds."""
+    return stamp.sec + stamp.nanosec * 1e-9
