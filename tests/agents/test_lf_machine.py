@@ -505,3 +505,66 @@ def test_in_groups_a_follower_stops_waiting_for_a_leader_it_no_longer_hears() ->
         reasons = [e.data["reason"] for e in h.timeline.events if e.label == L.ROLES_DISSOLVED]
         assert ("leader lost" in reasons) is lost
         assert (h.agent.state == "follower_waiting") is not lost, h.agent.state
+
+
+def _following_robot_3(group_size: int) -> Harness:
+    """robot_1 (at the origin) follows robot_3: in groups of two as the nearer of two
+    leaders, in one group of three as its only leader."""
+    h = _grouped(group_size)
+    disconnect(h)
+    deliver(h, TOPIC_UTILITY, utility("robot_2", 40.0 if group_size == 2 else 0.0))
+    deliver(h, TOPIC_UTILITY, utility("robot_3", 50.0))
+    h.step()
+    deliver(h, TOPIC_ROLE, role("robot_2", "robot_2" if group_size == 2 else "robot_3"))
+    deliver(h, TOPIC_ROLE, role("robot_3", "robot_3"))
+    assert h.step() == "follower_following"
+    assert h.agent.leader == "robot_3"
+    return h
+
+
+def test_in_groups_a_follower_waits_for_a_leader_coming_its_way() -> None:
+    """robot_3 leads, 3 m east of its follower robot_1 and driving west at it (a goal
+    beyond the follower): in groups robot_1 stops and waits for it, as it waits once it
+    has reached its leader, instead of driving at it — followers meeting their leaders
+    head-on in a door jammed S2 for the whole mission. Once the leader has passed (the
+    follower behind it) robot_1 follows again. In one group (the original) it drives at
+    the leader throughout."""
+    for group_size, waits in ((2, True), (3, False)):
+        h = _following_robot_3(group_size)
+        coming = pose_of("robot_3", 3.0, 0.0, math.pi, v=0.4, goal_dist=8.0,
+                         role=L.ROLE_LEADER, leader="robot_3")  # fmt: skip
+        h.hear(coming)
+        h.step(times=3)
+        assert (h.agent.state == "follower_waiting") is waits, h.agent.state
+        assert (h.base.goal is None) is waits
+        h.step(times=10)  # still coming: no new goal while it comes
+        assert (h.agent.state == "follower_waiting") is waits
+        passed = pose_of("robot_3", -3.0, 0.0, math.pi, v=0.4, goal_dist=2.0,
+                         role=L.ROLE_LEADER, leader="robot_3")  # fmt: skip
+        h.hear(passed)
+        h.step(times=3)
+        assert h.agent.state == "follower_following"
+        assert h.base.goal is not None and h.base.goal[0] < 0  # after the leader
+
+
+def test_a_follower_does_not_wait_for_a_leader_going_elsewhere() -> None:
+    """The leader 3 m away has a goal but is heading away from the follower (the
+    follower behind it), or has no goal: the follower drives to it as before. An
+    await_radius of 0 never waits."""
+    leads: dict[str, Any] = {"role": L.ROLE_LEADER, "leader": "robot_3"}
+    cases = [
+        (pose_of("robot_3", 3.0, 0.0, 0.0, v=0.4, goal_dist=8.0, **leads), LfParams(group_size=2)),
+        (pose_of("robot_3", 3.0, 0.0, math.pi, v=0.0, **leads), LfParams(group_size=2)),
+        (
+            pose_of("robot_3", 3.0, 0.0, math.pi, v=0.4, goal_dist=8.0, **leads),
+            LfParams(group_size=2, await_radius=0.0),
+        ),
+    ]
+    for leader_pose, params in cases:
+        h = _following_robot_3(2)
+        h.agent.params = params
+        h.hear(leader_pose)
+        h.step(times=3)
+        assert h.agent.state == "follower_following", (leader_pose, h.agent.state)
+        assert h.base.goal is not None and h.base.goal[0] > 2.0
+

@@ -61,3 +61,19 @@ def test_ten_robots_in_groups_complete_and_every_status_reaches_the_assigner() -
     assert not mission["timed_out"]
     assert mission["successful"] and mission["tasks_completed"] == 20
     assert mission["end_time"] < 1700.0
+
+
+@pytest.mark.slow
+def test_followers_wait_for_leaders_coming_through_the_start_door() -> None:
+    """S2 · LF · AH · SLT · SPL 50 · seed 6: the four groups of the first round leave the
+    start room by its one 0.9 m door. Followers that had got out first drove back in at
+    their leaders while the leaders, and another leader's followers, pushed out: the door
+    stayed jammed to the 1,800 s limit with none of the 20 tasks done. Followers in
+    groups now wait for a leader coming their way (``await_radius``), and the mission
+    completes, every status at the assigner (1,460 s)."""
+    config = make_config(
+        None, scenario=S2, behaviour="lf", network="ah", threshold="slt", spl=50, seed=6
+    )
+    mission = run_mission(config).summary()["mission"]
+    assert not mission["timed_out"]
+    assert mission["successful"] and mission["tasks_completed"] == 20

@@ -27,8 +27,8 @@ A hierarchical state machine: ``na`` is NB plus a network trigger; ``leader`` an
   dissolves the roles.
 * Follower: drives to the leader's last known position (moved on for its age with
   ``mate_extrapolation``), refreshing the goal as leader poses arrive (more often when
-  far), and waits there (follower waiting time). It returns to NA when the leader's
-  completion reaches it.
+  far), and waits there (in groups also where it is while the leader comes its way:
+  ``await_radius``); it returns to NA when the leader's completion reaches it.
 * Task statuses go with AON (acknowledged all-or-nothing), to every robot and the
   assigner. With ``report_back`` (on in teams larger than a group) a robot with
   nothing left to do whose completion the assigner missed goes to find it
@@ -53,7 +53,7 @@ from mrcomm.agents.lf_machine import (
     ROLE_OF_TOP_STATE,
     LfParams,
 )
-from mrcomm.agents.lf_route import direct_hop, predicted_follower
+from mrcomm.agents.lf_route import direct_hop, leader_coming, predicted_follower
 from mrcomm.agents.link_chain import chain_links
 from mrcomm.agents.role_round import RoleRound
 from mrcomm.agents.utility import UtilityInputs, utility_function
@@ -123,11 +123,8 @@ class LeaderFollowerExecutor(AonStatuses):
 
     def on_team_status(self, status: TaskStatus) -> None:
         super().on_team_status(status)
-        if (
-            status.state is TaskState.SUCCESS
-            and status.robot == self.leader
-            and self._in("follower")
-        ):
+        leader_done = status.state is TaskState.SUCCESS and status.robot == self.leader
+        if leader_done and self._in("follower"):
             self._dissolve("leader completed its task")
 
     # -- every step ----------------------------------------------------------------------
@@ -195,9 +192,7 @@ class LeaderFollowerExecutor(AonStatuses):
         """Length of the route the base plans to the target (None: no route)."""
         target = self._target()
         route = None if target is None else self.base.make_plan(target.x, target.y)
-        if route is None:
-            return None
-        return polyline_length(route)
+        return None if route is None else polyline_length(route)
 
     def _step_assigning(self) -> None:
         elapsed = self._now - self._state_since
@@ -240,9 +235,8 @@ class LeaderFollowerExecutor(AonStatuses):
 
     def _take_role(self) -> None:
         self._just_completed = False
-        self.timeline.event(
-            L.ROLE_ASSIGNED, self._now, round=self.role_round.number, leader=self.leader
-        )
+        number = self.role_round.number
+        self.timeline.event(L.ROLE_ASSIGNED, self._now, round=number, leader=self.leader)
         if self.leader == self.robot_id:
             self.trigger("become_leader")
             self._lead_next_task()
@@ -262,8 +256,7 @@ class LeaderFollowerExecutor(AonStatuses):
         self.role_round.next_announce = self._now + self.lf.announce_period
 
     def _announce_utility(self) -> None:
-        utility = self.role_round.scores[self.robot_id]
-        self._announce(TOPIC_UTILITY, UtilityMsg, utility=utility)
+        self._announce(TOPIC_UTILITY, UtilityMsg, utility=self.role_round.scores[self.robot_id])
 
     def _announce_role(self) -> None:
         assert self.leader is not None
@@ -482,15 +475,13 @@ class LeaderFollowerExecutor(AonStatuses):
         pose = self.base.pose
         distance = math.hypot(target[0] - pose.x, target[1] - pose.y)
         far = self.link_sensor.warning(self.leader or "", pose, target[0], target[1], self._now)
-        if distance <= self.lf.follow_distance and not far:
+        near = distance <= self.lf.follow_distance or self._awaits(leader, pose, distance)
+        if near and not far:
             self.base.cancel()
             self.trigger("reach")
             return
-        moved = (
-            self._follow_target is None
-            or math.hypot(target[0] - self._follow_target[0], target[1] - self._follow_target[1])
-            > 0.5
-        )
+        aimed = self._follow_target
+        moved = aimed is None or math.dist(target, aimed) > 0.5
         stalled = self.base.status is not NavStatus.ACTIVE  # arrived at a hop, or gave up
         if (moved and self._now >= self._next_refresh) or stalled:
             self._follow_target = target
@@ -527,7 +518,9 @@ class LeaderFollowerExecutor(AonStatuses):
                 self.step_aside(mate)
                 return
         far = self.link_sensor.warning(self.leader or "", pose, target[0], target[1], self._now)
-        if far or math.hypot(target[0] - pose.x, target[1] - pose.y) > self.lf.refollow_distance:
+        distance = math.hypot(target[0] - pose.x, target[1] - pose.y)
+        waits = self._awaits(self.mates.get(self.leader or ""), pose, distance)
+        if far or (distance > self.lf.refollow_distance and not waits):
             self._follow_target = target
             self.base.navigate_to(*target)
             self._next_refresh = self._now + self.lf.refresh_period_near
@@ -551,6 +544,11 @@ class LeaderFollowerExecutor(AonStatuses):
     def _in_groups(self) -> bool:
         """The team is larger than one group: the large-team rules apply."""
         return len(self.team) + 1 > self.lf.group_size
+
+    def _awaits(self, leader: Mate | None, pose: Pose, distance: float) -> bool:
+        """In groups, the leader is coming this follower's way: it waits for it."""
+        radius = self.lf.await_radius if self._in_groups() else 0.0
+        return leader_coming(pose, leader, distance, radius)
 
     def _reports_back(self) -> bool:
         """``report_back``; by default on in a team larger than one group."""
@@ -581,9 +579,8 @@ class LeaderFollowerExecutor(AonStatuses):
         self._check_collisions()
 
     def _in(self, top: str) -> bool:
-        """Whether the robot is in ``top`` or one of its sub-states — what
-        ``machine.is_state(top, self, allow_substates=True)`` answers, read from the
-        state table instead: that call costs ~8 µs, several times a step per robot."""
+        """Whether the robot is in ``top`` or a sub-state: ``machine.is_state(top, self,
+        allow_substates=True)`` read from the state table (that call costs ~8 µs)."""
         return self.STATE_TABLE[self.state].top == top
 
     # -- timeline ------------------------------------------------------------------------

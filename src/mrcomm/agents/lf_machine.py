@@ -134,6 +134,14 @@ class LfParams(ExecutorParams):
     refollow_distance: float = parameter(
         1.7, "and moves again when the leader is this far", "m", gt=0
     )
+    await_radius: float = parameter(
+        4.0,
+        "in groups, a follower this close to its leader and ahead of it while the leader "
+        "has a goal waits for the leader to come rather than driving at it (0: never; a "
+        "team of at most group_size robots never waits: the original)",
+        "m",
+        ge=0,
+    )
     refresh_period_near: float = parameter(
         1.0, "a follower refreshes its goal this often when the leader is near", "s", gt=0
     )

@@ -1,6 +1,7 @@
 """LF's geometry of following: whether a follower's planned route leaves the
-connection area around its leader and the straight hop it takes instead, and where a
-holding leader judges a follower to be by now (``hold_prediction``)."""
+connection area around its leader and the straight hop it takes instead, where a
+holding leader judges a follower to be by now (``hold_prediction``), and whether the
+leader is coming the follower's way (``await_radius``)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import itertools
 import math
 
 from mrcomm.agents.collision import Mate
+from mrcomm.agents.making_way import ahead_of
 from mrcomm.ports import Base, LinkSensor
 from mrcomm.world.geometry import Pose, polyline_length
 
@@ -83,3 +85,14 @@ def predicted_follower(
     if travel <= 0.0:
         return known.x, known.y
     return known.x + dx * travel / gap, known.y + dy * travel / gap
+
+
+def leader_coming(pose: Pose, leader: Mate | None, distance: float, radius: float) -> bool:
+    """Whether a follower at ``pose``, ``distance`` m from its leader, lies ahead of the
+    leader within ``radius`` while the leader has a goal: the leader is coming its way,
+    so the follower waits for it rather than driving at it. (Driving at it, followers
+    met their leaders head-on in doors: followers outside a room pushed in towards their
+    leaders while the leaders, and other groups' followers, pushed out.)"""
+    if leader is None or leader.goal_dist < 0 or distance >= radius:
+        return False
+    return ahead_of(pose, leader)

@@ -11,17 +11,24 @@ import math
 from mrcomm.agents.collision import Mate
 from mrcomm.world.geometry import Pose, wrap_angle
 
+#: A point lies ahead of a robot within this angle of its heading.
+AHEAD = math.radians(75)
+
+
+def ahead_of(pose: Pose, mate: Mate) -> bool:
+    """``pose`` lies ahead of the mate: within :data:`AHEAD` of its heading."""
+    bearing = math.atan2(pose.y - mate.y, pose.x - mate.x)
+    return abs(wrap_angle(bearing - mate.theta)) < AHEAD
+
 
 def in_way(pose: Pose, mate: Mate, radius: float, moving_speed: float) -> bool:
     """A robot at ``pose`` is within ``radius`` of a mate that has a goal: ahead of it,
     or next to it while the mate stands (slower than ``moving_speed``)."""
     if mate.goal_dist < 0:
         return False
-    dx, dy = pose.x - mate.x, pose.y - mate.y
-    if math.hypot(dx, dy) > radius:
+    if math.hypot(pose.x - mate.x, pose.y - mate.y) > radius:
         return False
-    ahead = abs(wrap_angle(math.atan2(dy, dx) - mate.theta)) < math.radians(75)
-    return ahead or mate.v < moving_speed
+    return ahead_of(pose, mate) or mate.v < moving_speed
 
 
 def aside_goals(pose: Pose, mate: Mate, step: float) -> list[tuple[float, float]]:
