@@ -568,3 +568,26 @@ def test_a_follower_does_not_wait_for_a_leader_going_elsewhere() -> None:
         assert h.agent.state == "follower_following", (leader_pose, h.agent.state)
         assert h.base.goal is not None and h.base.goal[0] > 2.0
 
+
+def test_in_groups_a_follower_that_never_hears_its_leader_leaves_the_roles() -> None:
+    """robot_1 joins a round it hears of (utilities, no poses) and follows robot_2, whose
+    pose it has never heard, so it has nowhere to go. In groups, after lost_timeout as a
+    follower it leaves the roles (in S3 two followers stood so for 1,270 s, to the time
+    limit); in one group (the original) it keeps the role."""
+    for group_size, lost in ((2, True), (3, False)):
+        h = _grouped(group_size)
+        h.assign([task("t", 10.0, 0.0)], team=TEAM)
+        assert h.step() == "na_navigating"
+        deliver(h, TOPIC_UTILITY, utility("robot_2", 40.0))
+        deliver(h, TOPIC_UTILITY, utility("robot_3", 50.0 if group_size == 2 else 0.0))
+        h.step()
+        deliver(h, TOPIC_ROLE, role("robot_2", "robot_2"))
+        deliver(h, TOPIC_ROLE, role("robot_3", "robot_3" if group_size == 2 else "robot_2"))
+        assert h.step() == "follower_following"
+        assert h.agent.leader == "robot_2" and "robot_2" not in h.agent.mates
+        h.step(times=round(h.agent.lf.lost_timeout / 0.1) - 5)
+        assert h.agent.state == "follower_following"  # not yet
+        h.step(times=10)
+        reasons = [e.data["reason"] for e in h.timeline.events if e.label == L.ROLES_DISSOLVED]
+        assert ("leader lost" in reasons) is lost, (reasons, h.agent.state)
+        assert (h.agent.state == "follower_following") is not lost, h.agent.state

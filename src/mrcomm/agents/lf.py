@@ -451,10 +451,13 @@ class LeaderFollowerExecutor(AonStatuses):
         return fresh and self.team_view.role(leader) not in (L.ROLE_LEADER, L.ROLE_ASSIGNING)
 
     def before_follower_step(self) -> bool:
-        # In groups, a follower waiting where its leader was that has not heard it for
-        # lost_timeout gives up (it may have finished out of range): no wait for ever.
-        silent = self.team_view.age(self.leader or "", self._now) > self.lf.lost_timeout
-        lost = silent and self.leaf() == "waiting" and self._in_groups()
+        # In groups a follower gives up (its leader may have finished out of range) when
+        # it has waited where its leader was without hearing it for lost_timeout, or has
+        # not heard it at all in lost_timeout as a follower: no wait for ever.
+        timeout, age = self.lf.lost_timeout, self.team_view.age(self.leader or "", self._now)
+        waited = age > timeout and self.leaf() == "waiting"
+        unheard = age == math.inf and self._now - self._state_since_role > timeout
+        lost = (waited or unheard) and self._in_groups()
         if lost or self._leader_gone():
             gone = self.leader in self.team_view.departed
             why = "lost" if lost else "no longer leads"
