@@ -393,6 +393,20 @@ def test_a_hold_no_follower_ends_gives_way_after_the_hold_timeout() -> None:
     assert 4.99 <= h.now - released <= 5.5
 
 
+def test_in_groups_a_hold_gives_way_after_the_group_hold_timeout() -> None:
+    """hold_timeout unset: in groups (here of two) a hold no follower ends gives way
+    after group_hold_timeout; in one group (the original) it lasts."""
+    for group_size, gives_way in ((2, True), (3, False)):
+        h, sent = _hold_then_lose_the_followers_poses(
+            hold_prediction=0.0, group_size=group_size, group_hold_timeout=5.0
+        )
+        while h.agent.state == "leader_holding" and h.now < sent + 20:
+            h.step()
+        assert (h.agent.state == "leader_navigating") is gives_way, h.agent.state
+        if gives_way:
+            assert 4.99 <= h.now - sent <= 5.5
+
+
 def test_without_prediction_the_hold_waits_for_a_pose() -> None:
     h, _ = _hold_then_lose_the_followers_poses(hold_prediction=0.0)
     assert h.step(times=200) == "leader_holding"  # 20 s: still where its last pose put it

@@ -53,7 +53,8 @@ def test_ten_robots_in_groups_complete_and_every_status_reaches_the_assigner() -
     """S2 · LF · AH · SLT · SPL 25 · seed 1: one leader for ten robots reached the time
     limit with 3 of 20 tasks; in groups, with reporting back, it completes every task
     and every completion reaches the assigner (on robot_1) within the limit (1,800 s:
-    ended at ~1,400 s when S2 planned on 0.1 m cells, 1,598 s on 0.2 m cells)."""
+    ended at ~1,400 s when S2 planned on 0.1 m cells, 1,598 s on 0.2 m cells, 1,070 s
+    once followers waited for leaders coming their way and holds in groups timed out)."""
     config = make_config(
         None, scenario=S2, behaviour="lf", network="ah", threshold="slt", spl=25, seed=1
     )
@@ -70,7 +71,7 @@ def test_followers_wait_for_leaders_coming_through_the_start_door() -> None:
     their leaders while the leaders, and another leader's followers, pushed out: the door
     stayed jammed to the 1,800 s limit with none of the 20 tasks done. Followers in
     groups now wait for a leader coming their way (``await_radius``), and the mission
-    completes, every status at the assigner (1,460 s)."""
+    completes, every status at the assigner (1,467 s)."""
     config = make_config(
         None, scenario=S2, behaviour="lf", network="ah", threshold="slt", spl=50, seed=6
     )

@@ -384,12 +384,12 @@ class LeaderFollowerExecutor(AonStatuses):
         self._step_navigating()
 
     def _step_leader_holding(self) -> None:
-        # hold_timeout: a hold no follower can end gives way, and the leader drives as
-        # long before holding again, so the group moves on (serried does the same).
-        timeout = self.lf.hold_timeout
+        # hold_timeout (unset: group_hold_timeout in groups): a hold no follower ends gives
+        # way, and the leader drives as long before holding again (as serried does).
+        lf = self.lf
+        timeout = lf.hold_timeout or (lf.group_hold_timeout if self._in_groups() else None)
         timed_out = timeout is not None and self._now - self._state_since >= timeout
-        if timed_out:
-            assert timeout is not None
+        if timeout is not None and timed_out:
             self._no_hold_until = self._now + timeout
         if timed_out or not self._followers_out():
             assert self.goal is not None

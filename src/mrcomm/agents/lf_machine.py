@@ -185,6 +185,14 @@ class LfParams(ExecutorParams):
         "s",
         gt=0,
     )
+    group_hold_timeout: float = parameter(
+        60.0,
+        "hold_timeout in a team of more than group_size robots when hold_timeout is not "
+        "set: a group's followers knotted around their holding leader (each making way "
+        "or avoiding another) cannot end its hold",
+        "s",
+        gt=0,
+    )
     route_check_step: float = parameter(
         0.5, "spacing of the route points a follower checks against the threshold", "m", gt=0
     )
