@@ -172,7 +172,7 @@ def test_goal_in_another_frame_is_rejected(
 
 
 def test_pose_and_odometry_topics(world_and_client: tuple[SteppedWorld, Client]) -> None:
-    from mrcomm.ros2.runtime import yaw_of
+    from mrcomm.ros2.runtime import seconds_of, yaw_of
 
     world, client = world_and_client
     base = world.bases["robot_1"]
@@ -188,7 +188,7 @@ def test_pose_and_odometry_topics(world_and_client: tuple[SteppedWorld, Client])
     assert last.pose.pose.position.y == pytest.approx(pose.y, abs=1e-9)
     assert yaw_of(last.pose.pose.orientation) == pytest.approx(pose.theta, abs=1e-9)
     # Stamps are mission time (use_sim_time).
-    stamp = last.header.stamp.sec + last.header.stamp.nanosec * 1e-9
+    stamp = seconds_of(last.header.stamp)
     assert stamp == pytest.approx(world.now, abs=1e-6)
     # The odom frame's path length is the odometer's distance.
     xy = [(o.pose.pose.position.x, o.pose.pose.position.y) for o in client.odoms]

@@ -24,7 +24,14 @@ from typing import Any
 from mrcomm.ports import NavStatus
 from mrcomm.robot.planner import GridPlanner
 from mrcomm.robot.reported import ReportedBase
-from mrcomm.ros2.runtime import Nav2Names, RosThread, set_yaw, subscription_qos, yaw_of
+from mrcomm.ros2.runtime import (
+    Nav2Names,
+    RosThread,
+    seconds_of,
+    set_yaw,
+    subscription_qos,
+    yaw_of,
+)
 from mrcomm.world.geometry import Pose
 
 Point = tuple[float, float]
@@ -215,7 +222,7 @@ class Nav2Base(ReportedBase):
         pose = Pose(p.position.x, p.position.y, yaw_of(p.orientation))
         with self._lock:
             self._latest_pose = pose
-        self.pose_stamp = _seconds(message.header.stamp)
+        self.pose_stamp = seconds_of(message.header.stamp)
         self.pose_messages += 1
 
     def _on_odom(self, message: Any) -> None:
@@ -227,9 +234,4 @@ class Nav2Base(ReportedBase):
                 self._latest_odometry += math.hypot(xy[0] - lx, xy[1] - ly)
             self._last_odom_xy = xy
             self._latest_speed = message.twist.twist.linear.x
-        self.odom_stamp = _seconds(message.header.stamp)
-
-
-def _seconds(stamp: Any) -> float:
-    """A ``builtin_interfaces/Time`` in seconds."""
-    return stamp.sec + stamp.nanosec * 1e-9
+        self.odom_stamp = seconds_of(message.header.stamp)

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from mrcomm.ports import Base, NavStatus
-from mrcomm.ros2.runtime import Nav2Names, RosThread, publisher_qos, set_yaw
+from mrcomm.ros2.runtime import Nav2Names, RosThread, publisher_qos, set_seconds, set_yaw
 
 FEEDBACK_EVERY = 5  # ticks between feedback messages of an active goal
 #: What an aborted goal's result says (Nav2's own error codes and messages).
@@ -56,12 +56,6 @@ class _Odom:
     x: float = 0.0
     y: float = 0.0
     distance: float = 0.0
-
-
-def _stamp(message_stamp: Any, now: float) -> None:
-    seconds = math.floor(now)
-    message_stamp.sec = int(seconds)
-    message_stamp.nanosec = round((now - seconds) * 1e9) % 1_000_000_000
 
 
 class Nav2Server:
@@ -142,7 +136,7 @@ class Nav2Server:
         self._ticks += 1
         messages: list[tuple[Any, Any]] = []
         clock = self._clock_type()
-        _stamp(clock.clock, now)
+        set_seconds(clock.clock, now)
         messages.append((self._clock_pub, clock))
         feedback_due = self._ticks % FEEDBACK_EVERY == 0
         feedbacks: list[tuple[Any, Any]] = []
@@ -176,7 +170,7 @@ class Nav2Server:
     def _pose_message(self, now: float, pose: Any) -> Any:
         message = self._pose_type()
         message.header.frame_id = self.frame
-        _stamp(message.header.stamp, now)
+        set_seconds(message.header.stamp, now)
         message.pose.pose.position.x = float(pose.x)
         message.pose.pose.position.y = float(pose.y)
         set_yaw(message.pose.pose.orientation, float(pose.theta))
@@ -192,7 +186,7 @@ class Nav2Server:
         message = self._odom_type()
         message.header.frame_id = "odom"
         message.child_frame_id = "base_link"
-        _stamp(message.header.stamp, now)
+        set_seconds(message.header.stamp, now)
         message.pose.pose.position.x = odom.x
         message.pose.pose.position.y = odom.y
         set_yaw(message.pose.pose.orientation, float(theta))
@@ -203,17 +197,17 @@ class Nav2Server:
         feedback = self._action_type.Feedback()
         pose = base.pose
         feedback.current_pose.header.frame_id = self.frame
-        _stamp(feedback.current_pose.header.stamp, now)
+        set_seconds(feedback.current_pose.header.stamp, now)
         feedback.current_pose.pose.position.x = float(pose.x)
         feedback.current_pose.pose.position.y = float(pose.y)
         set_yaw(feedback.current_pose.pose.orientation, float(pose.theta))
         elapsed = max(0.0, now - goal.started)
-        _stamp(feedback.navigation_time, elapsed)
+        set_seconds(feedback.navigation_time, elapsed)
         remaining = pose.distance_to(goal.x, goal.y)
         feedback.distance_remaining = float(remaining)
         speed = abs(base.speed)
         if speed > 1e-3:
-            _stamp(feedback.estimated_time_remaining, remaining / speed)
+            set_seconds(feedback.estimated_time_remaining, remaining / speed)
         feedback.number_of_recoveries = int(getattr(base, "recoveries", 0))
         return feedback
 

@@ -99,6 +99,18 @@ def set_yaw(q: Any, yaw: float) -> None:
     q.w = math.cos(yaw / 2.0)
 
 
+def seconds_of(stamp: Any) -> float:
+    """A ``builtin_interfaces/Time`` (or Duration) in seconds."""
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def set_seconds(stamp: Any, seconds: float) -> None:
+    """Write ``seconds`` (>= 0) into a ``builtin_interfaces/Time`` (or Duration)."""
+    whole = math.floor(seconds)
+    stamp.sec = int(whole)
+    stamp.nanosec = round((seconds - whole) * 1e9) % 1_000_000_000
+
+
 def subscription_qos(reliability: str, depth: int = 5) -> Any:
     """Volatile (matches both volatile and transient-local publishers, e.g. AMCL's)."""
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
