@@ -288,3 +288,20 @@ def test_a_drain_stops_at_once_when_told_and_when_nothing_comes() -> None:
     assert handled == [1, 2] and items == [3]  # the mission ended with item 2
     drain(poll, handled.append, 10.0)  # type: ignore[arg-type]
     assert handled == [1, 2, 3] and items == []  # drained: nothing more came
+
+
+def test_free_ports_lie_below_the_kernels_ephemeral_range() -> None:
+    """A port handed to a process about to listen must not be one the kernel can give
+    to any socket that connects meanwhile (the flaky UDP mission start)."""
+    import socket
+
+    from mrcomm.live.launcher import free_port
+
+    low = int(Path("/proc/sys/net/ipv4/ip_local_port_range").read_text().split()[0])
+    for udp in (False, True):
+        ports = {free_port("127.0.0.1", udp=udp) for _ in range(20)}
+        assert all(20000 <= p < low for p in ports), ports
+        assert len(ports) > 15  # spread out, so two launchers rarely meet
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.bind(("127.0.0.1", 0))  # what a connecting socket gets
+        assert sock.getsockname()[1] >= low

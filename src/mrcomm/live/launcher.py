@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import random
 import signal
 import socket
 import subprocess
@@ -343,10 +344,36 @@ class LiveTeam:
         self.stop()
 
 
+#: Where :func:`free_port` looks: above the well-known and common service ports and
+#: below the kernel's ephemeral range (read from Linux, 32768 by default).
+_LOWEST_PORT = 20000
+_EPHEMERAL_RANGE = Path("/proc/sys/net/ipv4/ip_local_port_range")
+
+
 def free_port(host: str, *, udp: bool = False) -> int:
-    """A port nobody listens on right now (the OS picks it)."""
+    """A port nobody listens on right now, chosen below the kernel's ephemeral range.
+
+    Why not bind port 0 and release it: the kernel hands out the same range to every
+    socket that connects without binding, and a process takes a second or more to start
+    and listen. Over UDP, where every Zenoh link opens such a socket, another one could
+    take the port in that second and the process would listen on a port whose packets
+    go elsewhere. Ports below the ephemeral range are only ever taken by an explicit
+    bind; picking one at random makes two launchers (parallel tests) unlikely to meet."""
     kind = socket.SOCK_DGRAM if udp else socket.SOCK_STREAM
-    with socket.socket(socket.AF_INET, kind) as sock:
+    try:
+        ephemeral_low = int(_EPHEMERAL_RANGE.read_text().split()[0])
+    except (OSError, ValueError, IndexError):
+        ephemeral_low = 32768  # Linux's default; elsewhere the range is not readable
+    pick = random.SystemRandom()  # not the run's seed: a port is not part of a result
+    for _ in range(200):
+        port = pick.randrange(_LOWEST_PORT, max(ephemeral_low, _LOWEST_PORT + 1000))
+        with socket.socket(socket.AF_INET, kind) as sock:
+            try:
+                sock.bind((host, port))
+            except OSError:
+                continue
+            return port
+    with socket.socket(socket.AF_INET, kind) as sock:  # crowded: let the OS choose
         sock.bind((host, 0))
         return int(sock.getsockname()[1])
 
