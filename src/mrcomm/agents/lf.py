@@ -56,13 +56,12 @@ from mrcomm.agents.lf_machine import (
 from mrcomm.agents.lf_route import direct_hop, leader_coming, predicted_follower
 from mrcomm.agents.link_chain import chain_links
 from mrcomm.agents.role_round import RoleRound
-from mrcomm.agents.utility import UtilityInputs, utility_function
+from mrcomm.agents.utility import robot_inputs, utility_function
 from mrcomm.messaging.messages import (
     TOPIC_ROLE,
     TOPIC_UTILITY,
     Message,
     RoleMsg,
-    TaskSpec,
     TaskState,
     TaskStatus,
     UtilityMsg,
@@ -70,7 +69,7 @@ from mrcomm.messaging.messages import (
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ROLE
 from mrcomm.ports import NavStatus
-from mrcomm.world.geometry import Pose, polyline_length
+from mrcomm.world.geometry import Pose
 
 NA_IDLE = "na_idle"  # transitions' name of NA's idle state
 HOME_REACH = 1.0  # m: the assigner's robot is home this close to its start
@@ -168,31 +167,7 @@ class LeaderFollowerExecutor(AonStatuses):
     def _my_utility(self) -> float:
         if not self.agenda:
             return 0.0
-        target = self._closest_task_distance()
-        inputs = UtilityInputs(
-            target, len(self.agenda), self._just_completed, route_length=self._route_length
-        )
-        return self._utility(inputs)
-
-    def _target(self) -> TaskSpec | None:
-        """The current goal, or the task of the agenda closest in a straight line."""
-        if self.goal is not None or not self.agenda:
-            return self.goal
-        pose = self.base.pose
-        return min(self.agenda, key=lambda t: math.hypot(t.x - pose.x, t.y - pose.y))
-
-    def _closest_task_distance(self) -> float | None:
-        target = self._target()
-        if target is None:
-            return None
-        pose = self.base.pose
-        return math.hypot(target.x - pose.x, target.y - pose.y)
-
-    def _route_length(self) -> float | None:
-        """Length of the route the base plans to the target (None: no route)."""
-        target = self._target()
-        route = None if target is None else self.base.make_plan(target.x, target.y)
-        return None if route is None else polyline_length(route)
+        return self._utility(robot_inputs(self.base, self.agenda, self.goal, self._just_completed))
 
     def _step_assigning(self) -> None:
         elapsed = self._now - self._state_since

@@ -12,10 +12,14 @@ Each function is a registered variant (kind ``utility``), selected by LF's param
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
+from mrcomm.messaging.messages import TaskSpec
+from mrcomm.ports import Base
 from mrcomm.specs import VariantSpec, get_spec, variant_names
+from mrcomm.world.geometry import polyline_length
 
 
 def _no_route() -> float | None:
@@ -33,6 +37,24 @@ class UtilityInputs:
 
 
 UtilityFunction = Callable[[UtilityInputs], float]
+
+
+def robot_inputs(
+    base: Base, agenda: Sequence[TaskSpec], goal: TaskSpec | None, just_completed: bool
+) -> UtilityInputs:
+    """A robot's utility inputs: its target is its current goal, or else the task of its
+    agenda closest in a straight line; the route to it is planned only when asked."""
+    pose = base.pose
+    target = goal
+    if target is None and agenda:
+        target = min(agenda, key=lambda t: math.hypot(t.x - pose.x, t.y - pose.y))
+
+    def route_length() -> float | None:
+        route = None if target is None else base.make_plan(target.x, target.y)
+        return None if route is None else polyline_length(route)
+
+    distance = None if target is None else math.hypot(target.x - pose.x, target.y - pose.y)
+    return UtilityInputs(distance, len(agenda), just_completed, route_length=route_length)
 
 
 def utility_function(name: str) -> UtilityFunction:
