@@ -605,3 +605,56 @@ def test_in_groups_a_follower_that_never_hears_its_leader_leaves_the_roles() -> 
         reasons = [e.data["reason"] for e in h.timeline.events if e.label == L.ROLES_DISSOLVED]
         assert ("leader lost" in reasons) is lost, (reasons, h.agent.state)
         assert (h.agent.state == "follower_following") is not lost, h.agent.state
+
+
+def test_in_groups_a_group_at_work_is_not_pulled_into_another_groups_round() -> None:
+    """robot_1 follows robot_3, and robot_2 leads a group of its own. A newer round of
+    robot_2's leaves robot_1 following in groups (in S4, 100 robots, such rounds spread
+    through the team and it spent three quarters of its time assigning roles); its own
+    leader's newer round takes it back to assignment. In one group (the original) any
+    newer round does."""
+    for group_size, joins_robot_2 in ((2, False), (3, True)):
+        h = _following_robot_3(group_size)
+        h.hear(pose_of("robot_2", 3.0, 3.0, role=L.ROLE_LEADER, leader="robot_2"))
+        deliver(h, TOPIC_UTILITY, utility("robot_2", 9.0, round_no=2))
+        assert (h.agent.state == "assigning") is joins_robot_2, h.agent.state
+        if not joins_robot_2:
+            assert h.step() == "follower_following" and h.agent.role_round.number == 1
+            assert h.agent.role_round.next_number() == 3  # its own next round is newer
+            deliver(h, TOPIC_UTILITY, utility("robot_3", 9.0, round_no=3))
+            assert h.agent.state == "assigning" and h.agent.role_round.number == 3
+
+
+def test_in_groups_a_leader_joins_only_a_round_of_its_own_followers() -> None:
+    """robot_1 leads (groups of two: robot_3 leads the other group); a newer round of
+    robot_3's leaves it leading, one of robot_2's, whose pose says it follows robot_1,
+    takes it back to assignment."""
+    h = _grouped(2)
+    disconnect(h)
+    deliver(h, TOPIC_UTILITY, utility("robot_2", 0.01))
+    deliver(h, TOPIC_UTILITY, utility("robot_3", 0.02))
+    h.step()
+    deliver(h, TOPIC_ROLE, role("robot_2", "robot_1"))
+    deliver(h, TOPIC_ROLE, role("robot_3", "robot_3"))
+    assert h.step() == "leader_navigating"
+    deliver(h, TOPIC_UTILITY, utility("robot_3", 9.0, round_no=2))
+    assert h.step().startswith("leader_")  # holding for robot_2, still leading
+    h.hear(pose_of("robot_2", -2.0, 0.0, role=L.ROLE_FOLLOWER, leader="robot_1"))
+    h.step()
+    deliver(h, TOPIC_UTILITY, utility("robot_2", 9.0, round_no=3))
+    assert h.agent.state == "assigning"
+
+
+def test_in_groups_a_robot_nobody_answers_does_its_own_work() -> None:
+    """Nobody answers robot_1's round (every group near it may be at work): in groups it
+    leads itself to its task, a group of one; in one group (the original) it regroups.
+    In S2 a robot regrouping to where a mate had been, hearing nobody there, stood still
+    until the time limit."""
+    for group_size, expected in ((2, "leader_navigating"), (3, "regrouping")):
+        h = _grouped(group_size)
+        disconnect(h)
+        h.step(times=int(h.agent.lf.assign_timeout / 0.1) + 2)
+        h.step(times=int(h.agent.lf.roles_timeout / 0.1) + 2)
+        assert h.agent.state == expected
+        if group_size == 2:
+            assert h.agent.leader == "robot_1" and h.base.goal == (10.0, 0.0)

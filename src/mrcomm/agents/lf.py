@@ -16,7 +16,10 @@ A hierarchical state machine: ``na`` is NB plus a network trigger; ``leader`` an
   the others follow the nearest (:mod:`mrcomm.agents.lf_groups`). Roles are then
   published the same way. A role message settles the round for whoever still
   collects, and a member already past the round answers late utilities with its role,
-  so no exchange waits on another; a timeout decides with what was collected.
+  so no exchange waits on another; a timeout decides with what was collected. In
+  groups a robot at work in a group joins a newer round only from its own group
+  (``lf_groups.joins``), and one whose round nobody answers leads itself, a group of one,
+  where the original regroups.
 * Leader: drives to its closest task and holds while any of *its* followers' links is
   in warning (leader disconnect time); its followers are the mates whose poses say
   they follow it (or that named it leader this round and have not spoken since). With
@@ -45,7 +48,7 @@ from transitions.extensions import HierarchicalMachine
 from mrcomm.agents import agenda
 from mrcomm.agents.aon_statuses import AonStatuses
 from mrcomm.agents.collision import Mate
-from mrcomm.agents.lf_groups import nearest_leader, round_leaders
+from mrcomm.agents.lf_groups import joins, nearest_leader, round_leaders
 from mrcomm.agents.lf_machine import (
     ACTIVITY_OF_FULL_STATE,
     LF_STATES,
@@ -151,7 +154,7 @@ class LeaderFollowerExecutor(AonStatuses):
             if known is not None and self._link_warns(mate, pose, known.x, known.y):
                 self.timeline.event(L.DISCONNECT_DETECTED, self._now, mate=mate)
                 self.send_status("", TaskState.DISCONNECT_ROLE)
-                self._open_round(self.role_round.number + 1)
+                self._open_round(self.role_round.next_number())
                 return
 
     # -- role assignment -----------------------------------------------------------------
@@ -188,8 +191,10 @@ class LeaderFollowerExecutor(AonStatuses):
         """Settle the round with the utilities collected (:mod:`mrcomm.agents.lf_groups`):
         lead, or follow the nearest leader; ``named`` is a leader a member's role message
         named, counted as one."""
-        if self.role_round.alone and self.team:
-            self.trigger("regroup")  # nobody answered: go back towards the team
+        # Nobody answered: go back towards the team; in groups, where a lone robot's round
+        # may go unanswered because every group near it is at work, do its own work.
+        if self.role_round.alone and self.team and not self._in_groups():
+            self.trigger("regroup")
             return
         leaders = round_leaders(self.role_round.scores, self._rank, self.lf.group_size)
         if named is not None and named not in leaders:
@@ -238,13 +243,25 @@ class LeaderFollowerExecutor(AonStatuses):
         role = self.role_round.roles[self.robot_id]
         self._announce(TOPIC_ROLE, RoleMsg, role=role, leader=self.leader)
 
+    def _in_round(self, message: UtilityMsg | RoleMsg) -> bool:
+        """Whether a round message is of this robot's round, joining a newer one (idle:
+        utility 0) unless it works in a group the sender is not in (lf_groups.joins)."""
+        if self._t0 is None or message.sender == self.robot_id:
+            return False
+        if message.round > self.role_round.number:
+            sender, top = message.sender, self.STATE_TABLE[self.state].top
+            mine = lambda: self._follows_me(sender)  # noqa: E731
+            if self._in_groups() and not joins(
+                top, sender, self.leader, self.team_view.leader(sender), mine
+            ):
+                self.role_round.pass_by(message.round)
+                return False
+            self._open_round(message.round)
+        return message.round == self.role_round.number
+
     def _on_utility(self, message: Message) -> None:
         assert isinstance(message, UtilityMsg)
-        if self._t0 is None or message.sender == self.robot_id:
-            return
-        if message.round > self.role_round.number:
-            self._open_round(message.round)  # join the newer round (idle: utility 0)
-        if message.round != self.role_round.number:
+        if not self._in_round(message):
             return
         if self.state == "assigning":
             self.role_round.hear_utility(message.sender, message.utility)
@@ -253,11 +270,7 @@ class LeaderFollowerExecutor(AonStatuses):
 
     def _on_role(self, message: Message) -> None:
         assert isinstance(message, RoleMsg)
-        if self._t0 is None or message.sender == self.robot_id:
-            return
-        if message.round > self.role_round.number:
-            self._open_round(message.round)
-        if message.round != self.role_round.number or self.state != "assigning":
+        if not self._in_round(message) or self.state != "assigning":
             return
         self.role_round.hear_role(message.sender, message.role, message.leader, self._now)
         if self.leader is None:  # decided by a member that had every score (or timed out)
@@ -510,7 +523,7 @@ class LeaderFollowerExecutor(AonStatuses):
         and try again once someone is heard (emergent regrouping)."""
         heard_recently = self.team_view.heard_within(1.0, self._now)
         if heard_recently and self._now - self._state_since > 1.0:
-            self._open_round(self.role_round.number + 1)
+            self._open_round(self.role_round.next_number())
             return
         if self._follow_target is None and self.mates:
             pose = self.base.pose

@@ -23,6 +23,8 @@ class RoleRound:
         self.confirmed_at: dict[str, float] = {}
         self.decided_at = 0.0
         self.next_announce = 0.0
+        #: The newest round heard of and not joined (LF in groups: another group's).
+        self.passed = 0
 
     def open(self, number: int, utility: float, now: float) -> None:
         """Start collecting round ``number`` with this robot's own utility."""
@@ -31,6 +33,17 @@ class RoleRound:
         self.roles = {}
         self.confirmed_at = {}
         self.next_announce = now
+
+    def pass_by(self, number: int) -> None:
+        """Round ``number`` was heard of and not joined."""
+        self.passed = max(self.passed, number)
+
+    def next_number(self) -> int:
+        """The number of a round this robot opens: newer than any it has heard of, joined
+        or not. A robot that reused the number of a round others had settled while it
+        was busy joined that round late, through its members' answers, and groups grew
+        past ``group_size`` (eight robots behind one leader in S2)."""
+        return max(self.number, self.passed) + 1
 
     def hear_utility(self, member: str, utility: float) -> None:
         self.scores.setdefault(member, utility)
