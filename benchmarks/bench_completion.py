@@ -88,8 +88,8 @@ def main() -> None:
         results = list(pool.map(run_case, todo))
     print(f"{time.perf_counter() - start:.0f} s wall; load {os.getloadavg()}")
     print("| scenario | behaviour | network | SPL | runs | hit the time limit | successful "
-          "| tasks completed | statuses lost | mission s (median) |")  # fmt: skip
-    print("|---|---|---|---|---|---|---|---|---|---|")
+          "| tasks completed | statuses lost | mission s (median) | slowest s |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     groups: dict[tuple[Any, ...], list[dict[str, Any]]] = {}
     for r in results:
         groups.setdefault((r["scenario"], r["behaviour"], r["network"], r["spl"]), []).append(r)
@@ -100,7 +100,8 @@ def main() -> None:
             f"| {scenario} | {behaviour} | {network} | {spl} | {len(runs)} "
             f"| {sum(r['timed_out'] for r in runs)} | {sum(r['successful'] for r in runs)} "
             f"| {completed} of {runs[0]['total']} | {lost} "
-            f"| {statistics.median(r['end'] for r in runs):.0f} |"
+            f"| {statistics.median(r['end'] for r in runs):.0f} "
+            f"| {max(r['end'] for r in runs):.0f} |"
         )
 
 
