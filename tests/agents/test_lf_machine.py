@@ -67,7 +67,8 @@ def disconnect(h: Harness, mate_at: tuple[float, float] = (6.0, 0.0)) -> None:
     assert h.agent.state == "assigning"
 
 
-def lead(h: Harness) -> None:
+def lead(h: Harness, robot_3_follows: str = "robot_1") -> None:
+    """robot_1 leads; robot_3 names ``robot_3_follows`` (itself: it leads another group)."""
     disconnect(h)
     statuses = h.bus.published(TOPIC_TASK_STATUS)
     assert statuses[-1].state is TaskState.DISCONNECT_ROLE
@@ -76,7 +77,7 @@ def lead(h: Harness) -> None:
     h.step()
     assert h.agent.leader == "robot_1"  # the highest utility leads
     deliver(h, TOPIC_ROLE, role("robot_2", "robot_1"))
-    deliver(h, TOPIC_ROLE, role("robot_3", "robot_1"))
+    deliver(h, TOPIC_ROLE, role("robot_3", robot_3_follows))
     assert h.step() == "leader_navigating"
     assert h.base.goal == (10.0, 0.0)
 
@@ -630,13 +631,7 @@ def test_in_groups_a_leader_joins_only_a_round_of_its_own_followers() -> None:
     robot_3's leaves it leading, one of robot_2's, whose pose says it follows robot_1,
     takes it back to assignment."""
     h = _grouped(2)
-    disconnect(h)
-    deliver(h, TOPIC_UTILITY, utility("robot_2", 0.01))
-    deliver(h, TOPIC_UTILITY, utility("robot_3", 0.02))
-    h.step()
-    deliver(h, TOPIC_ROLE, role("robot_2", "robot_1"))
-    deliver(h, TOPIC_ROLE, role("robot_3", "robot_3"))
-    assert h.step() == "leader_navigating"
+    lead(h, robot_3_follows="robot_3")
     deliver(h, TOPIC_UTILITY, utility("robot_3", 9.0, round_no=2))
     assert h.step().startswith("leader_")  # holding for robot_2, still leading
     h.hear(pose_of("robot_2", -2.0, 0.0, role=L.ROLE_FOLLOWER, leader="robot_1"))

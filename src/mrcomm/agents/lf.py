@@ -41,6 +41,7 @@ A hierarchical state machine: ``na`` is NB plus a network trigger; ``leader`` an
 from __future__ import annotations
 
 import math
+from functools import partial
 from typing import Any
 
 from transitions.extensions import HierarchicalMachine
@@ -250,7 +251,7 @@ class LeaderFollowerExecutor(AonStatuses):
             return False
         if message.round > self.role_round.number:
             sender, top = message.sender, self.STATE_TABLE[self.state].top
-            mine = lambda: self._follows_me(sender)  # noqa: E731
+            mine = partial(self._follows_me, sender)
             if self._in_groups() and not joins(
                 top, sender, self.leader, self.team_view.leader(sender), mine
             ):
