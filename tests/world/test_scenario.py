@@ -210,6 +210,8 @@ def _scenario_error(tmp_path: Path, **changes: Any) -> InputError:
         ({"tasks": "none.yaml"}, "tasks", "task file not found"),
         ({"robots": []}, "robots", "at least 1"),
         ({"name": 7}, "name", "must be a string, got 7"),
+        ({"one_lane_width": -1}, "one_lane_width", "greater than or equal to 0"),
+        ({"one_lane_width": "wide"}, "one_lane_width", "must be a number"),
     ],
 )
 def test_scenario_errors(tmp_path: Path, changes: dict[str, Any], field: str, words: str) -> None:

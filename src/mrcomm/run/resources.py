@@ -16,6 +16,7 @@ from mrcomm.net.signal.table import RssiTable
 from mrcomm.net.signal.trace import RssiTrace
 from mrcomm.robot.params import RobotParams
 from mrcomm.robot.planner import GridPlanner
+from mrcomm.world.passages import Passages, find_passages
 from mrcomm.world.scenario import Scenario, load_scenario
 
 
@@ -26,6 +27,7 @@ class ScenarioResources:
     planner: GridPlanner
     _tables: dict[Path | None, RssiTable] = field(default_factory=dict, repr=False)
     _traces: dict[Path, RssiTrace] = field(default_factory=dict, repr=False)
+    _passages: list[Passages] = field(default_factory=list, repr=False)
 
     @classmethod
     def load(
@@ -46,6 +48,18 @@ class ScenarioResources:
             model = default_model() if model_path is None else load_model(model_path)
             table = self._tables[model_path] = RssiTable.from_model(model)
         return table
+
+    @property
+    def passages(self) -> Passages | None:
+        """The map's one-lane passages (narrower than the scenario's
+        ``one_lane_width``, wider than a robot), where robots queue; None without."""
+        width = self.scenario.one_lane_width
+        if width <= 0:
+            return None
+        if not self._passages:
+            grid = self.scenario.grid
+            self._passages.append(find_passages(grid, width, 2 * self.robot_params.radius))
+        return self._passages[0]
 
     def rssi_trace(self, path: Path) -> RssiTrace:
         """A recorded RSSI trace for ESD replay."""

@@ -11,9 +11,12 @@ team (robot ids and start poses, in file order) and where the task assigner runs
     assigner: {host: robot_1}          # or {kind: base_station, position: {x: .., y: ..}}
                                        # or {kind: virtual}
     robot: {max_v: 0.3, planner_resolution: 0.2}   # optional: the robots' parameters
+    one_lane_width: 1.3                # optional: robots queue at narrower passages
 
 ``robot`` sets parameters of the team's robots (their defaults are a Turtlebot 2's; the
 names and meanings are in docs/ROBOT.md); they are checked where the robots are built.
+``one_lane_width`` (m, default 0: none) makes the doors and corridors narrower than it
+one-lane passages, where robots queue (world/passages.py, agents/passage_queue.py).
 
 A task file is a list of tasks in MRComm's task format (docs/ARCHITECTURE.md).
 :func:`load_scenario` checks the mission is feasible on its map (poses clear of walls,
@@ -133,6 +136,8 @@ class ScenarioModel(_Model):
     robots: list[RobotModel] = Field(min_length=1)
     assigner: AssignerModel
     robot: dict[str, Number] = Field(default_factory=dict)
+    #: Doors and corridors narrower than this (m) are one-lane: robots queue at them.
+    one_lane_width: Annotated[float, Field(ge=0, le=100, allow_inf_nan=False)] = 0.0
 
 
 _TASK_LIST = list[TaskModel]
@@ -187,6 +192,9 @@ class Scenario:
     robot_radius: float = ROBOT_RADIUS
     #: The scenario's ``robot`` section: robot parameters it sets (name, value).
     robot_settings: tuple[tuple[str, float], ...] = ()
+    #: Passages of the map narrower than this (m) are one-lane: robots queue at them
+    #: (0: none; world/passages.py).
+    one_lane_width: float = 0.0
 
     @property
     def team(self) -> tuple[str, ...]:
@@ -330,6 +338,7 @@ def load_scenario(path: str | Path, *, robot_radius: float | None = None) -> Sce
         description=model.description,
         robot_radius=robot_radius,
         robot_settings=tuple(model.robot.items()),
+        one_lane_width=float(model.one_lane_width),
     )
 
 
