@@ -78,7 +78,9 @@ def task(task_id: str, x: float, y: float, **options: Any) -> TaskSpec:
 
 
 def pose_of(mate: str, x: float, y: float, theta: float = 0.0, **options: Any) -> PoseMsg:
-    return PoseMsg(sender=mate, incarnation=1, seq=1, stamp=0.0, x=x, y=y, theta=theta, **options)
+    """A mate's pose message (sent at 0 s, as its first, unless ``options`` say)."""
+    fields: dict[str, Any] = dict(sender=mate, incarnation=1, seq=1, stamp=0.0)
+    return PoseMsg(**{**fields, "x": x, "y": y, "theta": theta, **options})
 
 
 class Harness:

@@ -65,11 +65,16 @@ ADDED_TRUTH_METRICS = (
 )
 
 
+#: Per robot, added later: waits at one-lane passages (none in S1: its scenario names
+#: no one-lane width).
+ADDED_ROBOT_METRICS = ("queued",)
+
+
 def without_added(summary: dict[str, Any]) -> dict[str, Any]:
     for key in (*ADDED_MISSION_METRICS, *ADDED_TRUTH_METRICS):
         summary["mission"].pop(key, None)
     for robot in summary["robots"].values():
-        for key in ADDED_TRUTH_METRICS:
+        for key in (*ADDED_TRUTH_METRICS, *ADDED_ROBOT_METRICS):
             robot.pop(key, None)
     return summary
 

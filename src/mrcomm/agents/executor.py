@@ -28,6 +28,7 @@ from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.agents.machine_table import StateEntry, build_table, quiet_rebinding
 from mrcomm.agents.making_way import aside_goals, in_way
 from mrcomm.agents.occupied_goal import OccupiedGoal
+from mrcomm.agents.passage_queue import PassageQueue
 from mrcomm.agents.team_view import TeamView
 from mrcomm.messaging.messages import (
     TOPIC_ASSIGNMENT,
@@ -47,6 +48,7 @@ from mrcomm.metrics.timeline import ACTIVITY, Timeline
 from mrcomm.net.link_sensors import NoSensor
 from mrcomm.ports import Base, BatchHandler, Bus, LinkSensor, NavStatus
 from mrcomm.world.geometry import Pose
+from mrcomm.world.passages import Passages
 
 NB_STATES = [
     "unassigned",
@@ -118,7 +120,10 @@ class TaskExecutor:
         link_sensor: LinkSensor | None = None,
         params: ExecutorParams | None = None,
         incarnation: int = 1,
+        passages: Passages | None = None,
     ) -> None:
+        """``passages``: the map's one-lane passages, where the robot queues (none: it
+        does not)."""
         self.bus = bus
         self.base = base
         self.timeline = timeline
@@ -140,6 +145,13 @@ class TaskExecutor:
         self._moved_once = False
         self._state_since = 0.0
         self.avoidance = Avoidance(self.robot_id, self.params, tie_break_rank)
+        self.queue: PassageQueue | None = None
+        if passages is not None and len(passages):
+            p = self.params
+            self.queue = PassageQueue(
+                passages, p.queue_distance, p.queue_timeout, p.collision.moving_speed,
+                tie_break_rank, self.robot_id,
+            )  # fmt: skip
         self._clearing_goals: list[tuple[float, float]] = []
         self._occupied = OccupiedGoal(self.params.occupied_goal)
         self._execute_until = 0.0
@@ -348,8 +360,11 @@ class TaskExecutor:
             self._select_next()
 
     def _step_avoiding(self) -> None:
+        if self.queue is not None and self.queue.waiting is not None:
+            if self.queue.still_waiting(self.base.pose, self._mates_near_point, self._now):
+                return
         # The pose is read only when needed: a base may draw noise for each reading.
-        if not self.avoidance.may_resume(
+        elif not self.avoidance.may_resume(
             self._current_pose, self.known_mates(), self._now, self._state_since
         ):
             return
@@ -383,8 +398,31 @@ class TaskExecutor:
         self.base.navigate_to(task.x, task.y)
         self.trigger("go")
 
+    def _mates_near_point(self, x: float, y: float, reach: float) -> Collection[Mate]:
+        return self._mates_near(Pose(x, y, 0.0), reach)
+
+    def _queued(self, pose: Pose) -> bool:
+        """Whether the robot stops to queue at a one-lane passage ahead (then it is)."""
+        assert self.queue is not None
+        target = self.navigation_target()
+        if target is None:
+            return False
+        queued = self.queue.wait_for(
+            pose, target, self._mates_near_point, self._now, self.base.make_plan
+        )
+        if queued is None:
+            return False
+        passage, mate = queued
+        self.timeline.event(L.QUEUED, self._now, mate=mate.robot, passage=passage.index)
+        self.base.navigate_to(*self.queue.hold_point(pose))  # out of the mouth
+        self.trigger("conflict")
+        return True
+
     def _check_collisions(self) -> None:
         pose = self.base.pose
+        queue = self.queue  # (near no passage: one lookup, for every robot every step)
+        if queue is not None and queue.passages.near(pose.x, pose.y) and self._queued(pose):
+            return
         # Only the mates near enough to be in conflict (detect tests it).
         near = self._mates_near(pose, self.avoidance.reach)
         conflict = self.avoidance.detect(pose, near, self._now, self._goal_distance)

@@ -68,6 +68,20 @@ class ExecutorParams(BaseModel):
     )
     make_way_step: float = parameter(1.5, "how far it steps aside", "m", gt=0)
     make_way_timeout: float = parameter(6.0, "it gives up stepping aside after", "s", gt=0)
+    queue_distance: float = parameter(
+        1.5,
+        "at a one-lane passage (the scenario's one_lane_width) a robot waits this far "
+        "before its entry while a mate comes the other way",
+        "m",
+        gt=0,
+    )
+    queue_timeout: float = parameter(
+        90.0,
+        "it drives on once the mates coming through a passage have stood still this long "
+        "(longer than an LF group leader holds: group_hold_timeout)",
+        "s",
+        gt=0,
+    )
     occupied_goal: OccupiedGoalParams = Field(
         default_factory=OccupiedGoalParams, description="arriving before a goal a mate holds"
     )

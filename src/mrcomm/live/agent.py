@@ -78,11 +78,11 @@ from mrcomm.net.zenoh_config import check_key_chunk
 from mrcomm.net.zenoh_node import Incoming, Presence, ZenohNode, drain
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.wiring import (
-    aon_options,
     build_link_sensor,
     build_network,
     build_radio_links,
     measures_radio,
+    scenario_options,
 )
 from mrcomm.seeding import stream
 from mrcomm.world.scenario import Scenario
@@ -200,7 +200,7 @@ class AgentProcess:
                 tie_break_rank=rank_of.__getitem__,
                 link_sensor=sensor,
                 incarnation=incarnation,
-                **aon_options(executor_class, self.scenario),
+                **scenario_options(executor_class, self.resources),
             )
             # The LF executor reads its AON lease when its assignment arrives.
             params = self.executor.params

@@ -55,6 +55,7 @@ def robot_metrics(timeline: Timeline, facts: RobotFacts) -> dict[str, Any]:
         "near_collisions_filtered": sum(1 for e in collisions if not e.data.get("repeat")),
         "nav_aborts": timeline.count(L.NAV_ABORTED),
         "made_way": timeline.count(L.MADE_WAY),
+        "queued": timeline.count(L.QUEUED),
         "last_task_time": last_completion.time if last_completion else None,
         "min_separation": facts.min_separation,
         "max_separation": facts.max_separation,

@@ -4,7 +4,7 @@ figures and recordings agree)."""
 # Activity track (mutually exclusive).
 INIT = "init"  # assignment received -> starts moving
 MOVING = "moving"  # navigating (includes re-planning and recovery)
-DELAY = "delay"  # paused for a near collision
+DELAY = "delay"  # paused for a near collision, or queued at a one-lane passage
 TASK = "task"  # at a task location, executing it (arrival -> status sent)
 WAITING = "waiting"  # agenda not empty but nothing to do now (task not yet available)
 IDLE = "idle"  # agenda complete, waiting for the team
@@ -18,6 +18,7 @@ NEAR_COLLISION = "near_collision"
 NAV_ABORTED = "nav_aborted"
 AGENDA_COMPLETE = "agenda_complete"
 MADE_WAY = "made_way"  # stepped aside for a team mate
+QUEUED = "queued"  # waited before a one-lane passage for a mate coming the other way
 GOAL_OCCUPIED = "goal_occupied"  # arrived before its goal: a mate stood on it too long
 OPERATOR_COMMAND = "operator_command"  # an operator's command reached the robot
 TASK_DROPPED = "task_dropped"  # reached a task the operator had reassigned meanwhile

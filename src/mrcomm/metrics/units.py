@@ -38,6 +38,7 @@ UNITS: dict[str, str] = {
     "max_separation": METRES,
     "nav_aborts": COUNT,
     "made_way": COUNT,
+    "queued": COUNT,
     "replans": COUNT,
     "recoveries": COUNT,
     "end_time": SECONDS,

@@ -63,10 +63,10 @@ def build_executor(
     tie_break_rank: Callable[[str], float],
     link_sensor: LinkSensor,
     incarnation: int = 1,
-    scenario: Scenario | None = None,
+    resources: ScenarioResources | None = None,
 ) -> TaskExecutor:
-    """One robot's task executor: the chosen behaviour with its parameters (and, for
-    one that sends with AON, where the task assigner is)."""
+    """One robot's task executor: the chosen behaviour with its parameters (and what
+    the scenario tells it: :func:`scenario_options`)."""
     cls: type[TaskExecutor] = config.spec("behaviour").load()
     return cls(
         bus,
@@ -76,19 +76,25 @@ def build_executor(
         link_sensor=link_sensor,
         params=config.variant_params("behaviour"),
         incarnation=incarnation,
-        **aon_options(cls, scenario),
+        **scenario_options(cls, resources),
     )
 
 
-def aon_options(cls: type[TaskExecutor], scenario: Scenario | None) -> dict[str, Any]:
-    """What an executor class takes beyond the common arguments: where the task
-    assigner is, for one whose statuses go with AON — its spec, and for one on a robot
-    that robot's start (its home)."""
-    if not cls.uses_aon or scenario is None:
+def scenario_options(
+    cls: type[TaskExecutor], resources: ScenarioResources | None
+) -> dict[str, Any]:
+    """What an executor takes from the scenario beyond the common arguments: the map's
+    one-lane passages, and where the task assigner is, for one whose statuses go with
+    AON — its spec, and for one on a robot that robot's start (its home)."""
+    if resources is None:
         return {}
-    host = scenario.assigner.host
-    home = next(((r.pose.x, r.pose.y) for r in scenario.robots if r.id == host), None)
-    return {"assigner": scenario.assigner, "assigner_home": home}
+    options: dict[str, Any] = {"passages": resources.passages}
+    if cls.uses_aon:
+        scenario = resources.scenario
+        host = scenario.assigner.host
+        home = next(((r.pose.x, r.pose.y) for r in scenario.robots if r.id == host), None)
+        options.update(assigner=scenario.assigner, assigner_home=home)
+    return options
 
 
 def esd_trace_path(config: RunConfig) -> Path | None:

@@ -95,7 +95,7 @@ class Mission:
                 self.timelines[rid],
                 tie_break_rank=rank_of.__getitem__,
                 link_sensor=self.sensors[rid],
-                scenario=scenario,
+                resources=self.resources,
             )
             for rid in self.robot_ids
         }

@@ -1,0 +1,237 @@
+"""Queueing at one-lane passages, as one part of an executor: one direction at a time
+through a door or corridor too narrow for two robots to pass each other.
+
+A robot whose route enters a passage (its base's plan, asked once per passage and
+goal) stops ``queue_distance`` before the entry while a mate comes the other way:
+
+* the mate is inside the passage, heading towards the robot's side (driving, or
+  standing there: a leader holding for its followers); or
+* no mate inside goes the robot's way, and the mate is outside on the far side,
+  driving into the passage or standing before it with a goal (queued there itself),
+  nearer to it than the robot (equal: the team-wide rank decides, as right of way
+  does).
+
+Robots at both ends judge the same positions by the same rule, so one end goes first.
+A mate going the robot's way is followed through, and while one is inside the far side
+waits: a group crosses together.
+
+The queued robot waits beside the mouth, out of the way of the mates coming out
+(:meth:`PassageQueue.hold_point`), and drives on once no mate comes the other way, or
+once the mates coming have stood still for ``queue_timeout`` (then it does not queue at
+that passage again for as long: a mate stuck inside must not hold it for good). Mates
+coming through keep it waiting: driving in among them would jam the passage. Only poses
+heard in the last ``FRESH`` s count: who is in a passage is news.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Collection
+
+from mrcomm.agents.collision import Mate
+from mrcomm.world.geometry import Pose
+from mrcomm.world.passages import Passage, Passages
+
+Point = tuple[float, float]
+#: How far along its route a robot looks for the entry of a passage (m).
+ROUTE_LOOKAHEAD = 6.0
+#: A mate heading within this angle of a direction is going that way (cosine, 60°).
+HEADING_COS = 0.5
+#: Goals within this distance share one route answer (m).
+GOAL_QUANTUM = 0.5
+#: Where a queued robot waits: this far out from the passage's mouth, and this far to
+#: the side of its axis beyond the passage's half width (m): out of the way of the
+#: mates coming out, who would otherwise find the waiting robot in the mouth.
+HOLD_OUT = 1.0
+HOLD_SIDE = 0.8
+#: A mate's pose older than this (s) says nothing of who is in a passage now: poses
+#: come at 5 Hz, and one last heard in a door before the mate left range would hold
+#: the robot there until the time-out, every time.
+FRESH = 1.0
+
+
+class PassageQueue:
+    """One robot's queueing at the one-lane passages of its map."""
+
+    def __init__(
+        self,
+        passages: Passages,
+        queue_distance: float,
+        timeout: float,
+        moving_speed: float,
+        rank: Callable[[str], float],
+        robot: str,
+    ) -> None:
+        self.passages = passages
+        self.queue_distance = queue_distance
+        self.timeout = timeout
+        self.moving_speed = moving_speed
+        self._rank = rank
+        self.robot = robot
+        #: (passage, goal cell) -> where the route enters the passage (None: it does not).
+        self._entries: dict[tuple[int, int, int], Point | None] = {}
+        self._skip_until: dict[int, float] = {}
+        #: The passage queued for, and since when the mates coming through it have
+        #: stood still (the last time one moved); None while not queueing.
+        self.waiting: tuple[Passage, float] | None = None
+
+    def wait_for(
+        self,
+        pose: Pose,
+        goal: Point,
+        mates_near: Callable[[float, float, float], Collection[Mate]],
+        now: float,
+        plan: Callable[[float, float], tuple[Point, ...] | None],
+    ) -> tuple[Passage, Mate] | None:
+        """The passage ahead to queue at and the mate coming the other way, or None.
+        ``mates_near(x, y, reach)``: the known mates that may lie within ``reach``;
+        ``plan(x, y)``: the base's route to a goal."""
+        x, y = pose.x, pose.y
+        candidates = self.passages.near(x, y)
+        if not candidates or self.passages.at(x, y) is not None:
+            return None  # no passage near, or inside one already: go on through
+        for index in candidates:
+            if self._skip_until.get(index, -math.inf) > now:
+                continue
+            passage = self.passages.passages[index]
+            # Cheapest first: near the passage, then a mate coming, then the route.
+            if abs(passage.along(x, y)) - passage.half_length > self.queue_distance:
+                continue
+            if abs(passage.across(x, y)) - passage.half_width > self.queue_distance:
+                continue
+            mate = self._oncoming(passage, x, y, mates_near, now)
+            if mate is None:
+                continue
+            entry = self._entry(index, pose, goal, plan)
+            if entry is None or math.hypot(entry[0] - x, entry[1] - y) > self.queue_distance:
+                continue
+            self.waiting = (passage, now)
+            return passage, mate
+        return None
+
+    def hold_point(self, pose: Pose) -> Point:
+        """Where the queued robot waits: out of the passage's mouth on its side, to the
+        side of the axis it stands on (the base snaps it to free space)."""
+        assert self.waiting is not None
+        passage = self.waiting[0]
+        side = 1.0 if passage.along(pose.x, pose.y) >= 0 else -1.0
+        lateral = 1.0 if passage.across(pose.x, pose.y) >= 0 else -1.0
+        out = side * (passage.half_length + HOLD_OUT)
+        off = lateral * (passage.half_width + HOLD_SIDE)
+        return (
+            passage.cx + passage.ax * out - passage.ay * off,
+            passage.cy + passage.ay * out + passage.ax * off,
+        )
+
+    def still_waiting(
+        self, pose: Pose, mates_near: Callable[[float, float, float], Collection[Mate]], now: float
+    ) -> bool:
+        """Whether the queued robot keeps waiting: a mate still comes the other way, and
+        the mates coming have not stood still for ``timeout`` (a stream of mates coming
+        through keeps it waiting; driving in among them would jam the passage). Ends
+        the wait when it returns False."""
+        assert self.waiting is not None
+        passage, stalled_since = self.waiting
+        mate = self._oncoming(passage, pose.x, pose.y, mates_near, now)
+        if mate is not None and mate.v >= self.moving_speed:
+            self.waiting = (passage, now)  # they come: no time-out yet
+            return True
+        if mate is not None and now - stalled_since < self.timeout:
+            return True
+        if mate is not None:  # stuck for the time-out: drive on, and do not queue there
+            self._skip_until[passage.index] = now + self.timeout  # again for as long
+        self.waiting = None
+        return False
+
+    def _entry(
+        self,
+        index: int,
+        pose: Pose,
+        goal: Point,
+        plan: Callable[[float, float], tuple[Point, ...] | None],
+    ) -> Point | None:
+        """Where the robot's route to ``goal`` enters passage ``index`` within the look
+        ahead (planned once per passage and goal)."""
+        key = (index, round(goal[0] / GOAL_QUANTUM), round(goal[1] / GOAL_QUANTUM))
+        if key in self._entries:
+            return self._entries[key]
+        if len(self._entries) > 256:
+            self._entries.clear()  # goals long past
+        route = plan(*goal)
+        entry = None if route is None else self._first_inside(index, (pose.x, pose.y), route)
+        self._entries[key] = entry
+        return entry
+
+    def _first_inside(self, index: int, start: Point, route: tuple[Point, ...]) -> Point | None:
+        """The first point of the route (sampled every half cell) inside the passage."""
+        step = self.passages.resolution / 2
+        travelled = 0.0
+        ax, ay = start
+        for bx, by in route:
+            length = math.hypot(bx - ax, by - ay)
+            n = max(1, math.ceil(length / step))
+            for i in range(1, n + 1):
+                px, py = ax + (bx - ax) * i / n, ay + (by - ay) * i / n
+                if self.passages.at(px, py) == index:
+                    return px, py
+            travelled += length
+            if travelled > ROUTE_LOOKAHEAD:
+                return None
+            ax, ay = bx, by
+        return None
+
+    def _oncoming(
+        self,
+        passage: Passage,
+        x: float,
+        y: float,
+        mates_near: Callable[[float, float, float], Collection[Mate]],
+        now: float,
+    ) -> Mate | None:
+        """A mate coming through the passage towards the robot's side (at ``x, y``),
+        or, while no mate goes through it the robot's way, one about to enter it from
+        the far side before the robot."""
+        along = passage.along(x, y)
+        side = 1.0 if along >= 0 else -1.0
+        own_gap = abs(along) - passage.half_length  # how far before the passage
+        reach = passage.half_length + passage.half_width + self.queue_distance + 1.0
+        first: Mate | None = None  # the far side's, to enter before the robot
+        convoy = False  # a mate inside goes the robot's way
+        for mate in mates_near(passage.cx, passage.cy, reach):
+            if not now - mate.stamp <= FRESH:
+                continue  # old news (or none: a NaN stamp)
+            towards = (math.cos(mate.theta) * passage.ax + math.sin(mate.theta) * passage.ay) * side
+            if self.passages.at(mate.x, mate.y) == passage.index:
+                # Coming this way, driving or not: one holding inside (a leader waiting
+                # for its followers) blocks the lane as much as one driving through.
+                if towards > 0:
+                    return mate
+                convoy = True
+                continue
+            if first is None and self._enters_first(passage, side, own_gap, mate):
+                first = mate
+        # Behind a mate going its way the robot follows it through: the far side waits
+        # for them both. (Yielding to the far side then would split a group at the
+        # lane: its leader inside holding for the follower, the follower for the far
+        # side, the far side for the leader.)
+        return None if convoy else first
+
+    def _enters_first(self, passage: Passage, side: float, own_gap: float, mate: Mate) -> bool:
+        """Whether ``mate``, outside the passage, is on the far side about to enter it
+        before the robot: driving into it or standing before it with a goal (queued
+        there itself), nearer to it (equal: the team-wide rank decides)."""
+        if mate.goal_dist < 0 and mate.v < self.moving_speed:
+            return False  # standing without a goal: not coming through
+        mate_along = passage.along(mate.x, mate.y)
+        if mate_along * side >= 0:
+            return False  # on this side
+        towards = (math.cos(mate.theta) * passage.ax + math.sin(mate.theta) * passage.ay) * side
+        if mate.v >= self.moving_speed and towards < HEADING_COS:
+            return False  # driving, not into the passage
+        gap = abs(mate_along) - passage.half_length
+        if gap > self.queue_distance + 0.5:
+            return False
+        if abs(passage.across(mate.x, mate.y)) > passage.half_width + self.queue_distance:
+            return False
+        ahead = self._rank(mate.robot) < self._rank(self.robot)
+        return gap < own_gap or (gap == own_gap and ahead)
