@@ -17,10 +17,17 @@ from mrcomm.world.generate import make
 from mrcomm.world.generate.make import Request, make_scenario, parse_size
 from mrcomm.world.generate.maps import KINDS
 from mrcomm.world.generate.place import START_MODES, START_SPACING
+from mrcomm.world.passages import find_passages
 from mrcomm.world.scenario import load_scenario
 from tests.conftest import ROOT
 
-SMALL = {"office": (30, 20), "warehouse": (30, 24), "campus": (60, 50), "grid": (15, 12)}
+SMALL = {
+    "office": (30, 20),
+    "warehouse": (30, 24),
+    "campus": (60, 50),
+    "grid": (15, 12),
+    "corridor": (24, 8),
+}
 
 
 def digest(directory: Path) -> dict[str, str]:
@@ -39,6 +46,7 @@ def test_every_kind_and_start_loads_with_what_was_asked(
     assert len(scenario.robots) == 8 and len(scenario.tasks) == 12
     # Every generated scenario's robots plan on 0.2 m cells (its passages stay open).
     assert dict(scenario.robot_settings) == {"planner_resolution": 0.2}
+    assert scenario.one_lane_width == 1.3  # robots queue at doors and lanes narrower
     assert scenario.assigner.kind == "robot" and scenario.assigner.host == "robot_3"
     xs = [(r.pose.x, r.pose.y) for r in scenario.robots]
     gaps = [((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2) ** 0.5 for i, a in enumerate(xs)
@@ -158,3 +166,15 @@ def test_large_maps_repair_routes_and_the_bundled_ones_are_as_made() -> None:
     for name, repair in (("s2", False), ("s3", False), ("s4", False), ("campus1000", True)):
         settings = dict(load_scenario(bundled / name / f"{name}.yaml").robot_settings)
         assert settings.get("repair_horizon") == (REPAIR_HORIZON if repair else None), name
+
+
+def test_the_corridor_map_is_two_halls_joined_by_one_lane(tmp_path: Path) -> None:
+    request = Request("corridor", 24, 8, 4, 4, "scattered", "virtual", 1, "lane")
+    scenario = load_scenario(make_scenario(request, tmp_path / "lane"))
+    passages = find_passages(scenario.grid, scenario.one_lane_width, 2 * scenario.robot_radius)
+    assert len(passages) == 1
+    lane = passages.passages[0]
+    assert (lane.cx, lane.cy) == pytest.approx((12.0, 4.0), abs=0.05)
+    assert abs(lane.ax) == pytest.approx(1.0, abs=0.01)  # through it: east-west
+    assert lane.half_length == pytest.approx(3.9, abs=0.2)  # the 7.4 m lane and its mouths
+    assert lane.width == pytest.approx(1.0, abs=0.1)

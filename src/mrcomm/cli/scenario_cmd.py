@@ -1,6 +1,6 @@
 """``mrcomm scenario``: scenarios of any size.
 
-* ``mrcomm scenario make --map office|warehouse|campus|grid --size WxH --robots N
+* ``mrcomm scenario make --map office|warehouse|campus|grid|corridor --size WxH --robots N
   --tasks T --start clustered|scattered|depots --assigner base|virtual|robot_K --seed S
   --out DIR`` — a map (ROS map_server YAML + PGM), a scenario and a task file, every
   start and task reachable (checked by loading the result), the same files for the same
@@ -33,7 +33,7 @@ scenario_app = typer.Typer(
 def make(
     out: Annotated[Path, typer.Option(help="Output directory (absent or empty).")],
     map_kind: Annotated[
-        str, typer.Option("--map", help="office | warehouse | campus | grid.")
+        str, typer.Option("--map", help="office | warehouse | campus | grid | corridor.")
     ] = "office",
     size: Annotated[str, typer.Option(help="Map size WIDTHxHEIGHT in metres.")] = "60x40",
     robots: Annotated[int, typer.Option(help="Team size.")] = 10,
@@ -144,8 +144,17 @@ def show(
         f"{free:,.0f} m²; {len(sc.robots)} robots, {len(sc.tasks)} tasks, assigner "
         f"{sc.assigner.kind}{' on ' + sc.assigner.host if sc.assigner.host else ''}"
     )
+    passages = None
+    if sc.one_lane_width > 0:
+        from mrcomm.world.passages import find_passages
+
+        passages = find_passages(sc.grid, sc.one_lane_width, 2 * sc.robot_radius)
+        typer.echo(
+            f"{len(passages)} one-lane passages (doors and corridors narrower than "
+            f"{sc.one_lane_width:g} m): robots queue at them"
+        )
     if plot is not None:
-        _plot(sc, plot)
+        _plot(sc, plot, passages)
         typer.echo(f"figure {plot}")
 
 
@@ -165,7 +174,7 @@ def _scenario_file(path: Path) -> Path:
     return found[0]
 
 
-def _plot(sc: object, path: Path) -> None:
+def _plot(sc: object, path: Path, passages: object = None) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -187,6 +196,15 @@ def _plot(sc: object, path: Path) -> None:
                color="tab:red", label=f"{len(sc.tasks)} tasks")  # fmt: skip
     if sc.assigner.position is not None:
         ax.scatter(*sc.assigner.position, s=60, marker="^", color="tab:green", label="base")
+    if passages is not None:
+        from mrcomm.world.passages import Passages
+
+        assert isinstance(passages, Passages)
+        found = passages.passages
+        ax.quiver([p.cx for p in found], [p.cy for p in found], [p.ax for p in found],
+                  [p.ay for p in found], angles="xy", scale_units="xy", scale=0.8,
+                  color="tab:orange", pivot="middle", width=0.004,
+                  label=f"{len(found)} one-lane passages")  # fmt: skip
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_title(sc.name)

@@ -64,6 +64,10 @@ REPAIR_FROM_M2 = 40_000.0
 #: How far along its route (m) a robot's repairs rejoin it: five sensing ranges, past
 #: any mate it is planning round.
 REPAIR_HORIZON = 10.0
+#: Generated scenarios make doors and corridors narrower than this one-lane (m): the
+#: office's 0.9 m doors, the corridor map's 1 m lane, the campus's 1.2 m doors; not
+#: the 2 m corridors and 2.6 m aisles, where two robots pass each other.
+ONE_LANE_WIDTH = 1.3
 _SIZE = re.compile(r"^\s*([0-9]+(?:\.[0-9]+)?)\s*[xX]\s*([0-9]+(?:\.[0-9]+)?)\s*$")
 
 
@@ -254,7 +258,7 @@ def _write(
         directory / f"{name}_tasks.yaml",
         comment + yaml.safe_dump(task_list, sort_keys=False, default_flow_style=None),
     )
-    scenario = {
+    scenario: dict[str, Any] = {
         "name": name.upper() if re.match(r"^s[0-9]+$", name) else name,
         "description": (
             f"{request.kind.capitalize()} {request.width:g} x {request.height:g} m, "
@@ -273,6 +277,7 @@ def _write(
         "assigner": assigner_spec(request.assigner, request.robots, base),
     }
     scenario["robot"] = robot_section(request.width, request.height)
+    scenario["one_lane_width"] = ONE_LANE_WIDTH
     atomic_write_text(
         directory / f"{name}.yaml",
         comment + yaml.safe_dump(scenario, sort_keys=False, default_flow_style=None, width=100),

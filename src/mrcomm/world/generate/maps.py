@@ -9,7 +9,9 @@ map's origin, as :class:`~mrcomm.world.occupancy.OccupancyGrid` holds it).
   loading area along the south wall;
 * ``campus`` — open ground fenced in, with buildings of 12-30 m (0.3 m walls), each with
   two 1.2 m doors and an inner wall with a door;
-* ``grid`` — open floor with 0.6 m pillars every 3 m.
+* ``grid`` — open floor with 0.6 m pillars every 3 m;
+* ``corridor`` — two halls at either end (up to 8 m deep, the map's full height) joined
+  by a one-lane corridor 1 m wide: robots crossing it both ways must queue.
 
 Every plan is enclosed by a 0.3 m outer wall. Random choices come only from ``rng``.
 """
@@ -173,10 +175,22 @@ def grid(width: float, height: float, resolution: float, rng: np.random.Generato
     return plan.cells
 
 
+def corridor(width: float, height: float, resolution: float, rng: np.random.Generator) -> Occupancy:
+    plan = Plan(width, height, resolution)
+    plan.fill(0, 0, width, height)
+    hall = min(8.0, (width - 2 * WALL) / 3)
+    plan.fill(WALL, WALL, WALL + hall, height - WALL, False)
+    plan.fill(width - WALL - hall, WALL, width - WALL, height - WALL, False)
+    lane = 1.0
+    plan.fill(WALL + hall, height / 2 - lane / 2, width - WALL - hall, height / 2 + lane / 2, False)
+    return plan.cells
+
+
 #: Map kinds ``mrcomm scenario make --map`` draws, with their smallest side (m).
 KINDS: dict[str, tuple[Callable[..., Occupancy], float]] = {
     "office": (office, 12.0),
     "warehouse": (warehouse, 16.0),
     "campus": (campus, 30.0),
     "grid": (grid, 8.0),
+    "corridor": (corridor, 6.0),
 }
