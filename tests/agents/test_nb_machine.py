@@ -115,6 +115,21 @@ def test_an_idle_robot_in_a_mates_way_steps_aside(nb: Harness) -> None:
     assert [e.label for e in nb.timeline.events].count(L.MADE_WAY) == 1
 
 
+def test_a_mates_pose_heard_more_than_ten_seconds_ago_puts_no_robot_in_its_way(
+    nb: Harness,
+) -> None:
+    """An idle robot in a corner stepped aside every 0.4 s, to the time limit, for a
+    mate's pose 346 s old: each step aside failed, and the old pose still said "in the
+    way". A mate that close is heard several times a second."""
+    nb.assign([])
+    nb.step(times=110)  # 11 s on
+    behind = dict(v=0.3, goal_dist=5.0)
+    nb.hear(pose_of("robot_2", -1.0, 0.0, 0.0, stamp=nb.now - 10.5, seq=2, **behind))
+    assert nb.step(times=5) == "idle"
+    nb.hear(pose_of("robot_2", -1.0, 0.0, 0.0, stamp=nb.now - 0.2, seq=3, **behind))
+    assert nb.step() == "clearing"
+
+
 def test_a_task_given_while_making_way_is_planned_once_idle(nb: Harness) -> None:
     nb.assign([])
     assert nb.step() == "idle"
