@@ -653,3 +653,19 @@ def test_in_groups_a_robot_nobody_answers_does_its_own_work() -> None:
         assert h.agent.state == expected
         if group_size == 2:
             assert h.agent.leader == "robot_1" and h.base.goal == (10.0, 0.0)
+
+
+def test_in_groups_an_idle_robot_joins_no_round() -> None:
+    """robot_1 has done its work: in one group (the original) it joins a newer round with
+    utility 0 and would follow; in groups it stays where it is. At the end of an S2
+    mission every idle robot in earshot followed the one robot with work left, and that
+    leader, with seven followers, crawled to the time limit."""
+    for group_size, joins_round in ((2, False), (3, True)):
+        h = _grouped(group_size)
+        h.assign([], team=TEAM)
+        assert h.step() == "na_idle"
+        deliver(h, TOPIC_UTILITY, utility("robot_2", 9.0))
+        assert (h.agent.state == "assigning") is joins_round, h.agent.state
+        h.step()
+        assert bool(h.bus.published(TOPIC_UTILITY)) is joins_round  # answered, or not
+        assert (h.agent.state == "na_idle") is not joins_round

@@ -9,7 +9,7 @@ A hierarchical state machine: ``na`` is NB plus a network trigger; ``leader`` an
   mate's last known pose) crosses the warning threshold stops, cancels its goal,
   publishes DISCONNECT_ROLE and opens a new role-assignment *round*. Robots that hear a
   newer round join it; an idle robot joins with utility 0 (so it follows) but never
-  opens one.
+  opens one (in groups it joins none: it stays where it is).
 * Role assignment: every member publishes its utility at 4 Hz until it has every
   member's; the highest utility leads (ties by the team-wide random order) — in a
   round of more than ``group_size`` members the best ``ceil(n/group_size)`` lead and
@@ -253,8 +253,9 @@ class LeaderFollowerExecutor(AonStatuses):
             sender, top = message.sender, self.STATE_TABLE[self.state].top
             mine = partial(self._follows_me, sender)
             if self._in_groups() and not joins(
-                top, sender, self.leader, self.team_view.leader(sender), mine
-            ):
+                top, sender, self.leader, self.team_view.leader(sender), mine,
+                idle=self.state == NA_IDLE,
+            ):  # fmt: skip
                 self.role_round.pass_by(message.round)
                 return False
             self._open_round(message.round)

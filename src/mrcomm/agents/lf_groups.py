@@ -53,6 +53,7 @@ def joins(
     leader: str | None,
     senders_leader: str | None,
     follows_me: Callable[[], bool],
+    idle: bool = False,
 ) -> bool:
     """Whether a member in top state ``top`` joins a newer round ``sender`` opened or is
     in. A group at work is not pulled apart by another group's round: a leader joins only
@@ -60,7 +61,12 @@ def joins(
     that follows the same leader; a robot in no group (NA, assigning, regrouping,
     reporting) joins any. In a team of 100 every link warning of a robot without a role
     opened a round that spread to everyone in earshot: the team spent three quarters of
-    its time assigning roles."""
+    its time assigning roles. An ``idle`` robot (its work done and reported) joins none:
+    it would follow, and at the end of a mission every idle robot in earshot followed the
+    one robot with work left (a leader with seven followers crawled to the time limit);
+    it stays where it is, making way."""
+    if idle:
+        return False
     if top == "leader":
         return follows_me()
     if top == "follower":
