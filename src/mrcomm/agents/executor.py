@@ -75,11 +75,6 @@ NB_TRANSITIONS: list[dict[str, Any]] = [
     {"trigger": "new_tasks", "source": "idle", "dest": "unassigned"},
 ]
 
-#: A mate's pose older than this (s) puts no robot in its way. A mate within the make-way
-#: radius is heard several times a second; one last heard longer ago has moved on (an
-#: idle robot stepped aside every 0.4 s, to the time limit, for a pose 346 s old).
-MAKE_WAY_MAX_AGE = 10.0
-
 #: Timeline activity recorded while in each state.
 _ACTIVITY_OF_STATE = {
     "navigating": L.MOVING,
@@ -337,11 +332,10 @@ class TaskExecutor:
         that has a goal: ahead of it, or next to it while it is stuck. ``pose``: the
         robot's, when the caller has read it already (a loop over mates reads it once)."""
         params = self.params
-        if self._now - mate.stamp > MAKE_WAY_MAX_AGE:
-            return False  # not heard for that long that close: it has moved on
         if pose is None:
             pose = self.base.pose
-        return in_way(pose, mate, params.make_way_radius, params.collision.moving_speed)
+        speed = params.collision.moving_speed
+        return in_way(pose, mate, params.make_way_radius, speed, self._now)
 
     def step_aside(self, mate: Mate) -> None:
         """Step aside of the mate's heading (left, right, then straight away from it);

@@ -13,6 +13,10 @@ from mrcomm.world.geometry import Pose, wrap_angle
 
 #: A point lies ahead of a robot within this angle of its heading.
 AHEAD = math.radians(75)
+#: A mate's pose older than this (s) puts no robot in its way. A mate within the make-way
+#: radius is heard several times a second; one last heard longer ago has moved on (an
+#: idle robot stepped aside every 0.4 s, to the time limit, for a pose 346 s old).
+MAX_AGE = 10.0
 
 
 def ahead_of(pose: Pose, mate: Mate) -> bool:
@@ -21,10 +25,11 @@ def ahead_of(pose: Pose, mate: Mate) -> bool:
     return abs(wrap_angle(bearing - mate.theta)) < AHEAD
 
 
-def in_way(pose: Pose, mate: Mate, radius: float, moving_speed: float) -> bool:
+def in_way(pose: Pose, mate: Mate, radius: float, moving_speed: float, now: float) -> bool:
     """A robot at ``pose`` is within ``radius`` of a mate that has a goal: ahead of it,
-    or next to it while the mate stands (slower than ``moving_speed``)."""
-    if mate.goal_dist < 0:
+    or next to it while the mate stands (slower than ``moving_speed``), by a pose of
+    the mate's heard within :data:`MAX_AGE` of ``now``."""
+    if mate.goal_dist < 0 or now - mate.stamp > MAX_AGE:
         return False
     if math.hypot(pose.x - mate.x, pose.y - mate.y) > radius:
         return False
