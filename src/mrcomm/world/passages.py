@@ -100,7 +100,8 @@ class Passages:
 def narrow_cells(grid: OccupancyGrid, max_width: float) -> NDArray[np.bool_]:
     """Free cells between two walls closer together than ``max_width`` metres: the
     nearest wall on one side plus the first wall straight the other way add up to
-    less. Inside a door or a narrow corridor they do; beside a wall of a room, or in
+    less (distances between cell centres: one cell more than the gap between the
+    walls' faces). Inside a door or a narrow corridor they do; beside a wall of a room, or in
     its corner, the way back across the room is long. Independent of the walls'
     orientation and thickness."""
     free = ~grid.occupied

@@ -65,8 +65,9 @@ REPAIR_FROM_M2 = 40_000.0
 #: any mate it is planning round.
 REPAIR_HORIZON = 10.0
 #: Generated scenarios make doors and corridors narrower than this one-lane (m): the
-#: office's 0.9 m doors, the corridor map's 1 m lane, the campus's 1.2 m doors; not
-#: the 2 m corridors and 2.6 m aisles, where two robots pass each other.
+#: office's 0.9 m doors, the corridor map's 1 m lane, the campus's 0.9 m inner doors;
+#: not the 2 m corridors and 2.6 m aisles, where two robots pass each other, nor the
+#: campus's 1.2 m doors (measured between wall cell centres, 1.3 on its 0.1 m cells).
 ONE_LANE_WIDTH = 1.3
 _SIZE = re.compile(r"^\s*([0-9]+(?:\.[0-9]+)?)\s*[xX]\s*([0-9]+(?:\.[0-9]+)?)\s*$")
 
