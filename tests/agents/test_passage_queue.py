@@ -163,6 +163,27 @@ def test_the_nb_executor_queues_before_the_door_and_drives_on_once_clear(
     assert h.base.goal == GOAL
 
 
+def test_a_wait_cut_short_is_over_and_a_later_near_collision_pauses_as_usual(
+    door: Passages,
+) -> None:
+    """Queued, the robot is taken out of ``avoiding`` by something else (LF: a role
+    round). The wait is over: a near collision later is judged by collision avoidance
+    (a pause of at least ``collision_pause``), not ended at once as a finished wait."""
+    h = Harness(TaskExecutor, passages=door)
+    h.base.pose = Pose(3.7, 3.0, EAST)
+    h.assign([task("t", *GOAL)])
+    h.step()
+    h.hear(pose_of("robot_2", 5.07, 3.0, WEST, stamp=h.now, v=0.4, goal_dist=4.0))
+    assert h.step() == "avoiding" and h.agent.queue is not None
+    assert h.agent.queue.waiting is not None
+    h.agent.trigger("resume")  # taken out of the wait by something else
+    assert h.agent.queue.waiting is None
+    h.base.pose = Pose(1.0, 1.0, EAST)  # far from the door now
+    h.hear(pose_of("robot_3", 1.3, 1.0, WEST, stamp=h.now, seq=2, v=0.3, goal_dist=2.0))
+    assert h.step() == "avoiding"  # a near collision: within the event horizon
+    assert h.step(times=5) == "avoiding"  # paused, not let go as a wait with nobody coming
+
+
 def test_without_passages_the_executor_does_not_queue() -> None:
     h = Harness(TaskExecutor)
     h.base.pose = Pose(3.7, 3.0, EAST)

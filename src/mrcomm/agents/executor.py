@@ -574,6 +574,8 @@ class TaskExecutor:
 
     def _after_state_change(self) -> None:
         self._state_since = self._now
+        if self.queue is not None and self.leaf() != "avoiding":
+            self.queue.waiting = None  # a wait at a passage is over, however it ended
         activity = self.activity_of(self.state)
         if self.leaf() == "navigating" and not self._moved_once:
             activity = L.INIT  # assignment received, not yet moving
