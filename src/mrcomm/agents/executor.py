@@ -301,10 +301,7 @@ class TaskExecutor:
         """The mates of :meth:`known_mates` that may lie within ``reach`` of ``pose``
         along both axes, in the same order (:meth:`TeamView.near`: without a loop over
         the whole team when it is large); the caller tests each one."""
-        params = self.params
-        return self.team_view.near(
-            pose.x, pose.y, reach, self._now, params.mate_max_age, params.mate_extrapolation
-        )
+        return self._mates_near_point(pose.x, pose.y, reach)
 
     def _plan_new_tasks(self) -> None:
         self._new_tasks = False
@@ -400,7 +397,11 @@ class TaskExecutor:
         self.trigger("go")
 
     def _mates_near_point(self, x: float, y: float, reach: float) -> Collection[Mate]:
-        return self._mates_near(Pose(x, y, 0.0), reach)
+        """:meth:`_mates_near` of a point (the passage queue asks about its passages)."""
+        params = self.params
+        return self.team_view.near(
+            x, y, reach, self._now, params.mate_max_age, params.mate_extrapolation
+        )
 
     def _queued(self, pose: Pose) -> bool:
         """Whether the robot stops to queue at a one-lane passage ahead (then it is)."""

@@ -208,7 +208,7 @@ class PassageQueue:
                     return mate
                 convoy = True
                 continue
-            if first is None and self._enters_first(passage, side, own_gap, mate):
+            if first is None and self._enters_first(passage, side, own_gap, mate, towards):
                 first = mate
         # Behind a mate going its way the robot follows it through: the far side waits
         # for them both. (Yielding to the far side then would split a group at the
@@ -216,16 +216,18 @@ class PassageQueue:
         # side, the far side for the leader.)
         return None if convoy else first
 
-    def _enters_first(self, passage: Passage, side: float, own_gap: float, mate: Mate) -> bool:
+    def _enters_first(
+        self, passage: Passage, side: float, own_gap: float, mate: Mate, towards: float
+    ) -> bool:
         """Whether ``mate``, outside the passage, is on the far side about to enter it
         before the robot: driving into it or standing before it with a goal (queued
-        there itself), nearer to it (equal: the team-wide rank decides)."""
+        there itself), nearer to it (equal: the team-wide rank decides). ``towards``: how
+        much its heading points to the robot's side along the axis (a cosine)."""
         if mate.goal_dist < 0 and mate.v < self.moving_speed:
             return False  # standing without a goal: not coming through
         mate_along = passage.along(mate.x, mate.y)
         if mate_along * side >= 0:
             return False  # on this side
-        towards = (math.cos(mate.theta) * passage.ax + math.sin(mate.theta) * passage.ay) * side
         if mate.v >= self.moving_speed and towards < HEADING_COS:
             return False  # driving, not into the passage
         gap = abs(mate_along) - passage.half_length

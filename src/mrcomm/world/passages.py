@@ -64,7 +64,6 @@ class Passages:
         reach: float,
     ) -> None:
         self.passages = passages
-        self.reach = reach
         self._origin = grid.origin
         self.resolution = grid.resolution
         self._width = grid.width
