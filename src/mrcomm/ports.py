@@ -207,6 +207,13 @@ class Base(Protocol):
         the base cannot tell."""
         ...
 
+    @property
+    def route(self) -> tuple[tuple[float, float], ...]:
+        """The waypoints still ahead on the route being driven, ending at the current
+        goal (what Nav2 publishes on ``/plan``); empty when not driving one or the base
+        cannot tell. Costs no search, unlike :meth:`make_plan`."""
+        ...
+
 
 class LinkSensor(Protocol):
     """How an agent judges its link to a team mate (SLT distance, SSD predicted RSSI,

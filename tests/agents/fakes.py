@@ -26,6 +26,7 @@ class FakeBase:
         self.cancels = 0
         self.speed = 0.0
         self.odometry_distance = 0.0
+        self.route: tuple[tuple[float, float], ...] = ()  # the route driven: untold
 
     def navigate_to(self, x: float, y: float) -> None:
         self.goal = (x, y)

@@ -35,11 +35,17 @@ def mate(
 
 
 class Plans:
-    """The base's route: a straight line to the goal (counted)."""
+    """A base that plans a straight line to the goal (counted) and drives ``route``."""
 
-    def __init__(self, start: tuple[float, float]) -> None:
+    def __init__(
+        self, start: tuple[float, float], route: tuple[tuple[float, float], ...] = ()
+    ) -> None:
         self.start = start
+        self.route = route
         self.calls = 0
+
+    def make_plan(self, x: float, y: float) -> tuple[tuple[float, float], ...]:
+        return self(x, y)
 
     def __call__(self, x: float, y: float) -> tuple[tuple[float, float], ...]:
         self.calls += 1
@@ -82,6 +88,24 @@ def test_waits_only_near_the_entry_and_only_when_its_route_goes_through(
     for _ in range(3):  # its goal lies in its own room: the route does not enter
         assert q.wait_for(pose, (3.0, 1.0), lambda *_: coming, 0.0, plans) is None
     assert plans.calls == 1  # planned once per passage and goal
+
+
+def test_the_route_being_driven_to_the_goal_is_asked_before_any_plan(door: Passages) -> None:
+    coming = [mate("robot_2", 5.07, WEST)]
+    pose = Pose(3.7, 3.0, EAST)
+    # driving to the goal along a route that turns away before the door: no wait, and
+    # no search (the straight plan would enter the door)
+    away = Plans((3.7, 3.0), route=((3.7, 1.0), (4.0, 1.0), GOAL))
+    assert queue_of(door).wait_for(pose, GOAL, lambda *_: coming, 0.0, away) is None
+    assert away.calls == 0
+    # driving through the door: waits, still without a search
+    through = Plans((3.7, 3.0), route=((5.0, 3.0), GOAL))
+    found = queue_of(door).wait_for(pose, GOAL, lambda *_: coming, 0.0, through)
+    assert found is not None and found[1].robot == "robot_2" and through.calls == 0
+    # the route being driven goes elsewhere (an older goal): the base plans
+    elsewhere = Plans((3.7, 3.0), route=((3.7, 1.0), (3.0, 1.0)))
+    found = queue_of(door).wait_for(pose, GOAL, lambda *_: coming, 0.0, elsewhere)
+    assert found is not None and elsewhere.calls == 1
 
 
 def test_the_robot_waits_beside_the_mouth_on_its_own_side(door: Passages) -> None:

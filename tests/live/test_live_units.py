@@ -58,6 +58,7 @@ def test_remote_base_reports_the_latest_command_until_the_world_acknowledges_it(
     base.cancel()
     assert sent[-1].kind == "cancel" and base.status is NavStatus.IDLE
     assert base.make_plan(1.0, 1.0) is None  # no planner: cannot tell
+    assert base.route == ()  # the world does not send the route its base drives
 
 
 def test_remote_base_plans_on_its_own_map(s1_resources: Any) -> None:

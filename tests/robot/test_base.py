@@ -104,6 +104,22 @@ def test_cancel_brakes_to_a_stop_and_goes_idle() -> None:
     assert base.pose == pose
 
 
+def test_route_is_the_plan_still_ahead_ending_at_the_goal() -> None:
+    base = make_base(two_rooms(), (1.0, 4.2, 0.0))
+    assert base.route == ()
+    base.navigate_to(9.0, 4.2)  # through the door at (5, 2.5): corners on the way
+    first = base.route
+    assert first[-1] == base.goal and first == base.path[1:]
+    run([base], 12.0, stop_when_done=False)  # through the door
+    later = base.route
+    # waypoints reached drop off the front; what is ahead stays the plan's own tail
+    assert later[-1] == base.goal and len(later) < len(first)
+    assert later == base.path[len(base.path) - len(later) :]
+    assert math.dist(later[0], base.goal) < math.dist(first[0], base.goal)
+    base.cancel()
+    assert base.route == ()
+
+
 def test_new_goal_replaces_current_one() -> None:
     base = make_base(two_rooms(), (1.0, 2.5, 0.0))
     base.navigate_to(9.0, 2.5)

@@ -409,9 +409,7 @@ class TaskExecutor:
         target = self.navigation_target()
         if target is None:
             return False
-        queued = self.queue.wait_for(
-            pose, target, self._mates_near_point, self._now, self.base.make_plan
-        )
+        queued = self.queue.wait_for(pose, target, self._mates_near_point, self._now, self.base)
         if queued is None:
             return False
         passage, mate = queued

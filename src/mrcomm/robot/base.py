@@ -242,6 +242,12 @@ class SimBase:
         return self._follower.waypoints if self._follower is not None else ()
 
     @property
+    def route(self) -> tuple[Point, ...]:
+        """Base port: the waypoints of the current plan still ahead (empty when not
+        following one)."""
+        return self._follower.remaining if self._follower is not None else ()
+
+    @property
     def waiting(self) -> bool:
         """True while holding for a team mate that blocks the path with no way round."""
         return self._waiting

@@ -67,6 +67,11 @@ class PathFollower:
         return tuple(self._pts)
 
     @property
+    def remaining(self) -> tuple[Point, ...]:
+        """The waypoints not yet reached, the goal last."""
+        return tuple(self._pts[self.seg :])
+
+    @property
     def goal(self) -> Point:
         return self._pts[-1]
 
