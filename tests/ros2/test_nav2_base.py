@@ -108,6 +108,29 @@ def test_cancel_before_the_goal_is_accepted(agent: Agent) -> None:
     assert sim.status is NavStatus.IDLE
 
 
+def test_route_is_the_reported_plan_ahead_of_the_robot(agent: Agent) -> None:
+    base, sim = agent.base, agent.world.bases["robot_1"]
+    assert base.route == ()
+    base.navigate_to(22.2, 13.8)  # to the conference room: seven corners on the way
+    agent.world.run_until(lambda: len(base.route) > 0, 300, agent.spin, "a plan")
+    first = base.route
+    # The server's plan is the simulated base's route from its pose: the agent has it
+    # from the segment the robot is on, the goal last.
+    assert first[-1] == sim.goal and first == sim.path[len(sim.path) - len(first) :]
+    agent.world.run_until(lambda: sim.pose.distance_to(*first[0]) < 0.3, 300, agent.spin, "")
+    for _ in range(25):  # a plan published since, from further on
+        agent.world.step()
+        agent.spin()
+    later = base.route
+    assert later[-1] == sim.goal and len(later) < len(first)
+    base.cancel()
+    assert base.route == ()  # no goal, no route
+    for _ in range(15):  # plans of the cancelled goal still arriving change nothing
+        agent.world.step()
+        agent.spin()
+        assert base.route == ()
+
+
 def test_unreachable_goal_aborts(agent: Agent) -> None:
     agent.base.navigate_to(-100.0, -100.0)
     # Steps follow pose messages, not the goal's round trip over DDS: allow as many as

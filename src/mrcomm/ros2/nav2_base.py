@@ -8,7 +8,11 @@
 * ``pose`` is the latest ``amcl_pose``; ``odometry_distance`` the running sum of
   ``‖Δposition‖`` of ``odom``; ``speed`` its ``twist.linear.x``;
 * ``make_plan`` plans on the robot's copy of the scenario's map with MRComm's planner
-  (as RemoteBase does), from the latest pose (:class:`~mrcomm.robot.reported.ReportedBase`).
+  (as RemoteBase does), from the latest pose (:class:`~mrcomm.robot.reported.ReportedBase`);
+* ``route`` is the part ahead of the latest ``plan`` (``nav_msgs/Path``, what Nav2's
+  planner server publishes each time it plans) received since the current goal was
+  sent, while that goal is active (a plan for the goal before may still arrive: it
+  ends at that goal, which tells a caller comparing ends).
 
 Every ROS call happens on the :class:`~mrcomm.ros2.runtime.RosThread`; the methods of
 the port never block. What arrives from ROS is kept under a lock and taken by
@@ -50,7 +54,7 @@ class Nav2Base(ReportedBase):
     ) -> None:
         from geometry_msgs.msg import PoseWithCovarianceStamped
         from nav2_msgs.action import NavigateToPose
-        from nav_msgs.msg import Odometry
+        from nav_msgs.msg import Odometry, Path
         from rclpy.action import ActionClient
 
         super().__init__(start, planner)
@@ -66,12 +70,14 @@ class Nav2Base(ReportedBase):
             PoseWithCovarianceStamped, names.name(names.pose_topic), self._on_pose, qos
         )
         node.create_subscription(Odometry, names.name(names.odom_topic), self._on_odom, qos)
+        node.create_subscription(Path, names.name(names.plan_topic), self._on_plan, qos)
         self._lock = threading.Lock()
         # Written on the ROS thread, under the lock:
         self._latest_pose = start
         self._latest_odometry = 0.0
         self._latest_speed = 0.0
         self._last_odom_xy: Point | None = None
+        self._latest_plan: tuple[Point, ...] = ()
         self._goal_status: dict[int, NavStatus] = {}  # goal token -> outcome
         self._cancel_wanted: set[int] = set()  # goal tokens the agent cancelled
         # The agent thread's view (pose, odometer, speed: ReportedBase's), taken by sync():
@@ -92,6 +98,7 @@ class Nav2Base(ReportedBase):
         token = self._token
         self._status = NavStatus.ACTIVE
         self.goals_sent += 1
+        self._forget_plan()  # the one reported was for the goal before
         goal = self._action_type.Goal()
         goal.pose.header.frame_id = self.names.frame
         goal.pose.header.stamp = self._ros.node.get_clock().now().to_msg()
@@ -107,6 +114,7 @@ class Nav2Base(ReportedBase):
         token = self._token
         self._token += 1  # whatever the cancelled goal reports is not ours any more
         self._status = NavStatus.IDLE
+        self._forget_plan()
         if token:
             with self._lock:
                 self._cancel_wanted.add(token)
@@ -123,10 +131,18 @@ class Nav2Base(ReportedBase):
             self._pose = self._latest_pose
             self._odometry = self._latest_odometry
             self._speed = self._latest_speed
+            self._plan = self._latest_plan
             outcome = self._goal_status.pop(self._token, None)
             self._goal_status.clear()  # older goals' outcomes are no longer wanted
         if outcome is not None and self._status is NavStatus.ACTIVE:
             self._status = outcome
+        if self._status is not NavStatus.ACTIVE:
+            self._plan = ()  # no route is being driven
+
+    def _forget_plan(self) -> None:
+        with self._lock:
+            self._latest_plan = ()
+        self._plan = ()
 
     def take(self, state: object = None) -> None:
         """A clock tick (its base state, if any, is the world's: the robot reports over
@@ -224,6 +240,11 @@ class Nav2Base(ReportedBase):
             self._latest_pose = pose
         self.pose_stamp = seconds_of(message.header.stamp)
         self.pose_messages += 1
+
+    def _on_plan(self, message: Any) -> None:
+        plan = tuple((p.pose.position.x, p.pose.position.y) for p in message.poses)
+        with self._lock:
+            self._latest_plan = plan
 
     def _on_odom(self, message: Any) -> None:
         position = message.pose.pose.position

@@ -13,6 +13,9 @@ Per robot, in its namespace (``/<robot id>`` by default):
   estimate, every tick;
 * ``odom`` (``nav_msgs/Odometry``): a pose in the ``odom`` frame dead-reckoned from the
   base's odometer (its path length is the odometer's distance) and the forward speed;
+* ``plan`` (``nav_msgs/Path``): the route the base drives, from its pose, when a goal
+  starts and then once a second while it is active (Nav2's default navigator plans
+  again once a second and its planner server publishes each plan);
 
 and ``/clock`` carries the mission time (stamps are mission time, as a simulator with
 ``use_sim_time`` gives them).
@@ -34,6 +37,7 @@ from mrcomm.ports import Base, NavStatus
 from mrcomm.ros2.runtime import Nav2Names, RosThread, publisher_qos, set_seconds, set_yaw
 
 FEEDBACK_EVERY = 5  # ticks between feedback messages of an active goal
+PLAN_PERIOD = 1.0  # mission s between the plans published for an active goal
 #: What an aborted goal's result says (Nav2's own error codes and messages).
 ABORTED_MESSAGE = "the robot could not reach the goal (no path, or stuck)"
 PREEMPTED_MESSAGE = "preempted by a new goal"
@@ -47,6 +51,7 @@ class _Goal:
     y: float
     future: Any
     started: float = 0.0
+    planned: float = -float("inf")  # when its plan was last published
     done: bool = False
     outcome: tuple[str, int, str] = field(default=("", 0, ""))
 
@@ -64,9 +69,9 @@ class Nav2Server:
     def __init__(
         self, robots: Sequence[str], frame: str = "map", domain_id: int | None = None
     ) -> None:
-        from geometry_msgs.msg import PoseWithCovarianceStamped
+        from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
         from nav2_msgs.action import NavigateToPose
-        from nav_msgs.msg import Odometry
+        from nav_msgs.msg import Odometry, Path
         from rclpy.action import ActionServer
         from rosgraph_msgs.msg import Clock
 
@@ -75,13 +80,16 @@ class Nav2Server:
         node = self.ros.node
         self._action_type = NavigateToPose
         self._pose_type = PoseWithCovarianceStamped
+        self._pose_stamped_type = PoseStamped
         self._odom_type = Odometry
+        self._path_type = Path
         self._clock_type = Clock
         qos = publisher_qos()
         self.names = {r: Nav2Names.of(r, frame=frame) for r in robots}
         self._servers = []
         self._pose_pub: dict[str, Any] = {}
         self._odom_pub: dict[str, Any] = {}
+        self._plan_pub: dict[str, Any] = {}
         for robot, names in self.names.items():
             self._servers.append(
                 ActionServer(
@@ -99,6 +107,7 @@ class Nav2Server:
             self._odom_pub[robot] = node.create_publisher(
                 Odometry, names.name(names.odom_topic), qos
             )
+            self._plan_pub[robot] = node.create_publisher(Path, names.name(names.plan_topic), qos)
         self._clock_pub = node.create_publisher(Clock, "/clock", qos)
         #: (kind, goal) from the ROS thread to the world's, in arrival order.
         self._ops: deque[tuple[str, _Goal]] = deque()
@@ -150,10 +159,15 @@ class Nav2Server:
             status = base.status
             if status is NavStatus.SUCCEEDED:
                 self._finish(goal, "succeeded", "")
-            elif status is not NavStatus.ACTIVE:
+                continue
+            if status is not NavStatus.ACTIVE:
                 self._finish(goal, "aborted", ABORTED_MESSAGE)
-            elif feedback_due:
+                continue
+            if feedback_due:
                 feedbacks.append((goal.handle, self._feedback(now, goal, base)))
+            if now - goal.planned >= PLAN_PERIOD - 1e-9 and base.route:
+                goal.planned = now
+                messages.append((self._plan_pub[robot], self._plan_message(now, pose, base)))
         self.ros.call_soon(lambda: _send(messages, feedbacks))
 
     def summary(self) -> dict[str, object]:
@@ -191,6 +205,18 @@ class Nav2Server:
         message.pose.pose.position.y = odom.y
         set_yaw(message.pose.pose.orientation, float(theta))
         message.twist.twist.linear.x = float(base.speed)
+        return message
+
+    def _plan_message(self, now: float, pose: Any, base: Base) -> Any:
+        message = self._path_type()
+        message.header.frame_id = self.frame
+        set_seconds(message.header.stamp, now)
+        for x, y in ((pose.x, pose.y), *base.route):
+            stamped = self._pose_stamped_type()
+            stamped.header = message.header
+            stamped.pose.position.x = float(x)
+            stamped.pose.position.y = float(y)
+            message.poses.append(stamped)
         return message
 
     def _feedback(self, now: float, goal: _Goal, base: Base) -> Any:

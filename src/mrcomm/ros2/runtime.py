@@ -56,13 +56,16 @@ def need_ros2(option: str) -> None:
 @dataclass(frozen=True)
 class Nav2Names:
     """One robot's Nav2 interfaces: ``<namespace>/navigate_to_pose`` (action),
-    ``<namespace>/amcl_pose`` and ``<namespace>/odom`` (topics), poses in ``frame``."""
+    ``<namespace>/amcl_pose``, ``<namespace>/odom`` and ``<namespace>/plan`` (topics),
+    poses in ``frame``."""
 
     namespace: str
     frame: str = "map"
     action: str = "navigate_to_pose"
     pose_topic: str = "amcl_pose"
     odom_topic: str = "odom"
+    #: The global plan Nav2's planner server publishes (``nav_msgs/Path``).
+    plan_topic: str = "plan"
     #: Reliability of the agent's subscriptions. ``best_effort`` matches any publisher
     #: (AMCL publishes reliable, many robots' odometry best effort); ``reliable``
     #: refuses best-effort publishers.
