@@ -162,18 +162,20 @@ class PassageQueue:
         base: Navigation,
     ) -> Point | None:
         """Where the robot's route to ``goal`` enters passage ``index`` within the look
-        ahead (asked once per passage and goal): the route the base drives when it
-        drives to ``goal``, else its plan (a search of the whole route: on a 300 m map
-        ~30 ms, which the route being driven costs nothing)."""
+        ahead: the route the base drives when it drives to ``goal`` (as it is now: a
+        detour round a mate may come and go), else its plan (a search of the whole
+        route, ~30 ms on a 300 m map: asked once per passage and goal)."""
+        start = (pose.x, pose.y)
+        route = base.route
+        if route and math.dist(route[-1], goal) <= GOAL_QUANTUM:
+            return self._first_inside(index, start, route)
         key = (index, round(goal[0] / GOAL_QUANTUM), round(goal[1] / GOAL_QUANTUM))
         if key in self._entries:
             return self._entries[key]
         if len(self._entries) > 256:
             self._entries.clear()  # goals long past
-        route: tuple[Point, ...] | None = base.route
-        if not route or math.dist(route[-1], goal) > GOAL_QUANTUM:
-            route = base.make_plan(*goal)
-        entry = None if route is None else self._first_inside(index, (pose.x, pose.y), route)
+        plan = base.make_plan(*goal)
+        entry = None if plan is None else self._first_inside(index, start, plan)
         self._entries[key] = entry
         return entry
 
