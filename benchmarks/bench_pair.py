@@ -32,7 +32,9 @@ def main() -> None:
     parser.add_argument("first", type=Path, help="a source tree (e.g. a git worktree)")
     parser.add_argument("second", type=Path, help="another source tree")
     parser.add_argument("--scenario", choices=sorted(SCENARIOS), default="s4")
-    parser.add_argument("--sim-time", type=float, default=60.0)
+    parser.add_argument(
+        "--sim-time", type=float, default=60.0, help="0: each mission to its end or limit"
+    )
     parser.add_argument("--rounds", type=int, default=4)
     args = parser.parse_args()
     if (os.cpu_count() or 1) < 2:
@@ -53,7 +55,10 @@ def main() -> None:
         rounds.append((ra["cpu"], rb["cpu"]))
         print(
             f"round {k + 1}: CPU s {ra['cpu']:.2f} / {rb['cpu']:.2f}, "
-            f"wall s {ra['wall']:.2f} / {rb['wall']:.2f}",
+            f"wall s {ra['wall']:.2f} / {rb['wall']:.2f}, "
+            f"simulated s {ra['sim']:.1f} / {rb['sim']:.1f}, "
+            f"real-time factor {ra['sim'] / ra['wall']:.3f} / {rb['sim'] / rb['wall']:.3f}, "
+            f"peak MB {ra['peak_mb']:.0f} / {rb['peak_mb']:.0f}",
             flush=True,
         )
     ratio = statistics.median(b / a for a, b in rounds)
