@@ -28,9 +28,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Collection
-from typing import Protocol
 
 from mrcomm.agents.collision import Mate
+from mrcomm.ports import Base
 from mrcomm.world.geometry import Pose
 from mrcomm.world.passages import Passage, Passages
 
@@ -50,15 +50,6 @@ HOLD_SIDE = 0.8
 #: come at 5 Hz, and one last heard in a door before the mate left range would hold
 #: the robot there until the time-out, every time.
 FRESH = 1.0
-
-
-class Navigation(Protocol):
-    """What the queue asks of the robot's base (the Base port's part it uses)."""
-
-    @property
-    def route(self) -> tuple[Point, ...]: ...
-
-    def make_plan(self, x: float, y: float) -> tuple[Point, ...] | None: ...
 
 
 class PassageQueue:
@@ -92,7 +83,7 @@ class PassageQueue:
         goal: Point,
         mates_near: Callable[[float, float, float], Collection[Mate]],
         now: float,
-        base: Navigation,
+        base: Base,
     ) -> tuple[Passage, Mate] | None:
         """The passage ahead to queue at and the mate coming the other way, or None.
         ``mates_near(x, y, reach)``: the known mates that may lie within ``reach``;
@@ -159,7 +150,7 @@ class PassageQueue:
         index: int,
         pose: Pose,
         goal: Point,
-        base: Navigation,
+        base: Base,
     ) -> Point | None:
         """Where the robot's route to ``goal`` enters passage ``index`` within the look
         ahead: the route the base drives when it drives to ``goal`` (as it is now: a
