@@ -32,7 +32,7 @@ def two_rooms(door: float, wall: float = 0.15, nook: bool = False) -> OccupancyG
 
 
 def test_a_door_narrower_than_the_width_is_one_passage_across_its_wall() -> None:
-    passages = find_passages(two_rooms(0.9), max_width=1.3, reach=2.0)
+    passages = find_passages(two_rooms(0.9), max_width=1.3)
     assert len(passages) == 1
     door = passages.passages[0]
     assert door.cx == pytest.approx(5.075, abs=0.05)
@@ -41,8 +41,9 @@ def test_a_door_narrower_than_the_width_is_one_passage_across_its_wall() -> None
     assert door.width == pytest.approx(0.9, abs=0.1)
     assert passages.at(5.07, 3.0) == 0
     assert passages.at(4.0, 3.0) is None  # the room before it
-    assert passages.near(3.5, 3.0) == (0,)  # within reach (2 m)
-    assert passages.near(1.5, 1.5) == ()
+    assert passages.near(3.5, 3.0, 2.0) == (0,)  # within reach (2 m)
+    assert passages.near(0.5, 0.5, 2.0) == ()
+    assert passages.near(0.5, 0.5, 4.0) == (0,)
 
 
 def test_wide_doors_nooks_and_gaps_no_robot_fits_are_not_passages() -> None:

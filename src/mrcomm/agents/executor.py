@@ -421,7 +421,7 @@ class TaskExecutor:
     def _check_collisions(self) -> None:
         pose = self.base.pose
         queue = self.queue  # (near no passage: one lookup, for every robot every step)
-        if queue is not None and queue.passages.near(pose.x, pose.y) and self._queued(pose):
+        if queue is not None and queue.near(pose.x, pose.y) and self._queued(pose):
             return
         # Only the mates near enough to be in conflict (detect tests it).
         near = self._mates_near(pose, self.avoidance.reach)

@@ -50,6 +50,9 @@ HOLD_SIDE = 0.8
 #: come at 5 Hz, and one last heard in a door before the mate left range would hold
 #: the robot there until the time-out, every time.
 FRESH = 1.0
+#: A mate on the far side counts as about to enter when it is this much farther out
+#: than ``queue_distance`` at most (m).
+ENTRY_SLACK = 0.5
 
 
 class PassageQueue:
@@ -73,6 +76,8 @@ class PassageQueue:
         #: (passage, goal cell) -> where the route enters the passage (None: it does not).
         self._entries: dict[tuple[int, int, int], Point | None] = {}
         self._skip_until: dict[int, float] = {}
+        #: The passages near a point, by 1 m cell (Passages.lookup, for queue_distance).
+        self._near = passages.lookup(queue_distance)
         #: The passage queued for, and since when the mates coming through it have
         #: stood still (the last time one moved); None while not queueing.
         self.waiting: tuple[Passage, float] | None = None
@@ -89,27 +94,56 @@ class PassageQueue:
         ``mates_near(x, y, reach)``: the known mates that may lie within ``reach``;
         ``base``: the robot's base, asked for its route to ``goal``."""
         x, y = pose.x, pose.y
-        candidates = self.passages.near(x, y)
+        candidates = self.near(x, y)
         if not candidates or self.passages.at(x, y) is not None:
             return None  # no passage near, or inside one already: go on through
+        route: tuple[Point, ...] | None = None  # the route driven to the goal, when asked
+        reach = self.queue_distance
         for index in candidates:
             if self._skip_until.get(index, -math.inf) > now:
                 continue
             passage = self.passages.passages[index]
-            # Cheapest first: near the passage, then a mate coming, then the route.
-            if abs(passage.along(x, y)) - passage.half_length > self.queue_distance:
+            # Cheapest first: near the passage, then the route driven (no search) or a
+            # mate coming, then a planned route (a search). (Passage.along and .across
+            # written out: every robot near a door, every step.)
+            dx, dy = x - passage.cx, y - passage.cy
+            if abs(dx * passage.ax + dy * passage.ay) - passage.half_length > reach:
                 continue
-            if abs(passage.across(x, y)) - passage.half_width > self.queue_distance:
+            if abs(dy * passage.ax - dx * passage.ay) - passage.half_width > reach:
                 continue
-            mate = self._oncoming(passage, x, y, mates_near, now)
-            if mate is None:
-                continue
-            entry = self._entry(index, pose, goal, base)
-            if entry is None or math.hypot(entry[0] - x, entry[1] - y) > self.queue_distance:
-                continue
+            if route is None:
+                route = self._route_to(goal, base)
+            if route:
+                if not self._enters_soon(self._first_inside(index, (x, y), route), x, y):
+                    continue
+                mate = self._oncoming(passage, x, y, mates_near, now)
+                if mate is None:
+                    continue
+            else:
+                mate = self._oncoming(passage, x, y, mates_near, now)
+                if mate is None:
+                    continue
+                if not self._enters_soon(self._planned_entry(index, pose, goal, base), x, y):
+                    continue
             self.waiting = (passage, now)
             return passage, mate
         return None
+
+    def near(self, x: float, y: float) -> tuple[int, ...]:
+        """The passages a robot at (x, y) may be within ``queue_distance`` of (asked for
+        every navigating robot at every step: one lookup, no division)."""
+        return self._near.get((math.floor(x), math.floor(y)), ())
+
+    def _enters_soon(self, entry: Point | None, x: float, y: float) -> bool:
+        """Whether the route's entry into the passage lies within ``queue_distance``."""
+        return entry is not None and math.hypot(entry[0] - x, entry[1] - y) <= self.queue_distance
+
+    @staticmethod
+    def _route_to(goal: Point, base: Base) -> tuple[Point, ...]:
+        """The route the base drives when it drives to ``goal`` (as it is now: a detour
+        round a mate may come and go); empty when it drives elsewhere or cannot tell."""
+        route = base.route
+        return route if route and math.dist(route[-1], goal) <= GOAL_QUANTUM else ()
 
     def hold_point(self, pose: Pose) -> Point:
         """Where the queued robot waits: out of the passage's mouth on its side, to the
@@ -145,21 +179,11 @@ class PassageQueue:
         self.waiting = None
         return False
 
-    def _entry(
-        self,
-        index: int,
-        pose: Pose,
-        goal: Point,
-        base: Base,
-    ) -> Point | None:
-        """Where the robot's route to ``goal`` enters passage ``index`` within the look
-        ahead: the route the base drives when it drives to ``goal`` (as it is now: a
-        detour round a mate may come and go), else its plan (a search of the whole
-        route, ~30 ms on a 300 m map: asked once per passage and goal)."""
+    def _planned_entry(self, index: int, pose: Pose, goal: Point, base: Base) -> Point | None:
+        """Where the base's plan to ``goal`` enters passage ``index`` within the look
+        ahead (a search of the whole route, ~30 ms on a 300 m map: asked once per
+        passage and goal)."""
         start = (pose.x, pose.y)
-        route = base.route
-        if route and math.dist(route[-1], goal) <= GOAL_QUANTUM:
-            return self._first_inside(index, start, route)
         key = (index, round(goal[0] / GOAL_QUANTUM), round(goal[1] / GOAL_QUANTUM))
         if key in self._entries:
             return self._entries[key]
@@ -173,11 +197,25 @@ class PassageQueue:
     def _first_inside(self, index: int, start: Point, route: tuple[Point, ...]) -> Point | None:
         """The first point of the route (sampled every half cell) inside the passage."""
         step = self.passages.resolution / 2
+        passage = self.passages.passages[index]
+        # Every point of the passage's cells lies within this box round its centre (a
+        # cell more than its cell centres): a segment wholly beyond one side of it
+        # has no sample inside, and is not sampled.
+        hl = passage.half_length + self.passages.resolution
+        hw = passage.half_width + self.passages.resolution
         travelled = 0.0
         ax, ay = start
+        a_along, a_across = passage.along(ax, ay), passage.across(ax, ay)
         for bx, by in route:
             length = math.hypot(bx - ax, by - ay)
-            n = max(1, math.ceil(length / step))
+            b_along, b_across = passage.along(bx, by), passage.across(bx, by)
+            beyond = (
+                min(a_along, b_along) > hl
+                or max(a_along, b_along) < -hl
+                or min(a_across, b_across) > hw
+                or max(a_across, b_across) < -hw
+            )
+            n = 0 if beyond else max(1, math.ceil(length / step))
             for i in range(1, n + 1):
                 px, py = ax + (bx - ax) * i / n, ay + (by - ay) * i / n
                 if self.passages.at(px, py) == index:
@@ -186,6 +224,7 @@ class PassageQueue:
             if travelled > ROUTE_LOOKAHEAD:
                 return None
             ax, ay = bx, by
+            a_along, a_across = b_along, b_across
         return None
 
     def _oncoming(
@@ -203,12 +242,24 @@ class PassageQueue:
         side = 1.0 if along >= 0 else -1.0
         own_gap = abs(along) - passage.half_length  # how far before the passage
         reach = passage.half_length + passage.half_width + self.queue_distance + 1.0
+        # Beyond these a mate is neither inside (its cells' points lie within a cell of
+        # the half length and width) nor about to enter (_enters_first): skipped before
+        # the cell lookup, which most mates near a door would otherwise cost.
+        res = self.passages.resolution
+        along_reach = passage.half_length + max(res, self.queue_distance + ENTRY_SLACK)
+        across_reach = passage.half_width + max(res, self.queue_distance)
         first: Mate | None = None  # the far side's, to enter before the robot
         convoy = False  # a mate inside goes the robot's way
-        for mate in mates_near(passage.cx, passage.cy, reach):
+        cx, cy, ax, ay = passage.cx, passage.cy, passage.ax, passage.ay
+        for mate in mates_near(cx, cy, reach):
             if not now - mate.stamp <= FRESH:
                 continue  # old news (or none: a NaN stamp)
-            towards = (math.cos(mate.theta) * passage.ax + math.sin(mate.theta) * passage.ay) * side
+            # Passage.along and .across, written out (every mate near a door, every step)
+            mate_along = (mate.x - cx) * ax + (mate.y - cy) * ay
+            mate_across = (mate.y - cy) * ax - (mate.x - cx) * ay
+            if abs(mate_along) > along_reach or abs(mate_across) > across_reach:
+                continue
+            towards = (math.cos(mate.theta) * ax + math.sin(mate.theta) * ay) * side
             if self.passages.at(mate.x, mate.y) == passage.index:
                 # Coming this way, driving or not: one holding inside (a leader waiting
                 # for its followers) blocks the lane as much as one driving through.
@@ -216,7 +267,9 @@ class PassageQueue:
                     return mate
                 convoy = True
                 continue
-            if first is None and self._enters_first(passage, side, own_gap, mate, towards):
+            if first is None and self._enters_first(
+                passage, side, own_gap, mate, towards, mate_along, mate_across
+            ):
                 first = mate
         # Behind a mate going its way the robot follows it through: the far side waits
         # for them both. (Yielding to the far side then would split a group at the
@@ -225,23 +278,30 @@ class PassageQueue:
         return None if convoy else first
 
     def _enters_first(
-        self, passage: Passage, side: float, own_gap: float, mate: Mate, towards: float
+        self,
+        passage: Passage,
+        side: float,
+        own_gap: float,
+        mate: Mate,
+        towards: float,
+        mate_along: float,
+        mate_across: float,
     ) -> bool:
         """Whether ``mate``, outside the passage, is on the far side about to enter it
         before the robot: driving into it or standing before it with a goal (queued
         there itself), nearer to it (equal: the team-wide rank decides). ``towards``: how
-        much its heading points to the robot's side along the axis (a cosine)."""
+        much its heading points to the robot's side along the axis (a cosine);
+        ``mate_along``, ``mate_across``: its position in the passage's frame."""
         if mate.goal_dist < 0 and mate.v < self.moving_speed:
             return False  # standing without a goal: not coming through
-        mate_along = passage.along(mate.x, mate.y)
         if mate_along * side >= 0:
             return False  # on this side
         if mate.v >= self.moving_speed and towards < HEADING_COS:
             return False  # driving, not into the passage
         gap = abs(mate_along) - passage.half_length
-        if gap > self.queue_distance + 0.5:
+        if gap > self.queue_distance + ENTRY_SLACK:
             return False
-        if abs(passage.across(mate.x, mate.y)) > passage.half_width + self.queue_distance:
+        if abs(mate_across) > passage.half_width + self.queue_distance:
             return False
         ahead = self._rank(mate.robot) < self._rank(self.robot)
         return gap < own_gap or (gap == own_gap and ahead)

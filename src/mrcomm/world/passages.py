@@ -61,21 +61,15 @@ class Passages:
         grid: OccupancyGrid,
         passages: tuple[Passage, ...],
         cells: dict[int, int],
-        reach: float,
     ) -> None:
         self.passages = passages
         self._origin = grid.origin
         self.resolution = grid.resolution
         self._width = grid.width
         self._cells = cells  # flat cell index -> passage index
-        self._near: dict[tuple[int, int], tuple[int, ...]] = {}
-        for passage in passages:
-            extent = max(passage.half_length, passage.half_width) + reach
-            x0, x1 = math.floor(passage.cx - extent), math.floor(passage.cx + extent)
-            y0, y1 = math.floor(passage.cy - extent), math.floor(passage.cy + extent)
-            for i in range(x0, x1 + 1):
-                for j in range(y0, y1 + 1):
-                    self._near[i, j] = (*self._near.get((i, j), ()), passage.index)
+        #: reach -> the lookup of :meth:`near` (made on first use; the same for all
+        #: who share the map, so a race between two makes the same one twice).
+        self._lookups: dict[float, dict[tuple[int, int], tuple[int, ...]]] = {}
 
     def __len__(self) -> int:
         return len(self.passages)
@@ -89,11 +83,28 @@ class Passages:
             return None
         return self._cells.get(iy * self._width + ix)
 
-    def near(self, x: float, y: float) -> tuple[int, ...]:
-        """The passages whose extent lies within ``reach`` of the point (may include a
-        few farther ones: the lookup is by 1 m cells)."""
-        # (Called for every robot at every step: the cells are 1 m, no division.)
-        return self._near.get((math.floor(x), math.floor(y)), ())
+    def near(self, x: float, y: float, reach: float) -> tuple[int, ...]:
+        """The passages the point may lie within ``reach`` of, along their axis and
+        across it (every one it does; a few farther ones: the lookup is by 1 m cells)."""
+        return self.lookup(reach).get((math.floor(x), math.floor(y)), ())
+
+    def lookup(self, reach: float) -> dict[tuple[int, int], tuple[int, ...]]:
+        """:meth:`near` as a table of 1 m cells (``(floor(x), floor(y))``), for a caller
+        asking for every robot at every step."""
+        table = self._lookups.get(reach)
+        if table is None:
+            table = {}
+            for passage in self.passages:
+                # A point within reach of the passage's box, at any angle of its axis,
+                # lies within this distance of its centre.
+                extent = math.hypot(passage.half_length + reach, passage.half_width + reach)
+                x0, x1 = math.floor(passage.cx - extent), math.floor(passage.cx + extent)
+                y0, y1 = math.floor(passage.cy - extent), math.floor(passage.cy + extent)
+                for i in range(x0, x1 + 1):
+                    for j in range(y0, y1 + 1):
+                        table[i, j] = (*table.get((i, j), ()), passage.index)
+            self._lookups[reach] = table
+        return table
 
 
 def narrow_cells(grid: OccupancyGrid, max_width: float) -> NDArray[np.bool_]:
@@ -128,15 +139,13 @@ def narrow_cells(grid: OccupancyGrid, max_width: float) -> NDArray[np.bool_]:
     return narrow
 
 
-def find_passages(
-    grid: OccupancyGrid, max_width: float, min_width: float = 0.0, reach: float = 4.0
-) -> Passages:
+def find_passages(grid: OccupancyGrid, max_width: float, min_width: float = 0.0) -> Passages:
     """The one-lane passages of ``grid``: groups of cells narrower than ``max_width``
     (m) that join two or more wider areas. Gaps narrower than ``min_width`` (m; a
     robot's diameter: no robot passes them, as between the ends of two thin walls)
-    are left out. ``reach``: how far from a passage :meth:`Passages.near` finds it."""
+    are left out."""
     if max_width <= 0:
-        return Passages(grid, (), {}, reach)
+        return Passages(grid, (), {})
     free = ~grid.occupied
     inner = narrow_cells(grid, max_width)
     # Across a wall at an angle to the grid, the cells of a door's line come in pieces
@@ -201,4 +210,4 @@ def find_passages(
         )
         for flat in ((iy + ys.start) * w + (ix + xs.start)).tolist():
             cells[flat] = index
-    return Passages(grid, tuple(passages), cells, reach)
+    return Passages(grid, tuple(passages), cells)
