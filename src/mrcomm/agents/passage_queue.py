@@ -98,33 +98,28 @@ class PassageQueue:
         if not candidates or self.passages.at(x, y) is not None:
             return None  # no passage near, or inside one already: go on through
         route: tuple[Point, ...] | None = None  # the route driven to the goal, when asked
-        reach = self.queue_distance
         for index in candidates:
             if self._skip_until.get(index, -math.inf) > now:
                 continue
             passage = self.passages.passages[index]
-            # Cheapest first: near the passage, then the route driven (no search) or a
-            # mate coming, then a planned route (a search). (Passage.along and .across
-            # written out: every robot near a door, every step.)
-            dx, dy = x - passage.cx, y - passage.cy
-            if abs(dx * passage.ax + dy * passage.ay) - passage.half_length > reach:
+            # Cheapest first: near the passage, then the route driven (no search; most
+            # robots near a door pass it by), a mate coming, then a planned route (a
+            # search, only once a mate comes).
+            if abs(passage.along(x, y)) - passage.half_length > self.queue_distance:
                 continue
-            if abs(dy * passage.ax - dx * passage.ay) - passage.half_width > reach:
+            if abs(passage.across(x, y)) - passage.half_width > self.queue_distance:
                 continue
             if route is None:
                 route = self._route_to(goal, base)
-            if route:
-                if not self._enters_soon(self._first_inside(index, (x, y), route), x, y):
-                    continue
-                mate = self._oncoming(passage, x, y, mates_near, now)
-                if mate is None:
-                    continue
-            else:
-                mate = self._oncoming(passage, x, y, mates_near, now)
-                if mate is None:
-                    continue
-                if not self._enters_soon(self._planned_entry(index, pose, goal, base), x, y):
-                    continue
+            if route and not self._enters_soon(self._first_inside(index, (x, y), route), x, y):
+                continue
+            mate = self._oncoming(passage, x, y, mates_near, now)
+            if mate is None:
+                continue
+            if not route and not self._enters_soon(
+                self._planned_entry(index, pose, goal, base), x, y
+            ):
+                continue
             self.waiting = (passage, now)
             return passage, mate
         return None
@@ -250,16 +245,14 @@ class PassageQueue:
         across_reach = passage.half_width + max(res, self.queue_distance)
         first: Mate | None = None  # the far side's, to enter before the robot
         convoy = False  # a mate inside goes the robot's way
-        cx, cy, ax, ay = passage.cx, passage.cy, passage.ax, passage.ay
-        for mate in mates_near(cx, cy, reach):
+        for mate in mates_near(passage.cx, passage.cy, reach):
             if not now - mate.stamp <= FRESH:
                 continue  # old news (or none: a NaN stamp)
-            # Passage.along and .across, written out (every mate near a door, every step)
-            mate_along = (mate.x - cx) * ax + (mate.y - cy) * ay
-            mate_across = (mate.y - cy) * ax - (mate.x - cx) * ay
+            mate_along = passage.along(mate.x, mate.y)
+            mate_across = passage.across(mate.x, mate.y)
             if abs(mate_along) > along_reach or abs(mate_across) > across_reach:
                 continue
-            towards = (math.cos(mate.theta) * ax + math.sin(mate.theta) * ay) * side
+            towards = (math.cos(mate.theta) * passage.ax + math.sin(mate.theta) * passage.ay) * side
             if self.passages.at(mate.x, mate.y) == passage.index:
                 # Coming this way, driving or not: one holding inside (a leader waiting
                 # for its followers) blocks the lane as much as one driving through.
