@@ -6,12 +6,13 @@ wait has a time-out. Then the NB executor queueing on a fake base."""
 from __future__ import annotations
 
 import math
+import random
 
 import pytest
 
 from mrcomm.agents.collision import MateState
 from mrcomm.agents.executor import TaskExecutor
-from mrcomm.agents.passage_queue import PassageQueue
+from mrcomm.agents.passage_queue import ROUTE_LOOKAHEAD, PassageQueue
 from mrcomm.metrics import labels as L
 from mrcomm.world.geometry import Pose
 from mrcomm.world.passages import Passages, find_passages
@@ -215,3 +216,46 @@ def test_without_passages_the_executor_does_not_queue() -> None:
     h.step()
     h.hear(pose_of("robot_2", 5.07, 3.0, WEST, v=0.4, goal_dist=4.0))
     assert h.step() == "navigating"  # 1.4 m away: no near collision either
+
+
+def walked_entry(passages: Passages, index: int, start, route) -> tuple[float, float] | None:
+    """The route's first point inside the passage, walked afresh: every segment from
+    the start sampled every half cell, until the look-ahead is travelled."""
+    step = passages.resolution / 2
+    travelled = 0.0
+    ax, ay = start
+    for bx, by in route:
+        length = math.hypot(bx - ax, by - ay)
+        n = max(1, math.ceil(length / step))
+        for i in range(1, n + 1):
+            px, py = ax + (bx - ax) * i / n, ay + (by - ay) * i / n
+            if passages.at(px, py) == index:
+                return px, py
+        travelled += length
+        if travelled > ROUTE_LOOKAHEAD:
+            return None
+        ax, ay = bx, by
+    return None
+
+
+def test_the_entry_of_the_route_being_driven_is_the_route_walked_afresh(door: Passages) -> None:
+    """The queue remembers what a route says beyond its first waypoint while the robot
+    drives it: as the robot moves, passes waypoints and gets new routes, every answer
+    is the one walking the route from the robot would give."""
+    rng = random.Random(7)
+    q = queue_of(door)
+    passage = door.passages[0]
+    found = 0
+    for _ in range(300):
+        route = tuple(
+            (rng.uniform(1.0, 9.0), rng.uniform(1.0, 5.0)) for _ in range(rng.randint(1, 5))
+        )
+        while route:
+            x, y = rng.uniform(3.0, 7.0), rng.uniform(1.5, 4.5)
+            frame = passage.along(x, y), passage.across(x, y)
+            entry = q._route_entry(passage, x, y, *frame, route)
+            assert entry == walked_entry(door, 0, (x, y), route)
+            found += entry is not None
+            if rng.random() < 0.3:
+                route = route[1:]  # a waypoint passed
+    assert found > 50  # many routes enter the door (the answers are not all None)

@@ -44,6 +44,12 @@ def test_a_door_narrower_than_the_width_is_one_passage_across_its_wall() -> None
     assert passages.near(3.5, 3.0, 2.0) == (0,)  # within reach (2 m)
     assert passages.near(0.5, 0.5, 2.0) == ()
     assert passages.near(0.5, 0.5, 4.0) == (0,)
+    # In the room 2.55 m down the wall from the door: nearer its centre than the
+    # corners of its box grown by the reach (1.5 m), but farther than the reach across
+    # its axis (by more than a cell of the lookup)
+    assert math.hypot(0.2, 2.55) < math.hypot(door.half_length + 1.5, door.half_width + 1.5)
+    assert passages.near(door.cx - 0.2, door.cy + 2.55, 1.5) == ()
+    assert passages.near(door.cx - 0.2, door.cy + 1.9, 1.5) == (0,)
 
 
 def test_wide_doors_nooks_and_gaps_no_robot_fits_are_not_passages() -> None:
@@ -86,3 +92,37 @@ def test_a_narrow_corridor_is_one_passage_along_it() -> None:
     assert abs(corridor.ax) == pytest.approx(1.0, abs=0.02)
     assert corridor.half_length == pytest.approx(2.0, abs=0.15)
     assert passages.at(7.0, 3.0) == 0
+
+
+@pytest.mark.parametrize("angle", [0.0, 0.3, math.pi / 4, 1.1])
+def test_the_passages_near_a_point_are_those_within_reach_along_and_across_the_axis(
+    angle: float,
+) -> None:
+    """Every point within reach of a door's box (along its axis and across it) is handed
+    the door, and nearly every point beyond is not (those in cells the grown box
+    touches are)."""
+    n = int(12 / RES)
+    yy, xx = np.mgrid[0:n, 0:n]
+    u = (xx - n / 2) * math.cos(angle) + (yy - n / 2) * math.sin(angle)
+    v = -(xx - n / 2) * math.sin(angle) + (yy - n / 2) * math.cos(angle)
+    occupied = (np.abs(v) < 0.75) & (np.abs(u) > 0.4 / RES)
+    occupied[:2, :] = occupied[-2:, :] = occupied[:, :2] = occupied[:, -2:] = True
+    passages = find_passages(OccupancyGrid(occupied, RES), max_width=1.3, min_width=0.4)
+    door = passages.passages[0]
+    rng = np.random.default_rng(3)
+    reach = 1.5
+    listed = unlisted = 0
+    for x, y in rng.uniform(1.0, 11.0, size=(4000, 2)).tolist():
+        within = (
+            abs(door.along(x, y)) - door.half_length <= reach
+            and abs(door.across(x, y)) - door.half_width <= reach
+        )
+        near = passages.near(x, y, reach)
+        if within:
+            assert near == (0,)
+            listed += 1
+        elif near == ():
+            unlisted += 1
+    assert listed > 200
+    # Beyond the box grown by the reach, only points in its border cells are listed.
+    assert unlisted > 0.85 * (4000 - listed)

@@ -28,11 +28,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Collection
+from dataclasses import dataclass
 
 from mrcomm.agents.collision import Mate
 from mrcomm.ports import Base
 from mrcomm.world.geometry import Pose
-from mrcomm.world.passages import Passage, Passages
+from mrcomm.world.passages import PER_M, Passage, Passages
 
 Point = tuple[float, float]
 #: How far along its route a robot looks for the entry of a passage (m).
@@ -53,6 +54,18 @@ FRESH = 1.0
 #: A mate on the far side counts as about to enter when it is this much farther out
 #: than ``queue_distance`` at most (m).
 ENTRY_SLACK = 0.5
+
+
+@dataclass(frozen=True)
+class _Tail:
+    """What a route's segments after its first waypoint say about one passage:
+    ``first``, the first waypoint in the passage's frame (along, across); ``hit``, the
+    first sample inside the passage among those segments within the look-ahead (None:
+    none); ``lengths``, the lengths of the segments before the one with the hit."""
+
+    first: tuple[float, float]
+    lengths: tuple[float, ...]
+    hit: Point | None
 
 
 class PassageQueue:
@@ -76,7 +89,11 @@ class PassageQueue:
         #: (passage, goal cell) -> where the route enters the passage (None: it does not).
         self._entries: dict[tuple[int, int, int], Point | None] = {}
         self._skip_until: dict[int, float] = {}
-        #: The passages near a point, by 1 m cell (Passages.lookup, for queue_distance).
+        #: The route being driven when last asked, and per passage what it says beyond
+        #: its first waypoint (:meth:`_route_entry`).
+        self._tail_route: tuple[Point, ...] = ()
+        self._tails: dict[int, _Tail] = {}
+        #: The passages near a point, by cell (Passages.lookup, for queue_distance).
         self._near = passages.lookup(queue_distance)
         #: The passage queued for, and since when the mates coming through it have
         #: stood still (the last time one moved); None while not queueing.
@@ -105,13 +122,16 @@ class PassageQueue:
             # Cheapest first: near the passage, then the route driven (no search; most
             # robots near a door pass it by), a mate coming, then a planned route (a
             # search, only once a mate comes).
-            if abs(passage.along(x, y)) - passage.half_length > self.queue_distance:
+            along = passage.along(x, y)
+            if abs(along) - passage.half_length > self.queue_distance:
                 continue
-            if abs(passage.across(x, y)) - passage.half_width > self.queue_distance:
+            across = passage.across(x, y)
+            if abs(across) - passage.half_width > self.queue_distance:
                 continue
             if route is None:
                 route = self._route_to(goal, base)
-            if route and not self._enters_soon(self._first_inside(index, (x, y), route), x, y):
+            entry = self._route_entry(passage, x, y, along, across, route) if route else None
+            if route and not self._enters_soon(entry, x, y):
                 continue
             mate = self._oncoming(passage, x, y, mates_near, now)
             if mate is None:
@@ -127,7 +147,7 @@ class PassageQueue:
     def near(self, x: float, y: float) -> tuple[int, ...]:
         """The passages a robot at (x, y) may be within ``queue_distance`` of (asked for
         every navigating robot at every step: one lookup, no division)."""
-        return self._near.get((math.floor(x), math.floor(y)), ())
+        return self._near.get((math.floor(x * PER_M), math.floor(y * PER_M)), ())
 
     def _enters_soon(self, entry: Point | None, x: float, y: float) -> bool:
         """Whether the route's entry into the passage lies within ``queue_distance``."""
@@ -178,48 +198,125 @@ class PassageQueue:
         """Where the base's plan to ``goal`` enters passage ``index`` within the look
         ahead (a search of the whole route, ~30 ms on a 300 m map: asked once per
         passage and goal)."""
-        start = (pose.x, pose.y)
         key = (index, round(goal[0] / GOAL_QUANTUM), round(goal[1] / GOAL_QUANTUM))
         if key in self._entries:
             return self._entries[key]
         if len(self._entries) > 256:
             self._entries.clear()  # goals long past
         plan = base.make_plan(*goal)
-        entry = None if plan is None else self._first_inside(index, start, plan)
+        passage = self.passages.passages[index]
+        x, y = pose.x, pose.y
+        entry = None
+        if plan:
+            frame = passage.along(x, y), passage.across(x, y)
+            entry = self._first_inside(passage, x, y, *frame, plan, self._tail(passage, plan))
         self._entries[key] = entry
         return entry
 
-    def _first_inside(self, index: int, start: Point, route: tuple[Point, ...]) -> Point | None:
-        """The first point of the route (sampled every half cell) inside the passage."""
-        step = self.passages.resolution / 2
-        passage = self.passages.passages[index]
-        # Every point of the passage's cells lies within this box round its centre (a
-        # cell more than its cell centres): a segment wholly beyond one side of it
-        # has no sample inside, and is not sampled.
-        hl = passage.half_length + self.passages.resolution
-        hw = passage.half_width + self.passages.resolution
-        travelled = 0.0
-        ax, ay = start
-        a_along, a_across = passage.along(ax, ay), passage.across(ax, ay)
-        for bx, by in route:
-            length = math.hypot(bx - ax, by - ay)
-            b_along, b_across = passage.along(bx, by), passage.across(bx, by)
-            beyond = (
-                min(a_along, b_along) > hl
-                or max(a_along, b_along) < -hl
-                or min(a_across, b_across) > hw
-                or max(a_across, b_across) < -hw
-            )
-            n = 0 if beyond else max(1, math.ceil(length / step))
-            for i in range(1, n + 1):
-                px, py = ax + (bx - ax) * i / n, ay + (by - ay) * i / n
-                if self.passages.at(px, py) == index:
-                    return px, py
+    def _first_inside(
+        self,
+        passage: Passage,
+        x: float,
+        y: float,
+        along: float,
+        across: float,
+        route: tuple[Point, ...],
+        tail: _Tail,
+    ) -> Point | None:
+        """The first point of the route from (x, y) (sampled every half cell) inside the
+        passage, within :data:`ROUTE_LOOKAHEAD` of travel. ``along``, ``across``: (x, y)
+        in the passage's frame; ``tail``: what :meth:`_tail` says of the route."""
+        bx, by = route[0]
+        hit = self._segment_hit(passage, x, y, along, across, bx, by, *tail.first)
+        if hit is not None:
+            return hit
+        # The same sums in the same order as walking the route segment by segment.
+        travelled = math.hypot(bx - x, by - y)
+        if travelled > ROUTE_LOOKAHEAD or tail.hit is None:
+            return None
+        for length in tail.lengths:
             travelled += length
             if travelled > ROUTE_LOOKAHEAD:
                 return None
-            ax, ay = bx, by
-            a_along, a_across = b_along, b_across
+        return tail.hit
+
+    def _route_entry(
+        self,
+        passage: Passage,
+        x: float,
+        y: float,
+        along: float,
+        across: float,
+        route: tuple[Point, ...],
+    ) -> Point | None:
+        """:meth:`_first_inside` of the route being driven (not empty), from the robot
+        at (x, y): what the route says beyond its first waypoint is remembered until the
+        route changes (the robot passes a waypoint, or drives another route), as the
+        robot asks at every step near a passage."""
+        if route != self._tail_route:
+            self._tail_route = route
+            self._tails.clear()
+        tail = self._tails.get(passage.index)
+        if tail is None:
+            tail = self._tails[passage.index] = self._tail(passage, route)
+        return self._first_inside(passage, x, y, along, across, route, tail)
+
+    def _tail(self, passage: Passage, route: tuple[Point, ...]) -> _Tail:
+        """What the route's segments after its first waypoint say about ``passage``
+        (see :class:`_Tail`). A segment is looked at only while their lengths add up
+        to at most :data:`ROUTE_LOOKAHEAD`: with the first segment's length added first,
+        the sum is no less (rounding is monotonic), so farther entries are never used."""
+        ax, ay = route[0]
+        a_along, a_across = passage.along(ax, ay), passage.across(ax, ay)
+        first = (a_along, a_across)
+        lengths: list[float] = []
+        travelled = 0.0
+        for bx, by in route[1:]:
+            b_along, b_across = passage.along(bx, by), passage.across(bx, by)
+            hit = self._segment_hit(passage, ax, ay, a_along, a_across, bx, by, b_along, b_across)
+            if hit is not None:
+                return _Tail(first, tuple(lengths), hit)
+            length = math.hypot(bx - ax, by - ay)
+            lengths.append(length)
+            travelled += length
+            if travelled > ROUTE_LOOKAHEAD:
+                break
+            ax, ay, a_along, a_across = bx, by, b_along, b_across
+        return _Tail(first, (), None)
+
+    def _segment_hit(
+        self,
+        passage: Passage,
+        ax: float,
+        ay: float,
+        a_along: float,
+        a_across: float,
+        bx: float,
+        by: float,
+        b_along: float,
+        b_across: float,
+    ) -> Point | None:
+        """The first sample (every half cell, from after a to b) of the segment from a
+        to b inside the passage; ``*_along``, ``*_across``: the ends in its frame."""
+        res = self.passages.resolution
+        # Every point of the passage's cells lies within this box round its centre (a
+        # cell more than its cell centres): a segment wholly beyond one side of it has
+        # no sample inside, and is not sampled.
+        hl = passage.half_length + res
+        hw = passage.half_width + res
+        if (
+            min(a_along, b_along) > hl
+            or max(a_along, b_along) < -hl
+            or min(a_across, b_across) > hw
+            or max(a_across, b_across) < -hw
+        ):
+            return None
+        n = max(1, math.ceil(math.hypot(bx - ax, by - ay) / (res / 2)))
+        at = self.passages.at
+        for i in range(1, n + 1):
+            px, py = ax + (bx - ax) * i / n, ay + (by - ay) * i / n
+            if at(px, py) == passage.index:
+                return px, py
         return None
 
     def _oncoming(

@@ -22,7 +22,6 @@ from scipy import ndimage
 
 from mrcomm.world.occupancy import OccupancyGrid
 
-#: Cells of the coarse grid that says which passages lie near a point are 1 m.
 #: A side area must have at least this many cells to count (a cell or two in a wall's
 #: corner is not a room).
 MIN_SIDE_CELLS = 4
@@ -85,26 +84,65 @@ class Passages:
 
     def near(self, x: float, y: float, reach: float) -> tuple[int, ...]:
         """The passages the point may lie within ``reach`` of, along their axis and
-        across it (every one it does; a few farther ones: the lookup is by 1 m cells)."""
-        return self.lookup(reach).get((math.floor(x), math.floor(y)), ())
+        across it (every one it does; a few farther ones: the lookup is by cells)."""
+        return self.lookup(reach).get((math.floor(x * PER_M), math.floor(y * PER_M)), ())
 
     def lookup(self, reach: float) -> dict[tuple[int, int], tuple[int, ...]]:
-        """:meth:`near` as a table of 1 m cells (``(floor(x), floor(y))``), for a caller
-        asking for every robot at every step."""
+        """:meth:`near` as a table of cells of 1 / :data:`PER_M` m (keyed
+        ``(floor(x * PER_M), floor(y * PER_M))``), for a caller asking for every robot at
+        every step. A cell lists a passage when some point of
+        it lies within ``reach`` of the passage's box along the axis and across it (the
+        box grown by ``reach`` and the cell overlap), so a robot beside a door down a
+        corridor is not handed the door a few metres on."""
         table = self._lookups.get(reach)
         if table is None:
             table = {}
             for passage in self.passages:
-                # A point within reach of the passage's box, at any angle of its axis,
-                # lies within this distance of its centre.
-                extent = math.hypot(passage.half_length + reach, passage.half_width + reach)
-                x0, x1 = math.floor(passage.cx - extent), math.floor(passage.cx + extent)
-                y0, y1 = math.floor(passage.cy - extent), math.floor(passage.cy + extent)
-                for i in range(x0, x1 + 1):
-                    for j in range(y0, y1 + 1):
-                        table[i, j] = (*table.get((i, j), ()), passage.index)
+                for cell in _cells_touching(passage, reach + LOOKUP_MARGIN):
+                    table[cell] = (*table.get(cell, ()), passage.index)
             self._lookups[reach] = table
         return table
+
+
+#: Grows a passage's box a little for :meth:`Passages.lookup`: a point on the grown
+#: box's edge, tested by the caller in its own floating-point arithmetic, is listed.
+LOOKUP_MARGIN = 1e-6
+#: Cells of :meth:`Passages.lookup` per metre: half-metre cells hand a robot fewer
+#: passages it is not near than metre cells (a door lined corridor has one every few
+#: metres), in a table of a few thousand cells. A power of two: a point's cell,
+#: ``floor(x * PER_M)``, and a cell's corners, ``i / PER_M``, are then exact.
+PER_M = 2
+
+
+def _cells_touching(passage: Passage, reach: float) -> list[tuple[int, int]]:
+    """The cells ``(i, j)`` of :meth:`Passages.lookup` (the square from (i, j) to
+    (i + 1, j + 1) / :data:`PER_M`) that overlap
+    the passage's box grown by ``reach`` along its axis and across it: two convex
+    shapes overlap unless one of their four edge directions separates them."""
+    half_along = passage.half_length + reach
+    half_across = passage.half_width + reach
+    ax, ay = passage.ax, passage.ay
+    # The grown box's extent along x and y (its own edge directions are tested below).
+    ex = abs(ax) * half_along + abs(ay) * half_across
+    ey = abs(ay) * half_along + abs(ax) * half_across
+    cells = []
+    size = 1 / PER_M
+    for i in range(
+        math.floor((passage.cx - ex) * PER_M), math.floor((passage.cx + ex) * PER_M) + 1
+    ):
+        for j in range(
+            math.floor((passage.cy - ey) * PER_M), math.floor((passage.cy + ey) * PER_M) + 1
+        ):
+            x0, y0 = i * size, j * size
+            corners = ((x0, y0), (x0 + size, y0), (x0, y0 + size), (x0 + size, y0 + size))
+            along = [passage.along(x, y) for x, y in corners]
+            across = [passage.across(x, y) for x, y in corners]
+            if min(along) > half_along or max(along) < -half_along:
+                continue
+            if min(across) > half_across or max(across) < -half_across:
+                continue
+            cells.append((i, j))
+    return cells
 
 
 def narrow_cells(grid: OccupancyGrid, max_width: float) -> NDArray[np.bool_]:
