@@ -28,7 +28,7 @@ from mrcomm.messaging.messages import (
     TaskState,
     TaskStatus,
 )
-from mrcomm.ports import Bus
+from mrcomm.ports import BatchHandler, Bus
 
 ASSIGNER_ID = "assigner"
 HEARTBEAT_PERIOD = 1.0  # s
@@ -73,7 +73,7 @@ class TaskAssigner:
                 on_deliver=lambda status, _id: self.record_status(status),
             )
         bus.subscribe(TOPIC_TASK_STATUS, self._on_status)
-        bus.subscribe(TOPIC_POSE, self._on_pose)
+        bus.subscribe(TOPIC_POSE, BatchHandler(self._on_poses))
         self.commands = CommandInbox(
             bus, incarnation, lambda: command_team(self.team, self.agent_id), self.on_command
         )
@@ -169,7 +169,10 @@ class TaskAssigner:
         assert isinstance(message, TaskStatus)
         self.record_status(message)
 
-    def _on_pose(self, message: Message) -> None:
-        self.received[TOPIC_POSE] += 1
+    def _on_poses(self, messages: Sequence[Message]) -> None:
+        """Poses that reached the assigner, in order (one, or a step's batch): counted,
+        and each a sign of life to AON."""
+        self.received[TOPIC_POSE] += len(messages)
         if self.aon is not None:
-            self.aon.heard_from(message.sender, self._now)
+            for message in messages:
+                self.aon.heard_from(message.sender, self._now)

@@ -75,6 +75,8 @@ class ProximityRecorder:
             return
         d = distance[i, j]
         near = np.flatnonzero(d <= self.radius)
+        if not len(near) and not self._since:
+            return  # most steps: no pair near, none was
         near_set = set(near.tolist())
         for k in [k for k in self._since if k not in near_set]:
             self._close(k, now)
