@@ -22,6 +22,21 @@ TRAJECTORY_PERIOD = 0.5  # simulated s between recorded trajectory samples
 SMALL_TEAM = 8
 
 Point = tuple[float, float]
+#: Bodies are handed the mates found within their neighbour radius plus this (m), and
+#: the search is made again only once a body has moved half of it: until then a mate
+#: within the radius now was within the radius plus SKIN then (two bodies closed in at
+#: most SKIN). A body tests the distance to each mate it is handed itself, so the extra
+#: mates change nothing.
+SKIN = 1.0
+
+
+def moved_farther(before: list[Point], now: list[Point], distance: float) -> bool:
+    """Whether any point moved farther than ``distance`` from ``before`` to ``now``."""
+    d2 = distance * distance
+    return any(
+        (x - x0) * (x - x0) + (y - y0) * (y - y0) > d2
+        for (x0, y0), (x, y) in zip(before, now, strict=True)
+    )
 
 
 class RobotBodies:
@@ -31,7 +46,13 @@ class RobotBodies:
         self.bases = bases
         self.assigner = assigner
         self._next_sample = 0.0
-        self._radii = [b.neighbour_radius for b in bases.values()]
+        # Each body's mates within its neighbour radius plus SKIN, found where the bodies
+        # stood at ``_found_at``: kept while no body has moved SKIN / 2 since.
+        self._radii = [b.neighbour_radius + SKIN for b in bases.values()]
+        self._near: list[list[int]] = []
+        self._found_at: list[Point] = []
+        #: How many times the mates near each body were searched for.
+        self.searches = 0
 
     def true_xy(self) -> list[Point]:
         return [b.true_xy for b in self.bases.values()]
@@ -45,14 +66,19 @@ class RobotBodies:
     def advance(self, dt: float, now: float, truth: list[Point]) -> None:
         """Advance every body by ``dt``; ``truth`` holds the positions before the step,
         each body's view of the others. In a large team a body is given only the mates
-        within its neighbour radius (found with a grid of cells): the others cannot
-        matter to it this step, so the outcome is the same at O(N) instead of O(N²)."""
+        within its neighbour radius (found with a grid of cells, again only once a body
+        has moved ``SKIN / 2``) and a few more: the others cannot matter to it this step,
+        so the outcome is the same at O(N) instead of O(N²)."""
         bases = list(self.bases.values())
         if len(bases) <= SMALL_TEAM:
             for i, base in enumerate(bases):
                 base.update(dt, now, truth[:i] + truth[i + 1 :])
             return
-        for i, near in enumerate(neighbours(truth, self._radii)):
+        if not self._found_at or moved_farther(self._found_at, truth, SKIN / 2):
+            self._near = neighbours(truth, self._radii)
+            self._found_at = truth
+            self.searches += 1
+        for i, near in enumerate(self._near):
             bases[i].update(dt, now, [truth[j] for j in near], near)
 
     def sample_due(self, now: float) -> bool:
