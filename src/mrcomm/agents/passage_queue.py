@@ -130,9 +130,10 @@ class PassageQueue:
                 continue
             if route is None:
                 route = self._route_to(goal, base)
-            entry = self._route_entry(passage, x, y, along, across, route) if route else None
-            if route and not self._enters_soon(entry, x, y):
-                continue
+            if route:
+                entry = self._route_entry(passage, x, y, along, across, route)
+                if not self._enters_soon(entry, x, y):
+                    continue
             mate = self._oncoming(passage, x, y, mates_near, now)
             if mate is None:
                 continue

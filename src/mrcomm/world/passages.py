@@ -90,10 +90,10 @@ class Passages:
     def lookup(self, reach: float) -> dict[tuple[int, int], tuple[int, ...]]:
         """:meth:`near` as a table of cells of 1 / :data:`PER_M` m (keyed
         ``(floor(x * PER_M), floor(y * PER_M))``), for a caller asking for every robot at
-        every step. A cell lists a passage when some point of
-        it lies within ``reach`` of the passage's box along the axis and across it (the
-        box grown by ``reach`` and the cell overlap), so a robot beside a door down a
-        corridor is not handed the door a few metres on."""
+        every step. A cell lists a passage when some point of it lies within ``reach`` of
+        the passage's box along the axis and across it (the box grown by ``reach`` and
+        the cell overlap), so a robot beside a door down a corridor is not handed the
+        door a few metres on."""
         table = self._lookups.get(reach)
         if table is None:
             table = {}
