@@ -253,7 +253,7 @@ def test_the_entry_of_the_route_being_driven_is_the_route_walked_afresh(door: Pa
         while route:
             x, y = rng.uniform(3.0, 7.0), rng.uniform(1.5, 4.5)
             frame = passage.along(x, y), passage.across(x, y)
-            entry = q._route_entry(passage, x, y, *frame, route)
+            entry = q._first_inside(passage, x, y, *frame, route, q._driven_tail(passage, route))
             assert entry == walked_entry(door, 0, (x, y), route)
             found += entry is not None
             if rng.random() < 0.3:

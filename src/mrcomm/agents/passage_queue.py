@@ -90,7 +90,7 @@ class PassageQueue:
         self._entries: dict[tuple[int, int, int], Point | None] = {}
         self._skip_until: dict[int, float] = {}
         #: The route being driven when last asked, and per passage what it says beyond
-        #: its first waypoint (:meth:`_route_entry`).
+        #: its first waypoint (:meth:`_driven_tail`).
         self._tail_route: tuple[Point, ...] = ()
         self._tails: dict[int, _Tail] = {}
         #: The passages near a point, by cell (Passages.lookup, for queue_distance).
@@ -131,7 +131,8 @@ class PassageQueue:
             if route is None:
                 route = self._route_to(goal, base)
             if route:
-                entry = self._route_entry(passage, x, y, along, across, route)
+                tail = self._driven_tail(passage, route)
+                entry = self._first_inside(passage, x, y, along, across, route, tail)
                 if not self._enters_soon(entry, x, y):
                     continue
             mate = self._oncoming(passage, x, y, mates_near, now)
@@ -241,17 +242,8 @@ class PassageQueue:
                 return None
         return tail.hit
 
-    def _route_entry(
-        self,
-        passage: Passage,
-        x: float,
-        y: float,
-        along: float,
-        across: float,
-        route: tuple[Point, ...],
-    ) -> Point | None:
-        """:meth:`_first_inside` of the route being driven (not empty), from the robot
-        at (x, y): what the route says beyond its first waypoint is remembered until the
+    def _driven_tail(self, passage: Passage, route: tuple[Point, ...]) -> _Tail:
+        """:meth:`_tail` of the route being driven, remembered per passage until the
         route changes (the robot passes a waypoint, or drives another route), as the
         robot asks at every step near a passage."""
         if route != self._tail_route:
@@ -260,7 +252,7 @@ class PassageQueue:
         tail = self._tails.get(passage.index)
         if tail is None:
             tail = self._tails[passage.index] = self._tail(passage, route)
-        return self._first_inside(passage, x, y, along, across, route, tail)
+        return tail
 
     def _tail(self, passage: Passage, route: tuple[Point, ...]) -> _Tail:
         """What the route's segments after its first waypoint say about ``passage``

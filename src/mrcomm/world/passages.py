@@ -116,9 +116,9 @@ PER_M = 2
 
 def _cells_touching(passage: Passage, reach: float) -> list[tuple[int, int]]:
     """The cells ``(i, j)`` of :meth:`Passages.lookup` (the square from (i, j) to
-    (i + 1, j + 1) / :data:`PER_M`) that overlap
-    the passage's box grown by ``reach`` along its axis and across it: two convex
-    shapes overlap unless one of their four edge directions separates them."""
+    (i + 1, j + 1) / :data:`PER_M`) that overlap the passage's box grown by ``reach``
+    along its axis and across it: two convex shapes overlap unless one of their four
+    edge directions separates them."""
     half_along = passage.half_length + reach
     half_across = passage.half_width + reach
     ax, ay = passage.ax, passage.ay
