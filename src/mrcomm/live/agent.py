@@ -30,7 +30,6 @@ import time
 from typing import Any
 
 from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
-from mrcomm.agents.behaviours import behaviour_class
 from mrcomm.agents.commands import OPERATOR_ID
 from mrcomm.agents.executor import TaskExecutor
 from mrcomm.errors import InputError, did_you_mean
@@ -76,15 +75,9 @@ from mrcomm.net.pulse import pulse_id
 from mrcomm.net.zenoh_bus import LinkRules, PositionBook, ZenohBus
 from mrcomm.net.zenoh_config import check_key_chunk
 from mrcomm.net.zenoh_node import Incoming, Presence, ZenohNode, drain
+from mrcomm.run.agents import AgentAssembly, AgentOverrides
 from mrcomm.run.resources import ScenarioResources
-from mrcomm.run.wiring import (
-    build_link_sensor,
-    build_network,
-    build_radio_links,
-    measures_radio,
-    scenario_options,
-)
-from mrcomm.seeding import stream
+from mrcomm.run.wiring import build_network, build_radio_links, measures_radio
 from mrcomm.world.scenario import Scenario
 
 HEARTBEAT_PERIOD = 0.25  # wall s between heartbeats (and at once on a change)
@@ -165,7 +158,9 @@ class AgentProcess:
             robots=self.robot_ids,
         )
         self.journal = Journal(journal_path(settings.record_dir, agent, incarnation))
-        executor_class = behaviour_class(run.behaviour)
+        self.agents = agents = AgentAssembly(
+            run, self.resources, AgentOverrides(aon_lease=settings.lease)
+        )
         self.executor: TaskExecutor | None = None
         self.base: AgentBase | None = None
         self.tail: TimelineTail | None = None
@@ -175,9 +170,7 @@ class AgentProcess:
         self.pulse_readings = 0
         self.operator: OperatorHost | None = None
         if agent == OPERATOR_ID:
-            self.operator = OperatorHost(
-                self.bus, run, self.resources, incarnation, settings.operator
-            )
+            self.operator = OperatorHost(self.bus, agents, incarnation, settings.operator)
         elif agent != ASSIGNER_ID:
             start = next(r.pose for r in self.scenario.robots if r.id == agent)
             self.base = open_base(
@@ -186,37 +179,20 @@ class AgentProcess:
             )  # fmt: skip
             base = self.base
             positions.own[agent] = lambda: (base.pose.x, base.pose.y)
-            ranks = stream(run.seed, "tie-break").permutation(len(self.robot_ids))
-            rank_of = {rid: float(ranks[i]) for i, rid in enumerate(self.robot_ids)}
-            endpoint = self.bus.endpoint(agent, stream(run.seed, "loss", agent))
+            endpoint = self.bus.endpoint(agent, agents.loss_stream(agent))
             timeline = Timeline(agent)
-            sensor = build_link_sensor(run, self.resources)
+            sensor = agents.link_sensor()
             if isinstance(sensor, MeasuredSensor):
                 self.measured = sensor
-            self.executor = executor_class(
-                endpoint,
-                self.base,
-                timeline,
-                tie_break_rank=rank_of.__getitem__,
-                link_sensor=sensor,
-                incarnation=incarnation,
-                **scenario_options(executor_class, self.resources),
+            self.executor = agents.executor(
+                endpoint, self.base, timeline, link_sensor=sensor, incarnation=incarnation
             )
-            # The LF executor reads its AON lease when its assignment arrives.
-            params = self.executor.params
-            if settings.lease is not None and "aon_lease" in type(params).model_fields:
-                self.executor.params = params.model_copy(update={"aon_lease": settings.lease})
             self.tail = TimelineTail(timeline, self.journal)
             self.resync = Resync(self.executor, endpoint, self._request_sync, wait=SYNC_WAIT)
         self.assigner: TaskAssigner | None = None
         if hosts_assigner:
-            self.assigner = TaskAssigner(
-                self.bus.endpoint(ASSIGNER_ID, stream(run.seed, "loss", ASSIGNER_ID)),
-                self.robot_ids,
-                self.scenario.tasks,
-                incarnation=incarnation,
-                use_aon=executor_class.uses_aon,
-            )
+            endpoint = self.bus.endpoint(ASSIGNER_ID, agents.loss_stream(ASSIGNER_ID))
+            self.assigner = agents.assigner(endpoint, incarnation=incarnation)
         self.recorder = AgentRecorder(self.journal, self.bus, agent, self.executor, self.assigner)
         self.bus.observer = self.recorder.delivery
         self.team = team_processes(self.scenario)

@@ -16,14 +16,11 @@ from pathlib import Path
 
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.agents.commands import OPERATOR_ID
-from mrcomm.agents.operator import Operator
 from mrcomm.errors import InputError
 from mrcomm.live.journal import Journal
 from mrcomm.net.zenoh_bus import PositionBook, ZenohBus
-from mrcomm.run.config import RunConfig
+from mrcomm.run.agents import AgentAssembly
 from mrcomm.run.operator_plan import BASE, OperatorPlan, ScriptedOperator, load_operator_plan
-from mrcomm.run.resources import ScenarioResources
-from mrcomm.seeding import stream
 from mrcomm.world.scenario import Scenario
 
 
@@ -42,13 +39,12 @@ class OperatorHost:
     def __init__(
         self,
         bus: ZenohBus,
-        run: RunConfig,
-        resources: ScenarioResources,
+        agents: AgentAssembly,
         incarnation: int,
         plan_path: Path | None,
     ) -> None:
-        scenario = resources.scenario
-        reassignable = run.spec("behaviour").accepts_reassignment
+        scenario = agents.resources.scenario
+        reassignable = agents.spec.accepts_reassignment
         plan = (
             load_operator_plan(plan_path, scenario, reassignable=reassignable)
             if plan_path is not None
@@ -59,13 +55,8 @@ class OperatorHost:
                 "live mode places the operator with the task assigner (placement: base)",
                 field="--operator",
             )
-        self.operator = Operator(
-            bus.endpoint(OPERATOR_ID, stream(run.seed, "loss", OPERATOR_ID)),
-            tuple(r.id for r in scenario.robots),
-            scenario.tasks,
-            incarnation=incarnation,
-            reassignable=reassignable,
-        )
+        endpoint = bus.endpoint(OPERATOR_ID, agents.loss_stream(OPERATOR_ID))
+        self.operator = agents.operator(endpoint, incarnation=incarnation)
         self.script = ScriptedOperator(self.operator, plan)
         #: Called at each step before the operator steps (a console applies the
         #: commands its page queued, and takes its snapshot).

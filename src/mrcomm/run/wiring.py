@@ -6,9 +6,8 @@ simulated run's."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
 
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.agents.commands import OPERATOR_ID
@@ -20,17 +19,13 @@ from mrcomm.net.radio.links import RadioLinks
 from mrcomm.net.radio.model import RadioNetwork
 from mrcomm.net.signal.trace import RssiTrace
 from mrcomm.net.thresholds import Threshold
-from mrcomm.ports import Base, Bus, LinkSensor
+from mrcomm.ports import LinkSensor
 from mrcomm.robot.base import SimBase
 from mrcomm.robot.variation import VariationParams, robot_variations
 from mrcomm.run.config import RunConfig
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.seeding import stream
 from mrcomm.world.scenario import Scenario
-
-if TYPE_CHECKING:
-    from mrcomm.agents.executor import TaskExecutor
-    from mrcomm.metrics.timeline import Timeline
 
 
 def build_network(config: RunConfig, resources: ScenarioResources | None = None) -> NetworkModel:
@@ -52,49 +47,6 @@ def build_link_sensor(config: RunConfig, resources: ScenarioResources) -> LinkSe
     """The link sensor a robot's agent judges its links with (one per robot)."""
     cls: type[Threshold] = config.spec("threshold").load()
     return cls.sensor(config.variant_params("threshold"), resources)
-
-
-def build_executor(
-    config: RunConfig,
-    bus: Bus,
-    base: Base,
-    timeline: Timeline,
-    *,
-    tie_break_rank: Callable[[str], float],
-    link_sensor: LinkSensor,
-    incarnation: int = 1,
-    resources: ScenarioResources | None = None,
-) -> TaskExecutor:
-    """One robot's task executor: the chosen behaviour with its parameters (and what
-    the scenario tells it: :func:`scenario_options`)."""
-    cls: type[TaskExecutor] = config.spec("behaviour").load()
-    return cls(
-        bus,
-        base,
-        timeline,
-        tie_break_rank=tie_break_rank,
-        link_sensor=link_sensor,
-        params=config.variant_params("behaviour"),
-        incarnation=incarnation,
-        **scenario_options(cls, resources),
-    )
-
-
-def scenario_options(
-    cls: type[TaskExecutor], resources: ScenarioResources | None
-) -> dict[str, Any]:
-    """What an executor takes from the scenario beyond the common arguments: the map's
-    one-lane passages, and where the task assigner is, for one whose statuses go with
-    AON — its spec, and for one on a robot that robot's start (its home)."""
-    if resources is None:
-        return {}
-    options: dict[str, Any] = {"passages": resources.passages}
-    if cls.uses_aon:
-        scenario = resources.scenario
-        host = scenario.assigner.host
-        home = next(((r.pose.x, r.pose.y) for r in scenario.robots if r.id == host), None)
-        options.update(assigner=scenario.assigner, assigner_home=home)
-    return options
 
 
 def esd_trace_path(config: RunConfig) -> Path | None:

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 import time
 
-from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
+from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.agents.commands import OPERATOR_ID
 from mrcomm.agents.executor import TaskExecutor
 from mrcomm.agents.operator import Operator
@@ -27,6 +27,7 @@ from mrcomm.net.delivery import DeliveryPolicy
 from mrcomm.net.inprocess import InProcessNetwork
 from mrcomm.net.links import LinkState
 from mrcomm.net.relay import make_relay
+from mrcomm.run.agents import AgentAssembly
 from mrcomm.run.assemble import AonAgentFacts, RunFacts, assemble
 from mrcomm.run.bodies import RobotBodies
 from mrcomm.run.config import RunConfig
@@ -36,14 +37,11 @@ from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.result import MissionResult
 from mrcomm.run.trajectory import Trajectory
 from mrcomm.run.wiring import (
-    build_executor,
-    build_link_sensor,
     build_pulse,
     link_nodes,
     make_bases,
     make_links,
 )
-from mrcomm.seeding import stream
 
 
 class Mission:
@@ -66,10 +64,11 @@ class Mission:
         seed = config.seed
         self.links, self.link_recorder = make_links(self.resources, config, placement)
         self.proximity = make_proximity(config, self.robot_ids)
+        self.agents = agents = AgentAssembly(config, self.resources)
         self.network = InProcessNetwork(
             self.node_ids,
             policy=DeliveryPolicy(config.spl),
-            loss_rngs={a: stream(seed, "loss", a) for a in self.node_ids},
+            loss_rngs=agents.loss_streams(self.node_ids),
             channel=self.links.network.channel(self.node_ids),
             relay=make_relay(
                 self.node_ids,
@@ -83,37 +82,22 @@ class Mission:
         )
         self.bases = self.bodies.bases
         self.timelines = {rid: Timeline(rid) for rid in self.robot_ids}
-        ranks = stream(seed, "tie-break").permutation(len(self.robot_ids))
-        rank_of = {rid: float(ranks[i]) for i, rid in enumerate(self.robot_ids)}
-        self.sensors = {rid: build_link_sensor(config, self.resources) for rid in self.robot_ids}
+        self.sensors = {rid: agents.link_sensor() for rid in self.robot_ids}
         self.pulse = build_pulse(config, self.resources, self.sensors, self.links.network)
         self.executors: dict[str, TaskExecutor] = {
-            rid: build_executor(
-                config,
+            rid: agents.executor(
                 self.network.endpoint(rid),
                 self.bases[rid],
                 self.timelines[rid],
-                tie_break_rank=rank_of.__getitem__,
                 link_sensor=self.sensors[rid],
-                resources=self.resources,
             )
             for rid in self.robot_ids
         }
-        self.assigner = TaskAssigner(
-            self.network.endpoint(ASSIGNER_ID),
-            self.robot_ids,
-            scenario.tasks,
-            use_aon=config.spec("behaviour").uses_aon,
-        )
+        self.assigner = agents.assigner(self.network.endpoint(ASSIGNER_ID))
         self.operator: Operator | None = None
         self.script: ScriptedOperator | None = None
         if operator is not None:
-            self.operator = Operator(
-                self.network.endpoint(OPERATOR_ID),
-                self.robot_ids,
-                scenario.tasks,
-                reassignable=config.spec("behaviour").accepts_reassignment,
-            )
+            self.operator = agents.operator(self.network.endpoint(OPERATOR_ID))
             self.script = ScriptedOperator(self.operator, operator)
         self.trajectories = {rid: Trajectory() for rid in self.robot_ids}
         self.now = 0.0
