@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from typing import ClassVar
 
+from mrcomm.agents.behaviour import AgentContext
 from mrcomm.agents.executor import ExecutorParams, TaskExecutor
 from mrcomm.messaging.messages import TOPIC_TASK_STATUS, TaskState, TaskStatus
 from mrcomm.specs import VariantSpec, parameter
@@ -32,15 +33,16 @@ class RepeatExecutor(TaskExecutor):
 
     Params: ClassVar[type[ExecutorParams]] = RepeatParams
 
-    def __init__(self, *args: object, **kwargs: object) -> None:
-        super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+    def __init__(self, context: AgentContext, params: ExecutorParams) -> None:
+        super().__init__(context, params)  # refuses parameters that are not RepeatParams
         # (due time, copies left, status): copies still to publish.
         self._copies: list[tuple[float, int, TaskStatus]] = []
 
     @property
     def repeats(self) -> int:
         params = self.params
-        return params.repeats if isinstance(params, RepeatParams) else 1
+        assert isinstance(params, RepeatParams)  # the executor was made with its own
+        return params.repeats
 
     def send_status(self, task_id: str, state: TaskState) -> None:
         status = self.status_message(task_id, state)

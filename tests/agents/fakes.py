@@ -7,9 +7,11 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from mrcomm.agents.behaviour import AgentContext
 from mrcomm.agents.executor import TaskExecutor
 from mrcomm.messaging.messages import TOPIC_ASSIGNMENT, TOPIC_POSE, Assignment, Message, PoseMsg
 from mrcomm.metrics.timeline import Timeline
+from mrcomm.net.link_sensors import NoSensor
 from mrcomm.ports import Handler, NavStatus
 from mrcomm.world.geometry import Pose
 from mrcomm.world.tasks import TaskSpec
@@ -93,9 +95,16 @@ class Harness:
         self.timeline = Timeline(robot)
         self.now = 0.0
         ranks = {"robot_1": 0.0, "robot_2": 1.0, "robot_3": 2.0}
-        self.agent = cls(
-            self.bus, self.base, self.timeline, tie_break_rank=ranks.__getitem__, **kwargs
+        params = kwargs.pop("params", None) or cls.Params()
+        context = AgentContext(
+            bus=self.bus,
+            base=self.base,
+            timeline=self.timeline,
+            tie_break_rank=ranks.__getitem__,
+            link_sensor=kwargs.pop("link_sensor", None) or NoSensor(),
+            **kwargs,
         )
+        self.agent = cls(context, params)
         self.taken: list[tuple[str, str]] = []
         self._state = self.agent.state
         inner = self.agent._after_state_change

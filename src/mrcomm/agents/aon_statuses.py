@@ -10,9 +10,11 @@ handler; the executor is done only when nothing it sent is still pending."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any, ClassVar
+from typing import ClassVar
 
+from mrcomm.agents.behaviour import AgentContext
 from mrcomm.agents.executor import TaskExecutor
+from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.agents.report_tour import ReportTour, report_places
 from mrcomm.messaging.aon import AonEndpoint, MessageId
 from mrcomm.messaging.messages import (
@@ -24,7 +26,6 @@ from mrcomm.messaging.messages import (
     TaskStatus,
 )
 from mrcomm.ports import NavStatus
-from mrcomm.world.scenario import AssignerSpec
 
 #: A robot's last known position counts as where the assigner on it is for this long (s).
 HOST_FRESH = 30.0
@@ -40,22 +41,17 @@ class AonStatuses(TaskExecutor):
     #: The statuses sent with AON.
     AON_STATES: ClassVar[frozenset[TaskState]] = frozenset({TaskState.SUCCESS})
 
-    def __init__(
-        self,
-        *args: Any,
-        assigner: AssignerSpec | None = None,
-        assigner_home: tuple[float, float] | None = None,
-        **kwargs: Any,
-    ) -> None:
-        """``assigner``: where the task assigner is (the scenario's), and
+    def __init__(self, context: AgentContext, params: ExecutorParams) -> None:
+        """The context's ``assigner``: where the task assigner is (the scenario's), and
         ``assigner_home`` the start of the robot it runs on, so that a robot can bring
         it a status it missed."""
         self.aon: AonEndpoint | None = None
         self.report_tour = ReportTour()
+        assigner = context.assigner
         self._assigner_host = (assigner.host or "") if assigner is not None else ""
         self._assigner_at = assigner.position if assigner is not None else None
-        self.assigner_home = assigner_home
-        super().__init__(*args, **kwargs)
+        self.assigner_home = context.assigner_home
+        super().__init__(context, params)
         self.bus.subscribe(TOPIC_HEARTBEAT, self._on_heartbeat)
 
     def aon_settled(self) -> bool:

@@ -22,6 +22,7 @@ from transitions import Machine
 
 from mrcomm.agents import agenda
 from mrcomm.agents.avoidance import Avoidance
+from mrcomm.agents.behaviour import AgentContext, require_params
 from mrcomm.agents.collision import Mate
 from mrcomm.agents.commands import CommandInbox, command_team
 from mrcomm.agents.executor_params import ExecutorParams
@@ -44,11 +45,9 @@ from mrcomm.messaging.messages import (
     TaskStatus,
 )
 from mrcomm.metrics import labels as L
-from mrcomm.metrics.timeline import ACTIVITY, Timeline
-from mrcomm.net.link_sensors import NoSensor
-from mrcomm.ports import Base, BatchHandler, Bus, LinkSensor, NavStatus
+from mrcomm.metrics.timeline import ACTIVITY
+from mrcomm.ports import BatchHandler, LinkSensor, NavStatus
 from mrcomm.world.geometry import Pose
-from mrcomm.world.passages import Passages
 
 NB_STATES = [
     "unassigned",
@@ -110,26 +109,19 @@ class TaskExecutor:
     state: str
     trigger: Callable[..., bool]
 
-    def __init__(
-        self,
-        bus: Bus,
-        base: Base,
-        timeline: Timeline,
-        *,
-        tie_break_rank: Callable[[str], float],
-        link_sensor: LinkSensor | None = None,
-        params: ExecutorParams | None = None,
-        incarnation: int = 1,
-        passages: Passages | None = None,
-    ) -> None:
-        """``passages``: the map's one-lane passages, where the robot queues (none: it
-        does not)."""
+    def __init__(self, context: AgentContext, params: ExecutorParams) -> None:
+        """``context``: the robot's ports and what the scenario tells it; ``params``:
+        the behaviour's validated parameters, of type ``Params`` (anything else is
+        refused: a behaviour never runs on parameters it was not given)."""
+        require_params(type(self), params)
+        bus = context.bus
         self.bus = bus
-        self.base = base
-        self.timeline = timeline
-        self.params = params or ExecutorParams()
-        self.link_sensor: LinkSensor = link_sensor or NoSensor()
-        self.incarnation = incarnation
+        self.base = context.base
+        self.timeline = context.timeline
+        self.params = params
+        self.link_sensor: LinkSensor = context.link_sensor
+        self.incarnation = context.incarnation
+        tie_break_rank = context.tie_break_rank
         self._rank = tie_break_rank
         self.robot_id = bus.owner
         self.team: tuple[str, ...] = ()
@@ -146,6 +138,7 @@ class TaskExecutor:
         self._state_since = 0.0
         self.avoidance = Avoidance(self.robot_id, self.params, tie_break_rank)
         self.queue: PassageQueue | None = None
+        passages = context.passages
         if passages is not None and len(passages):
             p = self.params
             self.queue = PassageQueue(
@@ -171,7 +164,7 @@ class TaskExecutor:
         self.paused = False  # by the operator
         self._new_tasks = False  # the operator gave tasks: plan again once idle
         self._assigner_id = ""
-        self.commands = CommandInbox(bus, incarnation, self._command_team, self.on_command)
+        self.commands = CommandInbox(bus, self.incarnation, self._command_team, self.on_command)
 
     # -- the agent's life ----------------------------------------------------------
     @property
@@ -187,6 +180,10 @@ class TaskExecutor:
     def leaf(self) -> str:
         """Innermost state name (``na_navigating`` -> ``navigating``)."""
         return self.STATE_TABLE[self.state].leaf
+
+    def rank(self, robot: str) -> float:
+        """``robot``'s place in the team-wide tie-break order."""
+        return self._rank(robot)
 
     @property
     def now(self) -> float:

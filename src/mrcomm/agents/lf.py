@@ -42,13 +42,15 @@ from __future__ import annotations
 
 import math
 from functools import partial
-from typing import Any
+from typing import Any, cast
 
 from transitions.extensions import HierarchicalMachine
 
 from mrcomm.agents import agenda
 from mrcomm.agents.aon_statuses import AonStatuses
+from mrcomm.agents.behaviour import AgentContext, require_params
 from mrcomm.agents.collision import Mate
+from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.agents.lf_groups import joins, nearest_leader, round_leaders
 from mrcomm.agents.lf_machine import (
     ACTIVITY_OF_FULL_STATE,
@@ -88,10 +90,9 @@ class LeaderFollowerExecutor(AonStatuses):
     machine_class = HierarchicalMachine
     Params = LfParams
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        params = kwargs.get("params")
-        lf = params if isinstance(params, LfParams) else LfParams()
-        kwargs["params"] = lf
+    def __init__(self, context: AgentContext, params: ExecutorParams) -> None:
+        require_params(type(self), params)  # before any use of them
+        lf = cast(LfParams, params)
         self._utility = utility_function(lf.utility)
         self.leader: str | None = None
         self._just_completed = False
@@ -104,7 +105,7 @@ class LeaderFollowerExecutor(AonStatuses):
         self._followers_were_out = False
         self._out_since: float | None = None  # since when a follower has been in warning
         self._no_hold_until = 0.0  # hold_timeout: no new hold before this time
-        super().__init__(*args, **kwargs)
+        super().__init__(context, params)
         self.role_round = RoleRound(self.robot_id)
         self.bus.subscribe(TOPIC_UTILITY, self._on_utility)
         self.bus.subscribe(TOPIC_ROLE, self._on_role)

@@ -29,6 +29,8 @@ import math
 from typing import Any
 
 from mrcomm.agents import agenda
+from mrcomm.agents.behaviour import AgentContext
+from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.agents.lf import LeaderFollowerExecutor
 from mrcomm.agents.lf_machine import ACTIVITY_OF_FULL_STATE, LF_STATES, LF_TRANSITIONS, LfParams
 from mrcomm.agents.machine_table import build_table
@@ -89,15 +91,13 @@ class LfWaitExecutor(LeaderFollowerExecutor):
     transitions = LF_TRANSITIONS
     Params = LfWaitParams
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        params = kwargs.get("params")
-        kwargs["params"] = params if isinstance(params, LfWaitParams) else LfWaitParams()
+    def __init__(self, context: AgentContext, params: ExecutorParams) -> None:
         #: mate -> when this leader first heard it detouring (the current detour).
         self._detours_heard: dict[str, float] = {}
         self._detour_since = 0.0
         #: (round, task) of detours given up: not tried again while in that round's role.
         self._given_up: set[tuple[int, str]] = set()
-        super().__init__(*args, **kwargs)
+        super().__init__(context, params)
 
     @property
     def lfw(self) -> LfWaitParams:

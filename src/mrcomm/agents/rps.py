@@ -39,6 +39,7 @@ from typing import Any, Literal
 
 import msgspec
 
+from mrcomm.agents.behaviour import AgentContext
 from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS, TaskExecutor
 from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.messaging.messages import (
@@ -110,9 +111,7 @@ class RendezvousExecutor(TaskExecutor):
     transitions = RPS_TRANSITIONS
     Params = RpsParams
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        params = kwargs.get("params")
-        kwargs["params"] = params if isinstance(params, RpsParams) else RpsParams()
+    def __init__(self, context: AgentContext, params: ExecutorParams) -> None:
         #: Where each mate was first heard, and this robot's own start.
         self._first_heard: dict[str, tuple[float, float]] = {}
         self._start: tuple[float, float] | None = None
@@ -124,7 +123,7 @@ class RendezvousExecutor(TaskExecutor):
         self._final_done = False
         self._next_reshare = 0.0
         self._reshares = 0
-        super().__init__(*args, **kwargs)
+        super().__init__(context, params)
 
     @property
     def rps(self) -> RpsParams:

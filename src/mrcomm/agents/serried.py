@@ -32,6 +32,7 @@ import math
 from typing import Any
 
 from mrcomm.agents.aon_statuses import AonStatuses
+from mrcomm.agents.behaviour import AgentContext
 from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS
 from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.messaging.messages import TaskState, TaskStatus
@@ -84,15 +85,13 @@ class SerriedExecutor(AonStatuses):
     Params = SerriedParams
     AON_STATES = frozenset({TaskState.SUCCESS, TaskState.AGENDA_COMPLETE})
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        params = kwargs.get("params")
-        kwargs["params"] = params if isinstance(params, SerriedParams) else SerriedParams()
+    def __init__(self, context: AgentContext, params: ExecutorParams) -> None:
         #: Robots whose agenda is done, as this robot knows.
         self.finished: set[str] = set()
         self._follow_target: tuple[float, float] | None = None
         self._next_refresh = 0.0
         self._no_hold_until = 0.0
-        super().__init__(*args, **kwargs)
+        super().__init__(context, params)
 
     @property
     def serried(self) -> SerriedParams:

@@ -24,6 +24,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from mrcomm.agents.aon_statuses import DEFAULT_AON_LEASE
 from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
+from mrcomm.agents.behaviour import AgentContext
 from mrcomm.agents.commands import OPERATOR_ID
 from mrcomm.agents.executor import TaskExecutor
 from mrcomm.agents.executor_params import ExecutorParams
@@ -132,16 +133,16 @@ class AgentAssembly:
         incarnation: int = 1,
     ) -> TaskExecutor:
         """The task executor of the robot that owns ``bus``."""
-        return self.executor_class(
-            bus,
-            base,
-            timeline,
+        context = AgentContext(
+            bus=bus,
+            base=base,
+            timeline=timeline,
             tie_break_rank=self.rank_of,
             link_sensor=link_sensor,
-            params=self.params,
             incarnation=incarnation,
             **self.options,
         )
+        return self.executor_class(context, self.params)
 
     def assigner(self, bus: Bus, *, incarnation: int = 1) -> TaskAssigner:
         """The task assigner (on ``bus``, owned by ``ASSIGNER_ID``); with AON it
