@@ -21,6 +21,7 @@ may use it without import circles.
 from __future__ import annotations
 
 import importlib
+import sys
 from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -179,6 +180,8 @@ class SpecRegistry:
         self.group = group
         self._specs: dict[Kind, dict[str, VariantSpec]] = {k: {} for k in KINDS}
         self._discovered = False
+        #: ``kind.name`` -> why the plugin registering it failed to load.
+        self.broken: dict[str, str] = {}
 
     def register(self, spec: VariantSpec) -> VariantSpec:
         if spec.kind not in KINDS:
@@ -212,6 +215,9 @@ class SpecRegistry:
         try:
             return entries[name]
         except KeyError:
+            broken = self.broken.get(f"{kind}.{name}")
+            if broken is not None:
+                raise InputError(broken, field=kind) from None
             raise InputError(
                 f"unknown {kind} {name!r}{did_you_mean(name, entries)}; "
                 f"choose from {', '.join(sorted(entries))}",
@@ -243,21 +249,26 @@ class SpecRegistry:
             try:
                 loaded = ep.load()
             except Exception as err:  # a broken plugin names itself, never a traceback
-                raise InputError(
-                    f"plugin {ep.name} = {ep.value} (from {origin}) failed to load: "
-                    f"{type(err).__name__}: {err}",
-                    field=self.group,
-                ) from None
-            specs = loaded if isinstance(loaded, Iterable) else [loaded]
+                self._refuse(ep.name, ep.value, origin, f"{type(err).__name__}: {err}")
+                continue
+            specs = list(loaded) if isinstance(loaded, Iterable) else [loaded]
+            if not all(isinstance(spec, VariantSpec) for spec in specs):
+                self._refuse(ep.name, ep.value, origin, "it is not a VariantSpec")
+                continue
             for spec in specs:
-                if not isinstance(spec, VariantSpec):
-                    raise InputError(
-                        f"plugin {ep.name} = {ep.value} (from {origin}) is not a VariantSpec",
-                        field=self.group,
-                    )
                 if spec.origin == "mrcomm" and origin != "mrcomm":
                     spec = _with_origin(spec, origin)
                 self.register(spec)
+
+    def _refuse(self, name: str, value: str, origin: str, why: str) -> None:
+        """A plugin that cannot be loaded is skipped with one warning line (on standard
+        error), so that it breaks no command that does not use it; naming it is then
+        an error (:meth:`get`). MRComm's own variants failing is a broken install."""
+        message = f"plugin {name} = {value} (from {origin}) failed to load: {why}"
+        if origin == "mrcomm":
+            raise InputError(message, field=self.group)
+        self.broken[name] = message
+        print(f"warning: {message}; skipped", file=sys.stderr)
 
 
 def _with_origin(spec: VariantSpec, origin: str) -> VariantSpec:

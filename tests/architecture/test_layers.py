@@ -1,8 +1,8 @@
 """The package's shape: layers depend downwards only, and no import circles.
 
 Read statically (``ast``) from ``src/mrcomm``: every ``import`` outside
-``if TYPE_CHECKING:`` blocks counts for the layering; only module-level ones (run at
-import time) count for circles.
+``if TYPE_CHECKING:`` blocks counts, for the layering and for circles alike (an import
+inside a function only postpones a circle to the first call).
 """
 
 from __future__ import annotations
@@ -41,9 +41,9 @@ RANKS = {
 }
 
 
-def module_name(path: Path) -> str:
+def module_name(path: Path, root: Path = SRC.parent) -> str:
     """``src/mrcomm/sim/mission.py`` -> ``mrcomm.sim.mission``."""
-    parts = path.relative_to(SRC.parent).with_suffix("").parts
+    parts = path.relative_to(root).with_suffix("").parts
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
@@ -62,10 +62,10 @@ def _is_type_checking(node: ast.If) -> bool:
     )
 
 
-def imports(path: Path, *, top_level_only: bool) -> set[str]:
+def imports(path: Path, *, top_level_only: bool, root: Path = SRC.parent) -> set[str]:
     """The mrcomm modules ``path`` imports (``top_level_only``: not those inside
     functions, which run only when called)."""
-    module = module_name(path)
+    module = module_name(path, root)
     package = module if path.name == "__init__.py" else module.rsplit(".", 1)[0]
     found: set[str] = set()
 
@@ -131,11 +131,18 @@ def test_layers_depend_downwards_only(module: str) -> None:
     assert not upward, f"{module} ({own}) imports upwards: {upward}"
 
 
-def test_no_import_circles() -> None:
-    graph = {
-        m: {t for t in imports(p, top_level_only=True) if t in MODULES and t != m}
-        for m, p in MODULES.items()
+def import_graph(modules: dict[str, Path], root: Path = SRC.parent) -> dict[str, set[str]]:
+    """Module -> the modules of ``modules`` (under ``root``) it imports, at module
+    level or inside a function."""
+    return {
+        m: {t for t in imports(p, top_level_only=False, root=root) if t in modules and t != m}
+        for m, p in modules.items()
     }
+
+
+def find_circle(graph: dict[str, set[str]]) -> list[str] | None:
+    """One import circle of ``graph`` (its modules in order, the first again at the
+    end), or None."""
     state: dict[str, int] = {}
     stack: list[str] = []
 
@@ -153,7 +160,25 @@ def test_no_import_circles() -> None:
 
     for start in sorted(graph):
         if start not in state and (cycle := walk(start)):
-            pytest.fail("import circle: " + " -> ".join(cycle))
+            return cycle
+    return None
+
+
+def test_no_import_circles() -> None:
+    cycle = find_circle(import_graph(MODULES))
+    assert cycle is None, "import circle: " + " -> ".join(cycle or [])
+
+
+def test_a_circle_through_a_function_level_import_is_found(tmp_path: Path) -> None:
+    (tmp_path / "mrcomm").mkdir()
+    first, second = tmp_path / "mrcomm" / "first.py", tmp_path / "mrcomm" / "second.py"
+    first.write_text("from mrcomm.second import thing\n")
+    second.write_text("def later():\n    from mrcomm.first import other\n")
+    modules = {"mrcomm.first": first, "mrcomm.second": second}
+    circle = ["mrcomm.first", "mrcomm.second", "mrcomm.first"]
+    assert find_circle(import_graph(modules, tmp_path)) == circle
+    second.write_text("def later():\n    return 1\n")
+    assert find_circle(import_graph(modules, tmp_path)) is None
 
 
 def test_no_module_over_600_lines() -> None:

@@ -162,7 +162,7 @@ def test_ad_hoc_range_cut_uses_poses_seen_on_the_wire() -> None:
         own = {"xy": (0.0, 0.0)}
         book = PositionBook(fixed={"station": (100.0, 0.0)})
         book.own["robot_2"] = lambda: own["xy"]
-        bus = ZenohBus(node, LinkRules(network=AdHoc()), book)
+        bus = ZenohBus(node, LinkRules(network=AdHoc(AdHocParams())), book)
         far = bus.endpoint("robot_1", stream(1, "loss", "robot_1"))
         me = bus.endpoint("robot_2", stream(1, "loss", "robot_2"))
         station = bus.endpoint("station", stream(1, "loss", "station"))

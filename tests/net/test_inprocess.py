@@ -16,7 +16,7 @@ from mrcomm.messaging.messages import (
 from mrcomm.net.delivery import DeliveryPolicy
 from mrcomm.net.inprocess import InProcessNetwork
 from mrcomm.net.links import LinkModel
-from mrcomm.net.network import AdHoc, Wlan
+from mrcomm.net.network import AdHoc, AdHocParams, Wlan
 from mrcomm.net.thresholds import DistanceThreshold, NoThreshold
 from mrcomm.seeding import stream
 from mrcomm.world.occupancy import OccupancyGrid
@@ -119,7 +119,7 @@ def test_assignment_topic_is_never_perturbed() -> None:
 def test_ah_cuts_links_beyond_8_m_and_wlan_does_not() -> None:
     grid = OccupancyGrid(np.zeros((10, 400), dtype=bool), 0.1)
     positions = np.array([[1.0, 0.5], [8.9, 0.5], [9.1, 0.5]])
-    ah = LinkModel(IDS, grid, AdHoc(), NoThreshold()).update(positions, 0.0)
+    ah = LinkModel(IDS, grid, AdHoc(AdHocParams()), NoThreshold()).update(positions, 0.0)
     assert ah.connected[0, 1] and ah.connected[1, 0]  # 7.9 m
     assert not ah.connected[0, 2] and not ah.connected[2, 0]  # 8.1 m
     wlan = LinkModel(IDS, grid, Wlan(), NoThreshold()).update(positions, 0.0)
@@ -139,7 +139,9 @@ def test_ah_cuts_links_beyond_8_m_and_wlan_does_not() -> None:
 def test_virtual_node_is_always_connected_and_slt_warns_beyond_4_m() -> None:
     grid = OccupancyGrid(np.zeros((10, 400), dtype=bool), 0.1)
     positions = np.array([[0.0, 0.5], [4.5, 0.5], [math.nan, math.nan]])
-    state = LinkModel(IDS, grid, AdHoc(), DistanceThreshold(4.0)).update(positions, 0.0)
+    state = LinkModel(IDS, grid, AdHoc(AdHocParams()), DistanceThreshold(4.0)).update(
+        positions, 0.0
+    )
     assert state.connected[:, 2].all() and state.connected[2, :].all()
     assert state.warning[0, 1] and state.warning[1, 0]
     assert not state.warning[:, 2].any() and not state.warning.diagonal().any()

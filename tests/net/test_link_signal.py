@@ -11,7 +11,7 @@ import pytest
 
 from mrcomm.net.link_sensors import MeasuredSensor, ModelSensor
 from mrcomm.net.links import LinkModel
-from mrcomm.net.network import AdHoc
+from mrcomm.net.network import AdHoc, AdHocParams
 from mrcomm.net.signal.bundled import default_model
 from mrcomm.net.signal.table import RssiTable
 from mrcomm.net.signal_thresholds import ModelThreshold
@@ -40,7 +40,7 @@ def _walled_room() -> OccupancyGrid:
 def test_a_wall_between_two_robots_switches_to_the_obstructed_model(table: RssiTable) -> None:
     grid = _walled_room()
     ids = ("a", "b")
-    model = LinkModel(ids, grid, AdHoc(), ModelThreshold(table, -42.0))
+    model = LinkModel(ids, grid, AdHoc(AdHocParams()), ModelThreshold(table, -42.0))
     behind_wall = model.update(np.array([[4.0, 1.0], [6.0, 1.0]]), 0.0)
     assert behind_wall.line_of_sight is not None and behind_wall.rssi is not None
     assert not behind_wall.line_of_sight[0, 1] and not behind_wall.line_of_sight[1, 0]

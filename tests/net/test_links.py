@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mrcomm.net.links import LinkModel
-from mrcomm.net.network import AdHoc
+from mrcomm.net.network import AdHoc, AdHocParams
 from mrcomm.net.signal.bundled import default_model
 from mrcomm.net.signal.table import RssiTable
 from mrcomm.net.signal_thresholds import ModelThreshold
@@ -39,10 +39,12 @@ def test_a_hosted_node_copies_its_hosts_row_and_column(table: RssiTable) -> None
     grid = _room()
     ids = ("a", "b", "c", "host")
     xy = np.array([[1.0, 1.0], [4.0, 1.0], [6.0, 1.5], [math.nan, math.nan]])
-    aliased = LinkModel(ids, grid, AdHoc(), ModelThreshold(table), aliases={"host": "b"})
+    aliased = LinkModel(
+        ids, grid, AdHoc(AdHocParams()), ModelThreshold(table), aliases={"host": "b"}
+    )
     state = aliased.update(xy, 0.0)
     # The same as evaluating "host" at b's position as a node of its own.
-    explicit = LinkModel(ids, grid, AdHoc(), ModelThreshold(table))
+    explicit = LinkModel(ids, grid, AdHoc(AdHocParams()), ModelThreshold(table))
     plain = explicit.update(np.array([*xy[:3], xy[1]]), 0.0)
     assert aliased.evaluated_ids == ("a", "b", "c")
     for field in ("distance", "rssi", "line_of_sight", "warning", "connected"):
@@ -58,7 +60,7 @@ def test_a_hosted_node_copies_its_hosts_row_and_column(table: RssiTable) -> None
 
 def test_rays_are_recast_only_when_line_of_sight_may_have_changed(table: RssiTable) -> None:
     grid = _room()
-    model = LinkModel(("a", "b"), grid, AdHoc(), ModelThreshold(table))
+    model = LinkModel(("a", "b"), grid, AdHoc(AdHocParams()), ModelThreshold(table))
     # In sight, 2 m apart in open space (clearance to the wall ~ 1 m): a 5 cm step
     # of both ends keeps the old answer; standing still never re-casts.
     model.update(np.array([[1.0, 2.0], [3.0, 2.0]]), 0.0)
@@ -80,7 +82,7 @@ def test_rays_are_recast_only_when_line_of_sight_may_have_changed(table: RssiTab
 
 def test_no_ray_is_cast_for_a_threshold_without_signal_model() -> None:
     grid = _room()
-    model = LinkModel(("a", "b"), grid, AdHoc(), DistanceThreshold(4.0))
+    model = LinkModel(("a", "b"), grid, AdHoc(AdHocParams()), DistanceThreshold(4.0))
     state = model.update(np.array([[4.0, 1.0], [6.0, 1.0]]), 0.0)
     assert model.casts == 0 and state.line_of_sight is None and state.rssi is None
 

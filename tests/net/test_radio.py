@@ -17,6 +17,7 @@ from mrcomm.net.links import LinkModel
 from mrcomm.net.radio.channel import RadioChannel, fading_gain_db
 from mrcomm.net.radio.model import (
     RadioNetwork,
+    RadioParams,
     delivery_ratio,
     mean_power_dbm,
     packet_error_rate,
@@ -145,8 +146,8 @@ def test_shadowing_is_seeded_and_reciprocal() -> None:
 
 
 def test_two_runs_of_one_seed_draw_one_field() -> None:
-    a = RadioNetwork(profile=OFFICE, extent=(0, 30, 0, 20), seed=3)
-    b = RadioNetwork(profile=OFFICE, extent=(0, 30, 0, 20), seed=3)
+    a = RadioNetwork(RadioParams.model_validate({}), profile=OFFICE, extent=(0, 30, 0, 20), seed=3)
+    b = RadioNetwork(RadioParams.model_validate({}), profile=OFFICE, extent=(0, 30, 0, 20), seed=3)
     assert np.array_equal(a.field.values, b.field.values)
     assert np.array_equal(a.offsets(4), b.offsets(4))
     offsets = a.offsets(4)
@@ -226,7 +227,9 @@ def _pulse_on_walls_grid(profile: RadioProfile) -> tuple[Any, Any, dict[str, Mea
     from mrcomm.run.wiring import RadioPulse
 
     grid = _walls_grid()
-    network = RadioNetwork(profile=profile, extent=grid.extent, seed=1)
+    network = RadioNetwork(
+        RadioParams.model_validate({}), profile=profile, extent=grid.extent, seed=1
+    )
     ids = ("a", "b", "c")
     links = LinkModel(ids, grid, network, NoThreshold())
     sensors = {r: MeasuredSensor(-41.0) for r in ids}

@@ -20,7 +20,7 @@ from mrcomm.experiment.radio_readings import positions_at, read_csv_readings
 from mrcomm.net.radio.fit import RadioFit, fit_profile, write_profile
 from mrcomm.net.radio.fit_data import Readings
 from mrcomm.net.radio.fit_shadowing import reciprocal_asymmetry
-from mrcomm.net.radio.model import RadioNetwork
+from mrcomm.net.radio.model import RadioNetwork, RadioParams
 from mrcomm.net.radio.profile import RadioProfile, load_profile
 from mrcomm.world.mapio import load_map
 from mrcomm.world.occupancy import OccupancyGrid
@@ -84,7 +84,9 @@ def draw_readings(
     time: list[float] = []
     pairs = [(a, b) for a in range(robots) for b in range(a + 1, robots)]
     for g, seed in enumerate(seeds):
-        network = RadioNetwork(profile=profile, extent=grid.extent, seed=seed)
+        network = RadioNetwork(
+            RadioParams.model_validate({}), profile=profile, extent=grid.extent, seed=seed
+        )
         offsets = network.offsets(robots)
         paths = wander(grid, np.random.default_rng(1000 + seed), robots, steps)
         for t in range(steps):

@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 
 from mrcomm.agents.executor import TaskExecutor
 from mrcomm.agents.utility import UtilityInputs
-from mrcomm.net.network import AdHoc, NetworkModel
+from mrcomm.net.network import AdHoc, AdHocParams, NetworkModel
 from mrcomm.specs import REGISTRY, VariantSpec, get_spec
 from mrcomm.testing import CHECKS, check_variant
 
@@ -73,7 +73,7 @@ class _Inconsistent(NetworkModel):
     reach_m = 8.0
 
     def connected(self, distance: NDArray[np.float64]) -> NDArray[np.bool_]:
-        return AdHoc().connected(distance)
+        return AdHoc(AdHocParams()).connected(distance)
 
 
 def test_api_catches_a_network_model_that_contradicts_itself() -> None:

@@ -234,7 +234,8 @@ def agent(
 ) -> None:
     """Run one robot's agent (task executor, and the assigner it hosts) over Zenoh."""
     run.check_mode("live")
-    from mrcomm.live.agent import check_agent_id, run_agent
+    from mrcomm.live.agent import check_agent_id
+    from mrcomm.live.agent_run import run_agent
     from mrcomm.live.settings import BaseOptions, LiveSettings, check_agent_clock
     from mrcomm.world.scenario import load_scenario
 

@@ -38,7 +38,6 @@ from mrcomm.live.journal import (
     Journal,
     TimelineTail,
     journal_path,
-    new_incarnation,
     track_presence,
 )
 from mrcomm.live.mates import MateWatch
@@ -544,13 +543,3 @@ class AgentProcess:
         if self.infra is not self.node:
             self.infra.close()
         self.node.close()
-
-
-def run_agent(settings: LiveSettings, agent: str, incarnation: int | None = None) -> int:
-    """Run one agent process to the end of the mission; returns the exit status."""
-    inc = incarnation if incarnation is not None else new_incarnation(settings.record_dir, agent)
-    if settings.agent_clock == "host":
-        from mrcomm.live.host_clock import HostClockAgent  # it extends AgentProcess
-
-        return HostClockAgent(settings, agent, inc).run()
-    return AgentProcess(settings, agent, inc).run()

@@ -126,9 +126,9 @@ class AdHoc(NetworkModel):
 
     name = "ah"
 
-    def __init__(self, params: BaseModel | None = None) -> None:
-        if not isinstance(params, AdHocParams):
-            params = AdHocParams.model_validate({})
+    def __init__(self, params: AdHocParams) -> None:
+        if not isinstance(params, AdHocParams):  # no fallback to defaults
+            raise TypeError(f"AdHoc takes AdHocParams, got {type(params).__name__}")
         self.reach_m = params.range_m
         self.relay_hops = params.hop_limit()
         self.relay_store = params.relay and params.relay_store

@@ -105,14 +105,14 @@ class RadioNetwork(NetworkModel):
 
     def __init__(
         self,
-        params: BaseModel | None = None,
+        params: RadioParams,
         *,
         profile: RadioProfile | None = None,
         extent: tuple[float, float, float, float] = (0.0, 1.0, 0.0, 1.0),
         seed: int = 0,
     ) -> None:
-        if not isinstance(params, RadioParams):
-            params = RadioParams.model_validate({})
+        if not isinstance(params, RadioParams):  # no fallback to defaults
+            raise TypeError(f"RadioNetwork takes RadioParams, got {type(params).__name__}")
         self.params = params
         self.profile = profile if profile is not None else load_profile(params.profile)
         self.reach_m = reach_m(self.profile)
@@ -131,6 +131,7 @@ class RadioNetwork(NetworkModel):
     def build(cls, params: BaseModel, resources: Any, seed: int) -> RadioNetwork:
         """The run's radio: its profile, and a shadowing field over the scenario's map
         drawn from the run's seed."""
+        assert isinstance(params, RadioParams), type(params)  # the spec's model
         return cls(params, extent=resources.scenario.grid.extent, seed=seed)
 
     @classmethod

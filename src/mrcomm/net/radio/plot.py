@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from mrcomm.fileio import atomic_write
-from mrcomm.net.radio.model import RadioNetwork, delivery_ratio, mean_power_dbm
+from mrcomm.net.radio.model import RadioNetwork, RadioParams, delivery_ratio, mean_power_dbm
 from mrcomm.net.radio.profile import RadioProfile
 from mrcomm.world.occupancy import OccupancyGrid
 
@@ -88,7 +88,9 @@ def plot_profile(
     axes[0].set_title("Delivery (averaged over shadowing)")
     axes[1].set_title("Path loss and walls")
     if panels == 3 and grid is not None and source is not None:
-        network = RadioNetwork(profile=profile, extent=grid.extent, seed=seed)
+        network = RadioNetwork(
+            RadioParams.model_validate({}), profile=profile, extent=grid.extent, seed=seed
+        )
         power, extent = power_map(network, grid, source)
         ax = axes[2]
         ax.imshow(grid.occupied, origin="lower", extent=grid.extent, cmap="Greys",
