@@ -27,6 +27,12 @@ class InputError(Exception):
         return " ".join(text.split())
 
 
+class MissionFailed(Exception):
+    """A mission that could not go on, through no fault of the input (every agent
+    process of a live team died; a live mission that never ended): the message says
+    what happened and where to look (the CLI prints it in one line, exit status 1)."""
+
+
 class Interrupted(Exception):
     """Ctrl-C, after the command has saved what it could: the message says what was
     kept (the CLI prints it in one line, exit status 130)."""

@@ -373,3 +373,47 @@ def test_a_stopped_lf_leader_is_left_and_rejoins_when_continued(tmp_path: Path) 
     assert result.mission["successful"] is True, result.mission
     for robot in ("robot_1", "robot_2", "robot_3"):
         assert result.robots[robot]["failed_tasks"] == [], (robot, result.robots[robot])
+
+
+def test_a_dead_team_ends_the_live_run_at_once(tmp_path: Path) -> None:
+    """Every agent process killed mid-mission: the launcher stops the world within
+    seconds (not at the mission's time limit, 30 min at speed 1) and names the first
+    process to die and its log."""
+    import threading
+
+    from mrcomm.errors import MissionFailed
+
+    config = make_config(None, scenario=S1)
+    failure: list[BaseException] = []
+
+    def wait(team: LiveTeam) -> None:
+        try:
+            team.wait()
+        except MissionFailed as err:
+            failure.append(err)
+
+    with LiveTeam(LiveSettings(config, make_options(), tmp_path, speed=1.0)) as t:
+        t.start()
+        wait_for(lambda: journal_has_tick(tmp_path), 60, "the mission's first tick")
+        waiting = threading.Thread(target=wait, args=(t,))
+        waiting.start()
+        t.kill("robot_3", signal.SIGKILL)
+        wait_for(lambda: "robot_3" in t.gone, 10, "robot_3 seen dead")
+        assert waiting.is_alive()  # two robots left: the mission goes on
+        start = time.monotonic()
+        for robot in ("robot_1", "robot_2"):
+            t.kill(robot, signal.SIGKILL)
+        waiting.join(timeout=60)
+        waited = time.monotonic() - start
+        assert not t.running("world")
+    assert len(failure) == 1, failure
+    assert waited < 30, waited  # against a mission timeout of more than 1,800 s
+    assert t.mission_timeout() > 1800
+    message = str(failure[0])
+    assert "every agent process has died (3)" in message
+    assert "robot_3 killed by signal 9" in message
+    assert str(tmp_path / "robot_3.log") in message
+
+
+def journal_has_tick(record_dir: Path) -> bool:
+    return any(line.get("k") == "first_tick" for line in journal(record_dir, "robot_*"))

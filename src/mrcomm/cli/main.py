@@ -15,7 +15,7 @@ import typer
 from typer.core import TyperGroup
 
 import mrcomm
-from mrcomm.errors import InputError, Interrupted
+from mrcomm.errors import InputError, Interrupted, MissionFailed
 
 #: Exit status after Ctrl-C (128 + SIGINT, as shells report it).
 EXIT_INTERRUPTED = 130
@@ -148,6 +148,9 @@ def app() -> None:
     except InputError as err:
         typer.echo(f"mrcomm: error: {err.one_line()}", err=True)
         sys.exit(2)
+    except MissionFailed as failed:
+        typer.echo(f"mrcomm: error: {' '.join(str(failed).split())}", err=True)
+        sys.exit(1)
     except Interrupted as stop:
         _interrupted(str(stop))
     except typer.Exit as err:

@@ -32,7 +32,7 @@ from typing import IO, Any
 
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.agents.commands import OPERATOR_ID
-from mrcomm.errors import InputError
+from mrcomm.errors import InputError, MissionFailed
 from mrcomm.live.collect import collect
 from mrcomm.live.kernel_links import Emulation
 from mrcomm.live.netns import Netns
@@ -109,6 +109,8 @@ class LiveTeam:
         #: Processes that died during the mission, one line each (after :meth:`wait`).
         self.died: list[str] = []
         self.restarts: dict[str, int] = {}
+        #: Agent processes seen exited while the mission runs: when first seen so.
+        self.gone: dict[str, float] = {}
 
     # -- processes ---------------------------------------------------------------------
     def start(self, hold: Collection[str] = ()) -> None:
@@ -134,6 +136,7 @@ class LiveTeam:
         old = self.children.get(name)
         if old is not None and old.process.poll() is None:
             raise RuntimeError(f"{name} is still running")
+        self.gone.pop(name, None)
         count = self.restarts.get(name, -1) + 1
         self.restarts[name] = count
         suffix = f".{count}" if count else ""
@@ -268,7 +271,8 @@ class LiveTeam:
                 if left <= PROGRESS_PERIOD:
                     self.stop()
                     message = "the live mission did not end in time (see the logs)"
-                    raise TimeoutError(message) from None
+                    raise MissionFailed(message) from None
+                self._stop_if_team_dead()
                 if on_progress is not None:
                     on_progress()
         if world.returncode != 0:
@@ -293,6 +297,24 @@ class LiveTeam:
             for child in self.children.values()
             if child.name not in lingered and child.process.returncode not in (0, None)
         ]
+
+    def _stop_if_team_dead(self) -> None:
+        """Every agent process (robots, task assigner, operator) has exited while the
+        world still runs: no one is left to end the mission, so stop now instead of
+        waiting out its time limit, naming the first to die and its log."""
+        agents = [self.children.get(name) for name in self.names if name != WORLD_ID]
+        for child in agents:
+            if child is not None and child.process.poll() is not None:
+                self.gone.setdefault(child.name, time.monotonic())
+        if not agents or any(c is None or c.name not in self.gone for c in agents):
+            return
+        dead = [c for c in agents if c is not None]
+        first = min(dead, key=lambda c: self.gone[c.name])
+        line = self.death(first)
+        self.stop()
+        raise MissionFailed(
+            f"every agent process has died ({len(dead)}); the first: {line} (its log: {first.log})"
+        )
 
     def death(self, child: Child) -> str:
         """One line on a process that died: how, and the first line of its error."""

@@ -172,6 +172,12 @@ class AonEndpoint:
         self._publish(now)
         return msg_id
 
+    @property
+    def lease(self) -> float | None:
+        """Simulated s after which a silent member no longer blocks the others (None:
+        never)."""
+        return self._lease
+
     def step(self, now: float) -> None:
         """Advance time: lease checks, fail-safe restarts, re-sends and replies."""
         self._clock(now)

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from mrcomm.specs import VariantSpec
+from mrcomm.specs import VariantSpec, parameter_names
 
 ROOT = Path(__file__).resolve().parents[3]
 S1 = ROOT / "data" / "scenarios" / "s1.yaml"
@@ -212,6 +212,32 @@ def check_same_decisions(spec: VariantSpec, steps: int = 600) -> str:
     return f"{compared} delivery decisions identical on both buses"
 
 
+# -- one assembly -----------------------------------------------------------------------
+
+
+def check_assembly(spec: VariantSpec) -> str:
+    """Every parameter of the variant set to a value other than its default: the
+    simulation and a live agent process build robot_1's executor alike."""
+    from mrcomm.testing.assembly import compare_assembly, non_default_values
+
+    if "live" not in spec.modes:
+        return "simulation only (no live mode): nothing to compare"
+    from mrcomm.run.config import make_config
+
+    base = mission_config(spec)
+    values, missed = non_default_values(spec.params_model())
+    params = {kind: dict(section) for kind, section in base.params.items()}
+    if spec.kind == "behaviour":
+        params.setdefault("behaviour", {}).update(values)
+    elif values:  # the variant's own section: it reaches this variant only
+        params.setdefault(spec.kind, {})[spec.name] = values
+    config = make_config(None, **{**base.model_dump(exclude={"params"}), "params": params})
+    made = compare_assembly(config)
+    varied = f"{len(parameter_names(spec.params_model())) - len(missed)} parameters varied"
+    left = f" ({', '.join(missed)} left at their defaults)" if missed else ""
+    return f"{made['class'].rsplit('.', 1)[-1]} the same in simulation and live, {varied}{left}"
+
+
 # -- layering ----------------------------------------------------------------------------
 
 
@@ -240,6 +266,7 @@ CHECKS: dict[str, Callable[[VariantSpec], str]] = {
     "determinism": check_determinism,
     "no_deadlock": check_no_deadlock,
     "same_decisions": check_same_decisions,
+    "assembly": check_assembly,
     "layering": check_layering,
 }
 
