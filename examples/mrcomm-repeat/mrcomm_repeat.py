@@ -6,20 +6,25 @@ at SPL X % a status is lost only if every copy is (X^repeats), where NB loses X 
 LF's AON makes sure at the cost of n(n+1) publications per status.
 
 Everything a behaviour needs is here: the executor class (a subclass of MRComm's NB
-executor), its parameter model (with defaults, limits, units) and its spec. The entry
-point in ``pyproject.toml`` registers the spec.
+executor), its parameter model (with defaults, limits, units), the metric it adds
+(``status_copies``: each robot counts the copies it published; the team's total is a
+team metric, stored with every run, tested by ``mrcomm analyze`` and drawn by
+``mrcomm report``) and its spec. The entry point in ``pyproject.toml`` registers the
+spec.
 """
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Any, ClassVar
 
 from mrcomm.agents.behaviour import AgentContext
 from mrcomm.agents.executor import ExecutorParams, TaskExecutor
 from mrcomm.messaging.messages import TOPIC_TASK_STATUS, TaskState, TaskStatus
-from mrcomm.specs import VariantSpec, parameter
+from mrcomm.metrics.timeline import Timeline
+from mrcomm.specs import TeamMetric, VariantSpec, parameter
 
 REPEAT_PERIOD_S = 1.0  # between copies of a status
+COPY_EVENT = "status_copy"  # recorded in the robot's timeline for each copy published
 
 
 class RepeatParams(ExecutorParams):
@@ -57,6 +62,7 @@ class RepeatExecutor(TaskExecutor):
         for due, left, status in self._copies:
             if self.now + 1e-9 >= due:
                 self.bus.publish(TOPIC_TASK_STATUS, status)
+                self.timeline.event(COPY_EVENT, self.now, task_id=status.task_id)
                 left -= 1
                 due += REPEAT_PERIOD_S
             if left > 0:
@@ -68,6 +74,11 @@ class RepeatExecutor(TaskExecutor):
         return super().done and not self._copies
 
 
+def repeat_metrics(timeline: Timeline) -> dict[str, Any]:
+    """The metric this behaviour adds to each robot's: the copies it published."""
+    return {"status_copies": timeline.count(COPY_EVENT)}
+
+
 SPEC = VariantSpec(
     kind="behaviour",
     name="repeat",
@@ -75,4 +86,7 @@ SPEC = VariantSpec(
     params=RepeatParams,
     summary="NB that publishes each task status `repeats` times, 1 s apart (example plugin)",
     topics=("pose", "task_status"),
+    robot_metrics=repeat_metrics,
+    metrics=("status_copies",),
+    team_metrics=(TeamMetric("status_copies", "Status copies sent", "count", "greater"),),
 )

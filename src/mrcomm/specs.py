@@ -46,6 +46,22 @@ def parameter(default: Any, description: str, unit: str | None = None, **limits:
     return Field(default, description=description, json_schema_extra=extra, **limits)
 
 
+@dataclass(frozen=True)
+class TeamMetric:
+    """A team metric a behaviour adds: the sum over the robots of the per-robot metric
+    of the same name (its spec's ``robot_metrics`` computes that). Stored with every
+    run of the behaviour, tested and drawn by ``mrcomm analyze`` / ``mrcomm report``
+    like MRComm's own metrics."""
+
+    name: str
+    #: What a figure or table calls it ("Rendezvous time").
+    label: str
+    #: Its unit ("s", "count", "m").
+    unit: str
+    #: The direction of the test of SPL 0 against SPL X: "less" = fewer at SPL 0.
+    alternative: Literal["less", "greater", "two-sided"] = "less"
+
+
 class NoParams(BaseModel):
     """A variant without parameters."""
 
@@ -73,6 +89,13 @@ class VariantSpec:
     #: Behaviours: the function (or ``"module:function"``) computing the metrics it adds
     #: from one robot's timeline (None: none).
     robot_metrics: Any = None
+    #: Behaviours: the team metrics it adds (each the sum of its robots' metric of
+    #: that name), in the order results list them.
+    team_metrics: tuple[TeamMetric, ...] = ()
+    #: Thresholds: whether each robot measures its links with a pulse process (ESD):
+    #: replayed from the threshold's ``trace`` parameter, or read off the radio model
+    #: when it has none.
+    pulse: bool = False
     #: Behaviours: whether task statuses travel with AON.
     uses_aon: bool = False
     #: Behaviours: whether an operator may move tasks between its robots or add tasks

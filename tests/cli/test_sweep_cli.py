@@ -135,7 +135,7 @@ def test_export_command_writes_csv(
         capsys, monkeypatch, "export", "--db", db, "--format", "csv", "--out", out
     )
     assert code == 0, err
-    assert stdout.startswith("wrote 13 tables")
+    assert stdout.startswith("wrote 14 tables")
     header = (out / "runs.csv").read_text().splitlines()[0]
     assert header.startswith("run_id,config_id,experiment,label,scenario,network,spl")
     assert len((out / "runs.csv").read_text().splitlines()) == 5

@@ -91,3 +91,34 @@ def assert_matches_simulation(live: dict[str, Any], options: dict[str, Any]) -> 
     assert lv["near_collisions_missed"] >= 0
     latency = live["live"]["pose_latency_ms"]
     assert latency["n"] > 1000 and latency["p50"] < 50.0
+
+
+def test_live_runs_the_parameters_it_records(tmp_path: Path) -> None:
+    """``--set behaviour.*`` takes effect in every live agent, as recorded: a pose
+    every second sends the simulation's pose count (it used to send the default
+    rate, five times as many, while the result recorded ``pose_period: 1.0``)."""
+    options = {"network": "wlan", "behaviour": "nb", "seed": 3}
+    live = live_run(options, tmp_path / "pose", "--set", "behaviour.pose_period=1.0")
+    config = make_config(
+        None, scenario=S1, params={"behaviour": {"pose_period": 1.0}}, **options
+    )
+    sim = run_mission(config).summary()
+    assert live["config"]["params"] == sim["config"]["params"] == config.params
+    sent_live, sent_sim = live["messages"]["pose"]["sent"], sim["messages"]["pose"]["sent"]
+    assert abs(ratio(sent_live, sent_sim) - 1.0) < 0.15, (sent_live, sent_sim)
+    default = run_mission(make_config(None, scenario=S1, **options)).summary()
+    assert default["messages"]["pose"]["sent"] > 3 * sent_live
+
+
+def test_live_plugin_parameters_take_effect(tmp_path: Path) -> None:
+    """The example plugin with ``repeats=4`` sends each status four times live: more
+    statuses than NB sends (it used to behave as NB live)."""
+    options = {"network": "wlan", "seed": 2}
+    nb = live_run({**options, "behaviour": "nb"}, tmp_path / "nb")
+    repeat = live_run(
+        {**options, "behaviour": "repeat"}, tmp_path / "repeat", "--set", "behaviour.repeats=4"
+    )
+    sent_nb = nb["messages"]["task_status"]["sent"]
+    sent_repeat = repeat["messages"]["task_status"]["sent"]
+    assert repeat["mission"]["successful"] and nb["mission"]["successful"]
+    assert sent_repeat >= 3 * sent_nb, (sent_repeat, sent_nb)

@@ -44,6 +44,10 @@ def test_one_repeat_is_exactly_nb() -> None:
         summary = run_mission(config).summary()
         summary.pop("wall_time_s")
         summary.pop("config")
+        # Its own metric (no copy with one repeat) is the only difference.
+        if summary["mission"].pop("status_copies", None) is not None:
+            for robot in summary["robots"].values():
+                assert robot.pop("status_copies") == 0
         return summary
 
     assert run("repeat", repeats=1) == run("nb")
@@ -93,3 +97,37 @@ def test_a_sweep_takes_the_parameter_as_a_factor(tmp_path: Path) -> None:
 def test_the_plugin_passes_mrcomms_conformance_kit(check: str) -> None:
     (result,) = check_variant(get_spec("behaviour", "repeat"), only=[check])
     assert result.passed, result.detail
+
+
+def test_its_team_metric_is_stored_analysed_and_drawn(tmp_path: Path) -> None:
+    """The plugin's team metric (declared in its spec, no MRComm file edited) is a
+    column of the results, a metric ``mrcomm analyze`` tests and a figure of
+    ``mrcomm report``."""
+    schema = tmp_path / "copies.yaml"
+    schema.write_text(
+        f"scenario: {S1}\nrepetitions: 3\nbase_seed: 4\n"
+        "factors: {behaviour: [repeat], spl: [0, 50], behaviour.repeats: [2, 3]}\n"
+    )
+    db = tmp_path / "c.duckdb"
+    done = mrcomm("sweep", str(schema), "--db", str(db), "--jobs", "2")
+    assert done.returncode == 0, done.stderr
+    from mrcomm.experiment.api import load_results
+
+    runs = load_results(db).runs
+    # 7 successes, repeats - 1 copies each.
+    copies = runs.groupby("label")["status_copies"].agg(set).to_dict()
+    assert copies == {
+        "WLAN_REPEAT_SPL0_REPEATS2": {7.0},
+        "WLAN_REPEAT_SPL50_REPEATS2": {7.0},
+        "WLAN_REPEAT_SPL0_REPEATS3": {14.0},
+        "WLAN_REPEAT_SPL50_REPEATS3": {14.0},
+    }
+    done = mrcomm("analyze", "--db", str(db), "--metric", "status_copies", "--format", "csv")
+    assert done.returncode == 0, done.stderr
+    assert "status_copies" in done.stdout
+    out = tmp_path / "report"
+    done = mrcomm("report", "--db", str(db), "--out", str(out))
+    assert done.returncode == 0, done.stderr
+    html = (out / "report.html").read_text()
+    assert "Status copies sent" in html
+    assert list(out.rglob("metric_status_copies.*")), sorted(p.name for p in out.rglob("*"))

@@ -10,10 +10,21 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from mrcomm.specs import VariantSpec, get_spec, variant_names
+from mrcomm.specs import TeamMetric, VariantSpec, get_spec, variant_names
 
 if TYPE_CHECKING:
     from mrcomm.agents.executor import TaskExecutor
+
+#: Leader-Follower's team metrics (the original study's): each robot's time by role.
+LF_TEAM_METRICS = (
+    TeamMetric("na_movement_time", "NA movement time", "s"),
+    TeamMetric("leader_movement_time", "Leader movement time", "s"),
+    TeamMetric("follower_movement_time", "Follower movement time", "s"),
+    TeamMetric("leader_disconnect_time", "Leader disconnect time", "s"),
+    TeamMetric("follower_waiting_time", "Follower waiting time", "s"),
+    TeamMetric("role_assignment_time", "Role assignment time", "s"),
+    TeamMetric("switching_time", "Switching time", "s"),
+)
 
 NB_SPEC = VariantSpec(
     kind="behaviour",
@@ -47,6 +58,7 @@ LF_SPEC = VariantSpec(
         "roles_assigned",
         "times_leader",
     ),
+    team_metrics=LF_TEAM_METRICS,
     uses_aon=True,
 )
 RPS_SPEC = VariantSpec(
@@ -60,6 +72,7 @@ RPS_SPEC = VariantSpec(
     topics=("pose", "task_status"),
     robot_metrics="mrcomm.metrics.compute:rps_metrics",
     metrics=("rendezvous_count", "rendezvous_time", "statuses_reshared"),
+    team_metrics=(TeamMetric("rendezvous_time", "Rendezvous time", "s"),),
     uses_threshold=False,
 )
 SERRIED_SPEC = VariantSpec(
@@ -73,6 +86,7 @@ SERRIED_SPEC = VariantSpec(
     topics=("pose", "task_status", "aon"),
     robot_metrics="mrcomm.metrics.compute:serried_metrics",
     metrics=("group_hold_time",),
+    team_metrics=(TeamMetric("group_hold_time", "Group hold time", "s"),),
     uses_aon=True,
 )
 LF_WAIT_SPEC = VariantSpec(
@@ -85,6 +99,11 @@ LF_WAIT_SPEC = VariantSpec(
     topics=("pose", "task_status", "utility", "role", "aon"),
     robot_metrics="mrcomm.metrics.compute:lf_wait_metrics",
     metrics=(*LF_SPEC.metrics, "detours", "detour_tasks", "leader_detour_wait_time"),
+    team_metrics=(
+        *LF_TEAM_METRICS,
+        TeamMetric("leader_detour_wait_time", "Leader detour wait time", "s"),
+        TeamMetric("detour_tasks", "Tasks done on detours", "count", "greater"),
+    ),
     uses_aon=True,
 )
 

@@ -27,7 +27,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from mrcomm.analysis.stats import METRICS, usable_runs
+from mrcomm.analysis.stats import metric_info, usable_runs
 
 NETWORK_ORDER = {"wlan": 0, "ah": 1}
 THRESHOLD_ORDER = {"none": 0, "slt": 1, "ssd": 2, "esd": 3}
@@ -163,7 +163,7 @@ def metric_bars(runs: pd.DataFrame, metric: str) -> Figure:
     original study drew them, above box plots (median, quartiles, 1.5 IQR whiskers),
     which show what the rank tests compare. Behaviours without the metric (NB for
     Leader–Follower metrics) are left out, not drawn as zero."""
-    info = METRICS[metric]
+    info = metric_info(metric)
     runs = usable_runs(runs)
     runs = runs[pd.to_numeric(runs[metric], errors="coerce").notna()]
     keys = panel_keys(runs)

@@ -21,7 +21,7 @@ from mrcomm.analysis.figures import (
     panel_title,
     spl_levels,
 )
-from mrcomm.analysis.stats import METRICS, usable_runs
+from mrcomm.analysis.stats import metric_info, usable_runs
 
 _SPL_COLOURS = matplotlib.colormaps["viridis"]
 _MARKERS = ("o", "s", "^", "D", "v", "P")
@@ -40,7 +40,7 @@ def qq_points(sample: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def qq_figure(runs: pd.DataFrame, metric: str) -> Figure:
     """Q–Q plots of ``metric`` for every configuration group and SPL level."""
-    info = METRICS[metric]
+    info = metric_info(metric)
     runs = usable_runs(runs)
     keys = panel_keys(runs)
     multi = len({k[0] for k in keys}) > 1

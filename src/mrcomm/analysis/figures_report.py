@@ -171,7 +171,7 @@ def _draw_figures(
     for name in metrics:
         if name in constant:
             continue  # the same value in every run: the report says so instead
-        info = st.METRICS[name]
+        info = st.metric_info(name)
         out["metrics"].append(
             _figure(
                 f"metric_{name}",
@@ -223,7 +223,7 @@ def _draw_figures(
         out["qq"].append(
             _figure(
                 f"qq_{name}",
-                f"Q–Q: {st.METRICS[name].label}",
+                f"Q–Q: {st.metric_info(name).label}",
                 "Standardised samples against normal quantiles.",
                 figures_qq.qq_figure(runs, name),
                 encoder,

@@ -63,4 +63,21 @@ def glossary_sections(path: Path | None = None) -> list[GlossarySection]:
                 section.columns = cells
             elif not all(set(c) <= set("-: ") for c in cells):
                 section.rows.append([_inline(c) for c in cells])
-    return [s for s in sections if s.rows]
+    return [s for s in [*sections, behaviour_metrics(sections)] if s.rows]
+
+
+def behaviour_metrics(sections: list[GlossarySection]) -> GlossarySection:
+    """The team metrics behaviours declare in their specs (plugins' too) that the
+    glossary file does not define: name, unit, and what the spec calls it."""
+    from mrcomm.specs import REGISTRY
+
+    named = {str(row[0]) for s in sections for row in s.rows if row}
+    section = GlossarySection("Metrics added by behaviours")
+    section.columns = ["metric", "unit", "meaning"]
+    for spec in REGISTRY.all():
+        for metric in spec.team_metrics:
+            if not any(metric.name in cell for cell in named):
+                named.add(metric.name)
+                meaning = f"{metric.label} (behaviour {spec.name})"
+                section.rows.append([escape(metric.name), escape(metric.unit), escape(meaning)])
+    return section

@@ -65,50 +65,63 @@ NOT_REJECTED = "H0 not rejected"
 
 @dataclass(frozen=True)
 class Metric:
-    """A per-run metric (a column of ``runs``) and the direction of its test."""
+    """A per-run metric (a column of the runs frame) and the direction of its test."""
 
     name: str
     label: str
     unit: str
     #: H_A of SPL0 against SPLX: "less" = SPL0 observations are less than SPLX ones.
     alternative: Alternative = "less"
-    #: Only defined for Leader-Follower runs.
-    lf_only: bool = False
 
 
 _M = Metric
-METRICS: dict[str, Metric] = {
-    m.name: m
-    for m in (
-        _M("execution_phase_time", "Execution phase time", "s"),
-        _M("total_movement_time", "Total movement time", "s"),
-        _M("total_distance", "Total distance travelled", "m"),
-        _M("near_collisions", "Near collisions", "count", "greater"),
-        _M("near_collisions_filtered", "Near collisions (filtered)", "count", "greater"),
-        _M("near_collisions_confirmed", "Near collisions (confirmed)", "count", "greater"),
-        _M("near_collisions_false", "Near collisions (false alarms)", "count"),
-        _M("near_collisions_missed", "Near collisions (missed)", "count"),
-        _M("delay_time", "Delay time", "s"),
-        _M("idle_time", "Idle time", "s"),
-        _M("task_execution_time", "Task execution time", "s"),
-        _M("n_failed_tasks", "Failed tasks", "count"),
-        _M("min_separation", "Minimum separation", "m"),
-        _M("max_separation", "Maximum separation", "m"),
-        _M("tasks_per_minute", "Tasks per minute", "tasks/min", "greater"),
-        _M("assigner_connected", "Time connected to the assigner", "fraction", "greater"),
-        _M("largest_group_mean", "Largest connected group (mean)", "fraction", "greater"),
-        _M("largest_group_min", "Largest connected group (min)", "fraction", "greater"),
-        _M("na_movement_time", "NA movement time", "s", lf_only=True),
-        _M("leader_movement_time", "Leader movement time", "s", lf_only=True),
-        _M("follower_movement_time", "Follower movement time", "s", lf_only=True),
-        _M("leader_disconnect_time", "Leader disconnect time", "s", lf_only=True),
-        _M("follower_waiting_time", "Follower waiting time", "s", lf_only=True),
-        _M("role_assignment_time", "Role assignment time", "s", lf_only=True),
-        _M("switching_time", "Switching time", "s", lf_only=True),
-        _M("aon_publications", "AON publications", "count", lf_only=True),
-        _M("aon_resends", "AON re-sends", "count", lf_only=True),
-    )
-}
+#: The metrics of every run, whatever its behaviour.
+_RUN_METRICS = (
+    _M("execution_phase_time", "Execution phase time", "s"),
+    _M("total_movement_time", "Total movement time", "s"),
+    _M("total_distance", "Total distance travelled", "m"),
+    _M("near_collisions", "Near collisions", "count", "greater"),
+    _M("near_collisions_filtered", "Near collisions (filtered)", "count", "greater"),
+    _M("near_collisions_confirmed", "Near collisions (confirmed)", "count", "greater"),
+    _M("near_collisions_false", "Near collisions (false alarms)", "count"),
+    _M("near_collisions_missed", "Near collisions (missed)", "count"),
+    _M("delay_time", "Delay time", "s"),
+    _M("idle_time", "Idle time", "s"),
+    _M("task_execution_time", "Task execution time", "s"),
+    _M("n_failed_tasks", "Failed tasks", "count"),
+    _M("min_separation", "Minimum separation", "m"),
+    _M("max_separation", "Maximum separation", "m"),
+    _M("tasks_per_minute", "Tasks per minute", "tasks/min", "greater"),
+    _M("assigner_connected", "Time connected to the assigner", "fraction", "greater"),
+    _M("largest_group_mean", "Largest connected group (mean)", "fraction", "greater"),
+    _M("largest_group_min", "Largest connected group (min)", "fraction", "greater"),
+)
+#: The metrics of runs whose statuses go with AON.
+_AON_METRICS = (
+    _M("aon_publications", "AON publications", "count"),
+    _M("aon_resends", "AON re-sends", "count"),
+)
+
+
+def all_metrics() -> dict[str, Metric]:
+    """Every metric by name: those of every run, the team metrics each registered
+    behaviour declares in its spec (plugins' too: ``VariantSpec.team_metrics``), and
+    AON's."""
+    from mrcomm.specs import REGISTRY
+
+    found = {m.name: m for m in _RUN_METRICS}
+    for spec in REGISTRY.all():
+        for t in spec.team_metrics:
+            found.setdefault(t.name, Metric(t.name, t.label, t.unit, t.alternative))
+    found.update({m.name: m for m in _AON_METRICS})
+    return found
+
+
+def metric_info(name: str) -> Metric:
+    """The metric called ``name`` (KeyError for none)."""
+    return all_metrics()[name]
+
+
 #: The core metrics of the original study: the default Q–Q plots.
 CORE_METRICS = (
     "execution_phase_time",
@@ -122,16 +135,17 @@ CORE_METRICS = (
 
 def resolve_metrics(names: Sequence[str] | None, field: str = "--metric") -> list[Metric]:
     """The metrics named (all when ``names`` is empty); unknown names are input errors."""
+    known = all_metrics()
     if not names:
-        return list(METRICS.values())
+        return list(known.values())
     out = []
     for name in names:
-        if name not in METRICS:
-            hint = did_you_mean(name, METRICS)
+        if name not in known:
+            hint = did_you_mean(name, known)
             raise InputError(
-                f"unknown metric {name!r}{hint}; known: {', '.join(METRICS)}", field=field
+                f"unknown metric {name!r}{hint}; known: {', '.join(known)}", field=field
             )
-        out.append(METRICS[name])
+        out.append(known[name])
     return out
 
 

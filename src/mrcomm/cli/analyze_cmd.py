@@ -121,7 +121,7 @@ def _print_comparisons(
     """The comparisons, one table per metric (the terminal's width is the limit)."""
     console.print(f"[bold]{rp.TABLE_TITLES['comparisons']}[/]")
     for metric, rows in frame.groupby("metric", sort=False):
-        info = st.METRICS[str(metric)]
+        info = st.metric_info(str(metric))
         title = f"{info.label} ({info.unit})"
         console.print(_rich_table(title, rp.display_frame("comparisons", rows, compact=True)))
     if frame.empty:
@@ -143,7 +143,7 @@ def _print_between(console: Console, name: str, frame: Any, rp: Any, st: Any) ->
         return
     console.print(f"[bold]{rp.TABLE_TITLES[name]}[/]")
     for metric, rows in frame.groupby("metric", sort=False):
-        info = st.METRICS[str(metric)]
+        info = st.metric_info(str(metric))
         shown = rp.display_frame(name, rows, compact=True)
         console.print(_rich_table(f"{info.label} ({info.unit})", shown))
 

@@ -21,13 +21,13 @@ from mrcomm.cli.db_option import (
 from mrcomm.cli.display import fmt
 from mrcomm.cli.run_options import warn_ignored_settings, with_run_options
 from mrcomm.fileio import atomic_write
-from mrcomm.metrics.compute import LF_TOTALS
 from mrcomm.metrics.units import unit_of
 from mrcomm.net.delivery import DELAY_KEYS, DROP_CAUSES, count_keys, has_radio_counts
 from mrcomm.output_paths import FIGURE_SUFFIXES, RECORDING_SUFFIXES, check_output_file
 from mrcomm.run.assemble import AON_TOTAL_KEYS
 from mrcomm.run.result import MissionResult
 from mrcomm.sim.mission import run_mission
+from mrcomm.specs import get_spec
 
 if TYPE_CHECKING:
     from mrcomm.experiment.adhoc import StoredRun
@@ -225,7 +225,6 @@ _ROBOT_KEYS = (
     "min_separation",
     "max_separation",
 )
-_LF_KEYS = LF_TOTALS
 _AON_KEYS = ("statuses_sent", *AON_TOTAL_KEYS, "max_finish_time")
 
 
@@ -272,11 +271,12 @@ def print_result(result: MissionResult, console: Console) -> None:
     else:
         console.print(f"Robots: {len(robots)} (per-robot metrics: --json)")
 
-    if any(m.get(key) is not None for key in _LF_KEYS):
-        lf = _table("Leader–Follower (team totals)", "metric", "value")
-        for key in _LF_KEYS:
-            lf.add_row(_named(key), fmt(m.get(key)))
-        console.print(lf)
+    spec = get_spec("behaviour", str(result.config["behaviour"]))
+    if spec.team_metrics:
+        team = _table(f"{spec.name} (team totals)", "metric", "value")
+        for metric in spec.team_metrics:
+            team.add_row(f"{metric.name} ({metric.unit})", fmt(m.get(metric.name)))
+        console.print(team)
 
     commands = result.operator.get("commands", [])
     if commands:

@@ -23,6 +23,7 @@ from mrcomm.experiment.tables import RUN_TABLES
 _ORDER = {
     "runs": "experiment, label, repetition",
     "configs": "experiment, label",
+    "team_metrics": "run_id, metric",
     "robot_metrics": "run_id, robot, metric",
     "failed_tasks": "run_id, task_id",
     "messages": "run_id, agent, topic",
@@ -39,8 +40,10 @@ _ORDER = {
 class Results:
     """Every results table as a DataFrame (tidy, long form), plus the connection."""
 
+    #: One row per run; a behaviour's team metrics (``team_metrics``) as columns too.
     runs: pd.DataFrame
     configs: pd.DataFrame
+    team_metrics: pd.DataFrame
     robot_metrics: pd.DataFrame
     failed_tasks: pd.DataFrame
     messages: pd.DataFrame
@@ -95,4 +98,18 @@ def load_results(
         except duckdb.Error as err:  # a file damaged past its first pages
             con.close()
             raise damaged(Path(db_path), err) from None
+    frames["runs"] = with_team_metrics(frames["runs"], frames["team_metrics"])
     return Results(con=con, **frames)
+
+
+def with_team_metrics(runs: pd.DataFrame, team_metrics: pd.DataFrame) -> pd.DataFrame:
+    """``runs`` with a column per team metric a behaviour added (NULL for the runs of
+    other behaviours), so that every metric is a column of the runs frame."""
+    if team_metrics.empty:
+        return runs
+    wide = team_metrics.pivot_table(
+        index="run_id", columns="metric", values="value", aggfunc="first", dropna=False
+    )
+    wide.columns = [str(c) for c in wide.columns]
+    new = [c for c in wide.columns if c not in runs.columns]
+    return runs.merge(wide[new], how="left", left_on="run_id", right_index=True)

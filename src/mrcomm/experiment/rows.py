@@ -23,6 +23,7 @@ from mrcomm.experiment.tables import (
 from mrcomm.net.delivery import COUNT_KEYS, DELAY_KEYS
 from mrcomm.run.provenance import fingerprint, provenance
 from mrcomm.run.result import MissionResult
+from mrcomm.specs import get_spec
 
 #: table name -> rows (tuples in the table's column order).
 Rows = dict[str, list[tuple[Any, ...]]]
@@ -106,6 +107,13 @@ def result_rows(
         *_provenance_part(spec, run_fingerprint),
     )
     rows: Rows = {"runs": [runs]}
+    columns = {key for _, _, key in RUN_METRIC_COLUMNS}
+    behaviour = get_spec("behaviour", spec.config.behaviour)
+    rows["team_metrics"] = [
+        (rid, metric.name, _number(mission.get(metric.name)))
+        for metric in behaviour.team_metrics
+        if metric.name not in columns
+    ]
     rows["robot_metrics"] = [
         (rid, robot, metric, _number(value))
         for robot, values in result.robots.items()

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 #: Bumped whenever a table or column changes meaning; a database written with another
 #: version is refused before it is touched.
-SCHEMA_VERSION = "5"
+SCHEMA_VERSION = "6"
 
 Columns = tuple[tuple[str, str], ...]
 
@@ -91,14 +91,8 @@ RUN_METRIC_COLUMNS: tuple[tuple[str, str, str], ...] = (
     ("follower_waiting_time", "DOUBLE", "follower_waiting_time"),
     ("role_assignment_time", "DOUBLE", "role_assignment_time"),
     ("switching_time", "DOUBLE", "switching_time"),
-    # lf-wait: NULL for other behaviours.
-    ("detour_tasks", "INTEGER", "detour_tasks"),
-    ("leader_detour_wait_time", "DOUBLE", "leader_detour_wait_time"),
-    # rps: NULL for other behaviours.
-    ("rendezvous_time", "DOUBLE", "rendezvous_time"),
-    # serried: NULL for other behaviours.
-    ("group_hold_time", "DOUBLE", "group_hold_time"),
 )
+
 
 #: AON totals of ``runs`` (NULL when statuses go without AON): (column, type, key).
 RUN_AON_COLUMNS: tuple[tuple[str, str, str], ...] = (
@@ -124,6 +118,15 @@ RUNS: Columns = (
     *((c, t) for c, t, _ in RUN_AON_COLUMNS),
     ("finished_at", "TIMESTAMP"),
     *RUN_PROVENANCE_COLUMNS,
+)
+
+#: The team metrics a behaviour's spec adds that have no column of ``runs`` (every
+#: behaviour but LF, whose totals are the original study's and have columns): one row
+#: per run and metric. Loading results puts each as a column of the runs frame.
+TEAM_METRICS: Columns = (
+    ("run_id", "TEXT"),
+    ("metric", "TEXT"),
+    ("value", "DOUBLE"),
 )
 
 ROBOT_METRICS: Columns = (
@@ -202,6 +205,7 @@ TRAJECTORY_STORE_PERIOD = 1.0
 #: Tables written once per run, in one transaction (``runs`` first).
 RUN_TABLES: dict[str, Columns] = {
     "runs": RUNS,
+    "team_metrics": TEAM_METRICS,
     "robot_metrics": ROBOT_METRICS,
     "failed_tasks": FAILED_TASKS,
     "messages": MESSAGES,

@@ -7,7 +7,7 @@ the original study.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -143,24 +143,6 @@ def serried_metrics(timeline: Timeline) -> dict[str, Any]:
     return {"group_hold_time": timeline.total(L.LEADER_DISCONNECT)}
 
 
-LF_TOTALS = (
-    "na_movement_time",
-    "leader_movement_time",
-    "follower_movement_time",
-    "leader_disconnect_time",
-    "follower_waiting_time",
-    "role_assignment_time",
-    "switching_time",
-    # lf-wait
-    "leader_detour_wait_time",
-    "detour_tasks",
-    # rps
-    "rendezvous_time",
-    # serried
-    "group_hold_time",
-)
-
-
 def completed_tasks(timeline: Timeline) -> set[str]:
     """Ids of the tasks a robot completed (each once, however often it did it)."""
     return {str(e.data.get("task_id")) for e in timeline.events if e.label == L.TASK_COMPLETED}
@@ -185,8 +167,10 @@ def mission_metrics(
     *,
     tasks_total: int,
     failed_tasks: list[str],
+    team_metrics: Sequence[str] = (),
 ) -> dict[str, Any]:
-    """Team metrics: totals / extremes over the per-robot metrics."""
+    """Team metrics: totals / extremes over the per-robot metrics; ``team_metrics``:
+    those the behaviour adds (its spec's), each the total of its robots' metric."""
     start, end = execution_phase(timelines)
     rows = list(robots.values())
 
@@ -207,7 +191,7 @@ def mission_metrics(
         "idle_time": total("idle_time"),
         "task_execution_time": total("task_execution_time"),
         **{k: int(total(k)) for k in TRUTH_COUNTS if rows and k in rows[0]},
-        **{k: total(k) for k in LF_TOTALS if rows and k in rows[0]},
+        **{k: total(k) for k in team_metrics if rows and k in rows[0]},
         "min_separation": min(
             (r["min_separation"] for r in rows if r["min_separation"] is not None), default=None
         ),

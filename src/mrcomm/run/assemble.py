@@ -101,7 +101,8 @@ def assemble(facts: RunFacts) -> MissionResult:
         for task in facts.agenda[rid]
         if (task.task_id, rid) not in facts.received
     ]
-    behaviour_metrics = facts.config.spec("behaviour").robot_metrics_function()
+    behaviour = facts.config.spec("behaviour")
+    behaviour_metrics = behaviour.robot_metrics_function()
     robots: dict[str, dict[str, Any]] = {}
     zone = collision_zone(facts.config)
     for rid in robot_ids:
@@ -128,6 +129,7 @@ def assemble(facts: RunFacts) -> MissionResult:
         # The tasks of the final agenda: an operator may have added some.
         tasks_total=len({t.task_id for tasks in facts.agenda.values() for t in tasks}),
         failed_tasks=list(dict.fromkeys(t for t, _ in failed_pairs)),
+        team_metrics=[m.name for m in behaviour.team_metrics],
     )
     mission.update(team_scale(facts, mission))
     mission["timed_out"] = not facts.finished
