@@ -99,9 +99,7 @@ def test_live_runs_the_parameters_it_records(tmp_path: Path) -> None:
     rate, five times as many, while the result recorded ``pose_period: 1.0``)."""
     options = {"network": "wlan", "behaviour": "nb", "seed": 3}
     live = live_run(options, tmp_path / "pose", "--set", "behaviour.pose_period=1.0")
-    config = make_config(
-        None, scenario=S1, params={"behaviour": {"pose_period": 1.0}}, **options
-    )
+    config = make_config(None, scenario=S1, params={"behaviour": {"pose_period": 1.0}}, **options)
     sim = run_mission(config).summary()
     assert live["config"]["params"] == sim["config"]["params"] == config.params
     sent_live, sent_sim = live["messages"]["pose"]["sent"], sim["messages"]["pose"]["sent"]

@@ -325,10 +325,10 @@ def test_relayed_copies_are_unwrapped_once_and_bad_ones_refused() -> None:
         return RelayedMsg(sender="robot_1", incarnation=1, seq=1, stamp=0.0, topic=topic,
                           hop=hop, payload=payload)  # fmt: skip
 
-    relaying = AdHoc(AdHocParams(relay=True))
+    relaying = LinkRules(network=AdHoc(AdHocParams()), relay_hops=4)
     members = frozenset({"robot_1", "robot_2", "robot_3", "assigner"})
     with nodes(mesh_options(1)) as (node,):
-        bus = ZenohBus(node, LinkRules(network=relaying), PositionBook(), members=members,
+        bus = ZenohBus(node, relaying, PositionBook(), members=members,
                        robots=("robot_1", "robot_2", "robot_3"))  # fmt: skip
         relayer = bus.endpoint("robot_1", stream(1, "loss", "robot_1"))
         receiver = bus.endpoint("robot_2", stream(1, "loss", "robot_2"))

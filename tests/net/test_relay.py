@@ -9,8 +9,8 @@ import pytest
 from mrcomm.messaging.messages import TOPIC_POSE, TOPIC_TASK_STATUS, PoseMsg, TaskState, TaskStatus
 from mrcomm.net.delivery import DeliveryPolicy
 from mrcomm.net.inprocess import InProcessNetwork
-from mrcomm.net.network import AdHoc, AdHocParams
-from mrcomm.net.relay import make_relay
+from mrcomm.net.network import AdHocParams
+from mrcomm.net.relay import RelayOptions, make_relay, relay_options
 from mrcomm.seeding import stream
 
 
@@ -21,7 +21,7 @@ def chain(n: int, hops: int) -> tuple[InProcessNetwork, dict[str, list[TaskStatu
         ids,
         policy=DeliveryPolicy(0.0),
         loss_rngs={i: stream(0, "loss", i) for i in ids},
-        relay=make_relay(ids, n, hops),
+        relay=make_relay(ids, n, RelayOptions(hops)),
     )
     net.set_connected([[abs(a - b) <= 1 for b in range(n)] for a in range(n)])
     got: dict[str, list[TaskStatus]] = {i: [] for i in ids}
@@ -70,7 +70,7 @@ def test_every_node_gets_each_message_once_in_a_dense_team() -> None:
     ids = tuple(f"r{i}" for i in range(6))
     net = InProcessNetwork(
         ids, policy=DeliveryPolicy(0.0), loss_rngs={i: stream(0, "loss", i) for i in ids},
-        relay=make_relay(ids, 6, 6),
+        relay=make_relay(ids, 6, RelayOptions(6)),
     )  # fmt: skip
     got: dict[str, list[TaskStatus]] = {i: [] for i in ids}
     for i in ids:
@@ -93,9 +93,12 @@ def test_poses_are_not_relayed_and_relaying_is_off_by_default() -> None:
     net.deliver(0.1)
     net.deliver(0.2)
     assert poses == [] and net.pending() == 0
-    assert AdHoc(AdHocParams()).relay_hops == 0
-    assert AdHoc(AdHocParams(relay=True, relay_hops=3)).relay_hops == 3
-    assert make_relay(("a", "b"), 2, 0) is None
+    assert relay_options(AdHocParams()) == RelayOptions(0, False)
+    assert relay_options(AdHocParams(relay=True, relay_hops=3)) == RelayOptions(3, False)
+    both = AdHocParams(relay=True, relay_store=True)
+    assert relay_options(both) == RelayOptions(4, True)
+    assert relay_options(AdHocParams(relay_store=True)) == RelayOptions(0, False)  # no relay
+    assert make_relay(("a", "b"), 2, RelayOptions()) is None
     with pytest.raises(ValueError):
         AdHocParams(relay=True, relay_hops=1)
 
@@ -110,7 +113,7 @@ def alone(n: int, hops: int, store: bool) -> tuple[InProcessNetwork, dict[str, l
         ids,
         policy=DeliveryPolicy(0.0),
         loss_rngs={i: stream(0, "loss", i) for i in ids},
-        relay=make_relay(ids, n, hops, store),
+        relay=make_relay(ids, n, RelayOptions(hops, store)),
     )
     net.set_connected([[a == b for b in range(n)] for a in range(n)])
     got: dict[str, list[TaskStatus]] = {i: [] for i in ids}

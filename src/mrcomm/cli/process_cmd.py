@@ -304,14 +304,13 @@ def _operator_console(settings: Any, robot: str, port: int) -> int:
 
 
 def radio_packet_error(process: Any) -> Any:
-    """With the ``radio`` network model: a packet's loss probability at a received
-    power, for the kernel's drop rules (None with the other models)."""
+    """With a network model that has a per-message channel (the radio): a packet's
+    loss probability at a received power, for the kernel's drop rules (None with the
+    other models)."""
     from mrcomm.live.kernel_links import PACKET_BYTES
-    from mrcomm.net.radio.model import RadioNetwork
 
-    network = process.links.network
-    if not isinstance(network, RadioNetwork):
+    channel = process.links.network.channel(process.node_ids)
+    if channel is None:
         return None
-    channel = network.channel(process.node_ids)
     bits = channel.bits_of(PACKET_BYTES)
     return lambda power: channel.mean_error(power, bits)

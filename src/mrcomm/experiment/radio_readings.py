@@ -47,6 +47,7 @@ from mrcomm.net.signal.calibration import MIN_READINGS as MIN_CLASS_READINGS
 from mrcomm.net.signal.calibration import Calibration
 from mrcomm.net.signal.csvio import read_csv
 from mrcomm.output_paths import DATABASE_SUFFIXES
+from mrcomm.specs import get_spec, variant_names
 from mrcomm.world.occupancy import OccupancyGrid
 
 CSV_COLUMNS = ("x_tx", "y_tx", "x_rx", "y_rx", "rssi")
@@ -174,7 +175,14 @@ class RunInfo:
 
     @property
     def measures_radio(self) -> bool:
-        return self.threshold == "esd" and self.trace is None
+        return self.pulse and self.trace is None
+
+    @property
+    def pulse(self) -> bool:
+        """Whether its threshold measured with pulses (ESD)."""
+        return self.threshold in variant_names("threshold") and bool(
+            get_spec("threshold", self.threshold).pulse
+        )
 
     @property
     def profile(self) -> str | None:
@@ -185,7 +193,7 @@ class RunInfo:
         )
 
     def why_not(self) -> str:
-        if self.threshold == "esd":
+        if self.pulse:
             return (
                 f"replays the RSSI trace {self.trace}, recorded elsewhere: its RSSI does "
                 "not follow the robots' positions"

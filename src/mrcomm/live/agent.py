@@ -76,7 +76,12 @@ from mrcomm.net.zenoh_config import check_key_chunk
 from mrcomm.net.zenoh_node import Incoming, Presence, ZenohNode, drain
 from mrcomm.run.agents import AgentAssembly, AgentOverrides
 from mrcomm.run.resources import ScenarioResources
-from mrcomm.run.wiring import build_network, build_radio_links, measures_radio
+from mrcomm.run.wiring import (
+    build_network,
+    build_radio_links,
+    build_relay_options,
+    measures_radio,
+)
 from mrcomm.world.scenario import Scenario
 
 HEARTBEAT_PERIOD = 0.25  # wall s between heartbeats (and at once on a change)
@@ -148,10 +153,11 @@ class AgentProcess:
         place_operator(positions, self.scenario)
         network = build_network(run, self.resources)
         radio = build_radio_links(run, self.resources, network)
-        rules = LinkRules(network=network, loss_percent=run.spl, radio=radio)
+        hops = build_relay_options(run).hops
+        rules = LinkRules(network=network, loss_percent=run.spl, radio=radio, relay_hops=hops)
         self.bus = ZenohBus(
             self.node,
-            LinkRules() if settings.emulated else rules,  # emulated: the kernel drops
+            LinkRules(relay_hops=hops) if settings.emulated else rules,  # the kernel drops
             positions,
             members=frozenset((*self.robot_ids, ASSIGNER_ID, OPERATOR_ID)),
             robots=self.robot_ids,

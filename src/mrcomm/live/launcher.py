@@ -42,7 +42,7 @@ from mrcomm.net.pulse import pulse_id
 from mrcomm.net.signal.trace import RssiTrace
 from mrcomm.run.config import param_assignments
 from mrcomm.run.result import MissionResult
-from mrcomm.run.wiring import esd_trace_path
+from mrcomm.run.wiring import pulse_trace_path
 from mrcomm.world.scenario import load_scenario
 
 _CLI = "from mrcomm.cli.main import app; app()"
@@ -100,7 +100,7 @@ class LiveTeam:
         #: trace (pulse id -> robot); a robot without readings never warns, as in sim.
         self.pulses: dict[str, str] = {}
         run = settings.run
-        trace = esd_trace_path(run)
+        trace = pulse_trace_path(run)
         if trace is not None:
             measuring = {a for a, _ in RssiTrace.load(trace).pairs}
             self.pulses = {pulse_id(r): r for r in self.robots if r in measuring}
@@ -217,7 +217,7 @@ class LiveTeam:
         s = self.settings
         robot = self.pulses[name]
         proto = s.zenoh.protocol
-        trace = esd_trace_path(s.run)
+        trace = pulse_trace_path(s.run)
         assert trace is not None
         args = [
             "pulse", "--trace", str(trace), "--robot", robot,

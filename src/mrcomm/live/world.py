@@ -59,10 +59,10 @@ from mrcomm.run.proximity import make_proximity
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.wiring import (
     RadioPulse,
-    esd_trace_path,
     make_bases,
     make_links,
     measures_radio,
+    pulse_trace_path,
 )
 from mrcomm.world.geometry import Pose
 
@@ -154,7 +154,7 @@ class WorldProcess:
             config = self.settings.run.model_dump(mode="json")
             # Collection may run elsewhere: name the scenario by its absolute path.
             config["scenario"] = str(self.settings.run.scenario.resolve())
-            trace = esd_trace_path(self.settings.run)
+            trace = pulse_trace_path(self.settings.run)
             if trace is not None:
                 config["params"]["threshold"]["trace"] = str(trace.resolve())
             self.journal.start(

@@ -43,10 +43,6 @@ class NetworkModel:
     name: ClassVar[str] = ""
     #: Beyond this distance nothing is delivered (inf: no distance limit).
     reach_m: float = math.inf
-    #: The hop limit of relaying (:mod:`mrcomm.net.relay`; 0: robots do not relay).
-    relay_hops: int = 0
-    #: Store and forward task statuses too (:mod:`mrcomm.net.relay`).
-    relay_store: bool = False
     #: Whether range is decided from received power, which needs the walls between
     #: nodes (:class:`~mrcomm.net.radio.model.RadioNetwork`); otherwise from distance.
     needs_walls: ClassVar[bool] = False
@@ -70,6 +66,13 @@ class NetworkModel:
         """The per-message part of the model for the nodes ``ids`` (a
         :class:`~mrcomm.net.radio.channel.RadioChannel`), or None when messages are
         decided by range and loss alone."""
+        return None
+
+    def live_links(self, grid: Any, node_ids: Sequence[str], aliases: Any) -> Any:
+        """Live mode: how one process judges each link a message came over — for a
+        model that decides range and loss per message from received power (a
+        :class:`~mrcomm.net.radio.links.RadioLinks` on the map ``grid``); None for a
+        model whose decisions need only distance (``in_range``)."""
         return None
 
     def connected(self, distance: NDArray[np.float64]) -> NDArray[np.bool_]:
@@ -130,8 +133,6 @@ class AdHoc(NetworkModel):
         if not isinstance(params, AdHocParams):  # no fallback to defaults
             raise TypeError(f"AdHoc takes AdHocParams, got {type(params).__name__}")
         self.reach_m = params.range_m
-        self.relay_hops = params.hop_limit()
-        self.relay_store = params.relay and params.relay_store
 
     def connected(self, distance: NDArray[np.float64]) -> NDArray[np.bool_]:
         return ~(distance > self.reach_m)  # NaN (virtual) stays connected

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -70,6 +71,24 @@ class RelayParams(BaseModel):
     def hop_limit(self) -> int:
         """The hop limit when relaying is on, else 0."""
         return self.relay_hops if self.relay else 0
+
+
+@dataclass(frozen=True)
+class RelayOptions:
+    """What a bus relays: the hop limit (0: nothing) and store and forward. The bus
+    (in-process or Zenoh) takes them from the run's network parameters
+    (:func:`relay_options`); the network model itself knows nothing of relaying."""
+
+    hops: int = 0
+    store: bool = False
+
+
+def relay_options(params: BaseModel) -> RelayOptions:
+    """The relaying a network model's parameters ask for (none for a model without
+    relaying options)."""
+    if not isinstance(params, RelayParams):
+        return RelayOptions()
+    return RelayOptions(params.hop_limit(), params.relay and params.relay_store)
 
 
 Key = tuple[str, str, int, int]
@@ -177,7 +196,7 @@ class Relay:
         }
 
 
-def make_relay(nodes: Sequence[str], robots: int, hops: int, store: bool = False) -> Relay | None:
+def make_relay(nodes: Sequence[str], robots: int, options: RelayOptions) -> Relay | None:
     """The relay of a network whose first ``robots`` nodes are the robots (the ones
     that relay), or None when the hop limit is 0 (relaying off)."""
-    return Relay(nodes, range(robots), hops, store) if hops else None
+    return Relay(nodes, range(robots), options.hops, options.store) if options.hops else None

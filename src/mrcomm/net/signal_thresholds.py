@@ -166,4 +166,5 @@ ESD_SPEC = VariantSpec(
     entry=MeasuredThreshold,
     params=EsdParams,
     summary="ESD, effective signal degradation: RSSI measured by each robot's pulse",
+    pulse=True,
 )

@@ -93,6 +93,8 @@ class LinkRules:
     network: NetworkModel = field(default_factory=Wlan)
     loss_percent: float = 0.0
     radio: RadioLinks | None = None
+    #: The hop limit of relaying (0: the robots relay nothing).
+    relay_hops: int = 0
     policy: DeliveryPolicy = field(init=False)
 
     def __post_init__(self) -> None:
@@ -315,7 +317,7 @@ class ZenohBus:
         self.rules = rules
         self.positions = positions
         self.members = members
-        hops = rules.network.relay_hops
+        hops = rules.relay_hops
         #: The relay's bookkeeping over the team (robots first), when relaying is on.
         self.relay: Relay | None = None
         self._relay_ids: dict[str, int] = {}

@@ -86,12 +86,12 @@ class RunConfig(BaseModel):
                     f"{' or '.join(repr(n) for n in sorted(spec.network_types))}"
                 )
         if (
-            self.threshold == "esd"
-            and self.variant_params("threshold").trace is None
+            self.spec("threshold").pulse
+            and getattr(self.variant_params("threshold"), "trace", None) is None
             and not self.spec("network").load().needs_walls
         ):
             raise ValueError(
-                "threshold 'esd' needs --rssi-trace CSV (or --network radio, "
+                f"threshold {self.threshold!r} needs --rssi-trace CSV (or --network radio, "
                 "whose signal the pulses then measure)"
             )
         return self

@@ -16,7 +16,7 @@ from mrcomm.net.links import LinkModel, LinkRecorder, LinkState
 from mrcomm.net.network import NetworkModel
 from mrcomm.net.radio.channel import fading_gain_db
 from mrcomm.net.radio.links import RadioLinks
-from mrcomm.net.radio.model import RadioNetwork
+from mrcomm.net.relay import RelayOptions, relay_options
 from mrcomm.net.signal.trace import RssiTrace
 from mrcomm.net.thresholds import Threshold
 from mrcomm.ports import LinkSensor
@@ -43,15 +43,22 @@ def build_threshold(
     return cls.build(config.variant_params("threshold"), resources, ids)
 
 
+def build_relay_options(config: RunConfig) -> RelayOptions:
+    """What the run's bus relays, from its network parameters (``network.relay``)."""
+    return relay_options(config.variant_params("network"))
+
+
 def build_link_sensor(config: RunConfig, resources: ScenarioResources) -> LinkSensor:
     """The link sensor a robot's agent judges its links with (one per robot)."""
     cls: type[Threshold] = config.spec("threshold").load()
     return cls.sensor(config.variant_params("threshold"), resources)
 
 
-def esd_trace_path(config: RunConfig) -> Path | None:
-    """The RSSI trace an ESD run replays (None for other thresholds)."""
-    if config.threshold != "esd":
+def pulse_trace_path(config: RunConfig) -> Path | None:
+    """The RSSI trace the pulses of a run replay: the ``trace`` parameter of a
+    threshold whose robots measure with a pulse (ESD; None for other thresholds, or
+    when the pulses read the radio)."""
+    if not config.spec("threshold").pulse:
         return None
     trace: Path | None = getattr(config.variant_params("threshold"), "trace", None)
     return trace
@@ -63,23 +70,24 @@ def build_pulse(
     sensors: Mapping[str, LinkSensor],
     network: NetworkModel,
 ) -> TracePulse | RadioPulse | None:
-    """ESD in simulation: the pulses that hand each robot's measured sensor its
-    readings — replayed from the run's RSSI trace, or measured on the radio when there
-    is no trace (None for other thresholds)."""
-    if config.threshold != "esd":
+    """A pulse threshold (ESD) in simulation: the pulses that hand each robot's
+    measured sensor its readings — replayed from the run's RSSI trace, or measured on
+    the radio when there is no trace (None for other thresholds)."""
+    if not config.spec("threshold").pulse:
         return None
     measured = {r: s for r, s in sensors.items() if isinstance(s, MeasuredSensor)}
     if measures_radio(config):
         return RadioPulse(network, tuple(measured), tuple(sensors), config.seed, measured)
-    path = esd_trace_path(config)
+    path = pulse_trace_path(config)
     assert path is not None
     return TracePulse(resources.rssi_trace(path), measured, tuple(sensors))
 
 
 def measures_radio(config: RunConfig) -> bool:
-    """Whether the run's ESD pulses read the radio (ESD without a trace; the live world
-    then publishes every robot's readings, as :func:`build_pulse`'s pulse takes them)."""
-    return config.threshold == "esd" and esd_trace_path(config) is None
+    """Whether the run's pulses read the radio (a pulse threshold without a trace; the
+    live world then publishes every robot's readings, as :func:`build_pulse`'s pulse
+    takes them)."""
+    return config.spec("threshold").pulse and pulse_trace_path(config) is None
 
 
 class RadioPulse:
@@ -242,9 +250,8 @@ def link_nodes(
 def build_radio_links(
     config: RunConfig, resources: ScenarioResources, network: NetworkModel
 ) -> RadioLinks | None:
-    """Live mode: the radio one process judges its agents' links with (None unless the
-    network model is the radio)."""
-    if not isinstance(network, RadioNetwork):
-        return None
+    """Live mode: what one process judges its agents' links with, for a network model
+    that decides each message from received power (the radio); None for the others."""
     node_ids, aliases = link_nodes(resources.scenario)
-    return RadioLinks(network, resources.scenario.grid, node_ids, aliases)
+    links: RadioLinks | None = network.live_links(resources.scenario.grid, node_ids, aliases)
+    return links

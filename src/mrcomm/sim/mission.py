@@ -38,6 +38,7 @@ from mrcomm.run.result import MissionResult
 from mrcomm.run.trajectory import Trajectory
 from mrcomm.run.wiring import (
     build_pulse,
+    build_relay_options,
     link_nodes,
     make_bases,
     make_links,
@@ -70,12 +71,7 @@ class Mission:
             policy=DeliveryPolicy(config.spl),
             loss_rngs=agents.loss_streams(self.node_ids),
             channel=self.links.network.channel(self.node_ids),
-            relay=make_relay(
-                self.node_ids,
-                len(scenario.robots),
-                self.links.network.relay_hops,
-                self.links.network.relay_store,
-            ),
+            relay=make_relay(self.node_ids, len(scenario.robots), build_relay_options(config)),
         )
         self.bodies = RobotBodies(
             make_bases(self.resources, seed, config.robot_variation()), scenario.assigner

@@ -121,7 +121,7 @@ def _plain(values: dict[str, Any]) -> dict[str, Any]:
 
 def network_summary(network: Any) -> dict[str, Any]:
     """What a network model was made with, as plain data."""
-    return {**network.describe(), "relay_hops": network.relay_hops, **_plain(vars(network))}
+    return {**network.describe(), **_plain(vars(network))}
 
 
 def simulated_executors(config: RunConfig) -> dict[str, dict[str, Any]]:
@@ -131,7 +131,9 @@ def simulated_executors(config: RunConfig) -> dict[str, dict[str, Any]]:
 
     mission = Mission(config)
     made = {r: executor_summary(e, mission.robot_ids) for r, e in mission.executors.items()}
-    return {**made, "network": network_summary(mission.links.network)}
+    relay = mission.network.relay
+    network = {**network_summary(mission.links.network), "relay_hops": relay.hops if relay else 0}
+    return {**made, "network": network}
 
 
 @contextmanager
@@ -159,7 +161,9 @@ def live_executor(config: RunConfig, robot: str) -> dict[str, Any]:
         executor = process.executor
         assert executor is not None, f"the live process of {robot} has no executor"
         summary = executor_summary(executor, process.robot_ids)
-        return {**summary, "network": network_summary(process.bus.rules.network)}
+        rules = process.bus.rules
+        network = {**network_summary(rules.network), "relay_hops": rules.relay_hops}
+        return {**summary, "network": network}
 
 
 def compare_assembly(config: RunConfig, robot: str = "robot_1") -> dict[str, Any]:

@@ -24,7 +24,7 @@ from mrcomm.net.zenoh_config import make_options
 from mrcomm.net.zenoh_node import ZenohNode
 from mrcomm.run.config import RunConfig
 from mrcomm.run.resources import ScenarioResources
-from mrcomm.run.wiring import build_network, build_radio_links
+from mrcomm.run.wiring import build_network, build_radio_links, build_relay_options
 from mrcomm.seeding import stream
 from mrcomm.sim.mission import Mission
 
@@ -74,7 +74,8 @@ def compare_decisions(config: RunConfig, steps: int, timeout: float = 5.0) -> li
         book = PositionBook()
         network = build_network(config, resources)
         radio = build_radio_links(config, resources, network)
-        rules = LinkRules(network=network, loss_percent=config.spl, radio=radio)
+        hops = build_relay_options(config).hops
+        rules = LinkRules(network=network, loss_percent=config.spl, radio=radio, relay_hops=hops)
         bus = ZenohBus(node, rules, book)
         got: list[Decision] = []
         bus.observer = lambda now, topic, sender, receiver, message, outcome: got.append(

@@ -55,7 +55,7 @@ def mission_config(spec: VariantSpec, *, spl: float = 0.0, seed: int = 1) -> Any
         options["threshold"] = spec.name
         if spec.network_types is not None and "ah" not in spec.network_types:
             options["network"] = sorted(spec.network_types)[0]
-        if spec.name == "esd":
+        if spec.pulse:  # its robots' pulses replay S1's synthetic trace
             params["threshold"] = {"trace": str(S1_TRACE)}
     elif spec.kind == "network":
         options["network"] = spec.name
@@ -96,7 +96,7 @@ def check_api(spec: VariantSpec) -> str:
                 f"{entry.__name__} does not implement {method}"
             )
         resources = ScenarioResources.load(S1)
-        if spec.name == "esd":
+        if spec.pulse:
             params = spec.make_params({"trace": str(S1_TRACE)})
         entry.build(params, resources, ("robot_1", "robot_2"))
         entry.sensor(params, resources)

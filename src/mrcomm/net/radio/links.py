@@ -17,11 +17,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 from mrcomm.net.links import cast_ray
 from mrcomm.net.radio.channel import RadioChannel
-from mrcomm.net.radio.model import RadioNetwork
 from mrcomm.world.occupancy import OccupancyGrid
+
+if TYPE_CHECKING:  # the model makes these: only its type is needed here
+    from mrcomm.net.radio.model import RadioNetwork
 
 Point = tuple[float, float]
 

@@ -23,6 +23,7 @@ from scipy.special import erfc
 
 from mrcomm.net.network import NetworkModel
 from mrcomm.net.radio.channel import RadioChannel, fading_gain_db
+from mrcomm.net.radio.links import RadioLinks
 from mrcomm.net.radio.profile import DEFAULT_PROFILE, RadioProfile, load_profile, profile_path
 from mrcomm.net.radio.shadowing import ShadowingField
 from mrcomm.net.relay import RelayParams
@@ -116,8 +117,6 @@ class RadioNetwork(NetworkModel):
         self.params = params
         self.profile = profile if profile is not None else load_profile(params.profile)
         self.reach_m = reach_m(self.profile)
-        self.relay_hops = params.hop_limit()
-        self.relay_store = params.relay and params.relay_store
         self.seed = seed
         self.field = ShadowingField(
             self.profile.shadowing_sigma_db,
@@ -136,11 +135,13 @@ class RadioNetwork(NetworkModel):
 
     @classmethod
     def advice(cls, config: Any) -> list[str]:
-        """ESD measures this radio: a warning level the radio passes within a few metres
-        (the original robots' -41 dBm) would keep an LF team huddled together."""
-        if config.threshold != "esd":
+        """A pulse threshold (ESD) measures this radio: a warning level the radio passes
+        within a few metres (the original robots' -41 dBm) would keep an LF team
+        huddled together."""
+        warning_dbm = getattr(config.variant_params("threshold"), "warning_dbm", None)
+        if not config.spec("threshold").pulse or warning_dbm is None:
             return []
-        warning = float(config.variant_params("threshold").warning_dbm)
+        warning = float(warning_dbm)
         params = config.variant_params("network")
         profile = load_profile(params.profile)
         reach = line_of_sight_distance(profile, warning)
@@ -193,6 +194,9 @@ class RadioNetwork(NetworkModel):
     def channel(self, ids: Sequence[str]) -> Any:
         rngs = {a: stream(self.seed, "radio", "fading", a) for a in ids}
         return RadioChannel(self.profile, ids, rngs)
+
+    def live_links(self, grid: Any, node_ids: Sequence[str], aliases: Any) -> RadioLinks:
+        return RadioLinks(self, grid, node_ids, aliases)
 
     def in_range_power(self, power: FloatArray) -> NDArray[np.bool_]:
         """Which links are in range (power at or above the sensitivity; NaN — a node
