@@ -45,7 +45,12 @@ print(json.dumps(run_team_case(Path(sys.argv[1]), json.loads(sys.argv[2]))))
 def run(tree: Path, scenario: str, options: dict[str, object]) -> dict[str, object]:
     """One whole mission with ``tree``'s code and bundled scenario: its digest and figures."""
     tree = tree.resolve()
-    env = dict(os.environ, PYTHONPATH=f"{tree / 'src'}{os.pathsep}{tree}")
+    # The tree's own example plugin too: the installed one's entry point then loads the
+    # tree's version of it (a plugin of a newer tree may not import in an older one).
+    path = os.pathsep.join(
+        str(p) for p in (tree / "src", tree, tree / "examples" / "mrcomm-repeat")
+    )
+    env = dict(os.environ, PYTHONPATH=path)
     path = tree / "data" / "scenarios" / scenario / f"{scenario}.yaml"
     command = [sys.executable, "-c", CHILD, str(path), json.dumps(options)]
     if sys.platform.startswith("linux"):

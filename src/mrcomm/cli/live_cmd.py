@@ -22,54 +22,13 @@ from mrcomm.cli.db_option import DbOpt, ExperimentOpt, KeepDuplicateOpt, check_d
 from mrcomm.cli.live_display import LiveDisplay
 from mrcomm.cli.run_cmd import show_result
 from mrcomm.cli.run_options import warn_ignored_settings, with_run_options
+from mrcomm.cli.zenoh_cli import InsecureOpt, ProtocolOpt, TeamOpt, warn_insecure
 from mrcomm.errors import InputError, Interrupted
-from mrcomm.net.zenoh_config import ZenohOptions, make_options
+from mrcomm.net.zenoh_config import make_options
 
 if TYPE_CHECKING:
-    from mrcomm.live.identity import Security
     from mrcomm.run.config import RunConfig
-    from mrcomm.world.scenario import Scenario
 
-TeamOpt = Annotated[str, typer.Option(help="Team name: the key space mrcomm/<team>/.")]
-ListenOpt = Annotated[
-    list[str] | None, typer.Option("--listen", help="Endpoint to listen on (repeatable).")
-]
-ConnectOpt = Annotated[
-    list[str] | None, typer.Option("--connect", help="Peer endpoint to connect to (repeatable).")
-]
-MulticastOpt = Annotated[
-    bool, typer.Option("--multicast/--no-multicast", help="Multicast scouting for peers.")
-]
-ProtocolOpt = Annotated[str, typer.Option(help="Transport: tcp | udp.")]
-TeamDirOpt = Annotated[
-    Path | None,
-    typer.Option(
-        "--team-dir",
-        help="Team directory (mrcomm team init): mutual TLS with this process's "
-        "certificate, and an access-control list that lets each member publish only "
-        "under its own keys.",
-    ),
-]
-InsecureOpt = Annotated[
-    bool,
-    typer.Option(
-        "--insecure",
-        help="Run without authentication or encryption: anyone on the network can read "
-        "and forge the team's messages (prints a warning).",
-    ),
-]
-TlsCaOpt = Annotated[Path | None, typer.Option(help="Team CA certificate (PEM): enables mTLS.")]
-TlsCertOpt = Annotated[Path | None, typer.Option(help="This node's certificate (PEM).")]
-TlsKeyOpt = Annotated[Path | None, typer.Option(help="This node's private key (PEM).")]
-AclOpt = Annotated[
-    str | None,
-    typer.Option(
-        help="With --tls-*: comma-separated member certificate names; each may publish "
-        "only under its own keys (ACL)."
-    ),
-]
-ZenohConfigOpt = Annotated[Path | None, typer.Option(help="Zenoh JSON5 config file.")]
-LinkLeaseOpt = Annotated[float, typer.Option(help="Zenoh link lease, wall s.")]
 RecordDirOpt = Annotated[Path, typer.Option(help="Directory of this run's records.")]
 SpeedOpt = Annotated[float, typer.Option(help="Simulated seconds per wall-clock second.")]
 BaseOpt = Annotated[
@@ -82,65 +41,6 @@ BaseOpt = Annotated[
 LeaseOpt = Annotated[
     float | None, typer.Option(help="AON lease, simulated s: silent members are left out.")
 ]
-
-
-def zenoh_options(
-    team: str,
-    listen: list[str] | None,
-    connect: list[str] | None,
-    multicast: bool,
-    protocol: str,
-    security: Security,
-    zenoh_config: Path | None,
-    link_lease: float,
-) -> ZenohOptions:
-    """The Zenoh options of a live process (world, agent, pulse) from its command line."""
-    tls = security.tls
-    return make_options(
-        team=team,
-        listen=listen or [],
-        connect=connect or [],
-        multicast=multicast,
-        protocol=protocol,
-        tls_ca=tls.ca if tls is not None else None,
-        tls_cert=tls.cert if tls is not None else None,
-        tls_key=tls.key if tls is not None else None,
-        acl_grants=security.grants,
-        config_file=zenoh_config,
-        link_lease=link_lease,
-    )
-
-
-def resolve_security(
-    identity: str,
-    team_dir: Path | None,
-    insecure: bool,
-    tls: tuple[Path | None, Path | None, Path | None],
-    acl: str | None,
-    scenario: Scenario | None,
-    zenoh_config: Path | None,
-) -> Security:
-    """The process's security from its options (one-line errors)."""
-    from mrcomm.live.identity import choose_security
-
-    return choose_security(
-        identity=identity,
-        team_dir=team_dir,
-        insecure=insecure,
-        tls_files=tls,
-        acl=acl,
-        scenario=scenario,
-        explicit_config=zenoh_config is not None,
-    )
-
-
-def warn_insecure(insecure: bool) -> None:
-    """The one warning line of ``--insecure``: printed once every input is checked,
-    just before the process joins the network."""
-    if insecure:
-        from mrcomm.live.identity import INSECURE_WARNING
-
-        typer.echo(INSECURE_WARNING, err=True)
 
 
 @with_run_options

@@ -19,52 +19,22 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from mrcomm.cli.live_cmd import (
-    AclOpt,
-    BaseOpt,
-    ConnectOpt,
-    InsecureOpt,
-    LeaseOpt,
-    LinkLeaseOpt,
-    ListenOpt,
-    MulticastOpt,
-    ProtocolOpt,
-    RecordDirOpt,
-    SpeedOpt,
-    TeamDirOpt,
-    TeamOpt,
-    TlsCaOpt,
-    TlsCertOpt,
-    TlsKeyOpt,
-    ZenohConfigOpt,
-    resolve_security,
-    warn_insecure,
-    zenoh_options,
-)
+from mrcomm.cli.live_cmd import BaseOpt, LeaseOpt, RecordDirOpt, SpeedOpt
 from mrcomm.cli.run_options import with_run_options
+from mrcomm.cli.zenoh_cli import warn_insecure, with_zenoh_options
 from mrcomm.errors import InputError
 
 if TYPE_CHECKING:
+    from mrcomm.cli.zenoh_cli import ZenohCli
     from mrcomm.run.config import RunConfig
 
 
 @with_run_options
+@with_zenoh_options
 def world(
     run: RunConfig,
+    net: ZenohCli,
     speed: SpeedOpt = 1.0,
-    team: TeamOpt = "team",
-    listen: ListenOpt = None,
-    connect: ConnectOpt = None,
-    multicast: MulticastOpt = False,
-    protocol: ProtocolOpt = "tcp",
-    team_dir: TeamDirOpt = None,
-    insecure: InsecureOpt = False,
-    tls_ca: TlsCaOpt = None,
-    tls_cert: TlsCertOpt = None,
-    tls_key: TlsKeyOpt = None,
-    acl: AclOpt = None,
-    zenoh_config: ZenohConfigOpt = None,
-    link_lease: LinkLeaseOpt = 10.0,
     record_dir: RecordDirOpt = Path("live-records"),
     start_timeout: Annotated[
         float, typer.Option(help="Wall s to wait for every agent to be ready.")
@@ -113,17 +83,12 @@ def world(
     from mrcomm.live.world import run_world
     from mrcomm.world.scenario import load_scenario
 
-    security = resolve_security(
-        WORLD_ID, team_dir, insecure, (tls_ca, tls_cert, tls_key), acl,
-        load_scenario(run.scenario), zenoh_config,
-    )  # fmt: skip
-    zenoh = zenoh_options(
-        team, listen, connect, multicast, protocol, security, zenoh_config, link_lease
-    )
+    security = net.security(WORLD_ID, load_scenario(run.scenario))
+    zenoh = net.options(security)
     settings = LiveSettings(
         run, zenoh, record_dir.expanduser(), speed=speed, start_timeout=start_timeout
     ).with_record_dir()
-    warn_insecure(insecure)
+    warn_insecure(net.insecure)
     if not foxglove and not ros2 and emulation is None:
         raise typer.Exit(run_world(settings))
     from mrcomm.live.journal import new_incarnation
@@ -157,22 +122,11 @@ def world(
 
 
 @with_run_options
+@with_zenoh_options
 def agent(
     run: RunConfig,
     robot: Annotated[str, typer.Option(help="Robot id of this agent (or 'assigner').")],
-    team: TeamOpt = "team",
-    listen: ListenOpt = None,
-    connect: ConnectOpt = None,
-    multicast: MulticastOpt = False,
-    protocol: ProtocolOpt = "tcp",
-    team_dir: TeamDirOpt = None,
-    insecure: InsecureOpt = False,
-    tls_ca: TlsCaOpt = None,
-    tls_cert: TlsCertOpt = None,
-    tls_key: TlsKeyOpt = None,
-    acl: AclOpt = None,
-    zenoh_config: ZenohConfigOpt = None,
-    link_lease: LinkLeaseOpt = 10.0,
+    net: ZenohCli,
     record_dir: RecordDirOpt = Path("live-records"),
     lease: LeaseOpt = None,
     world_connect: Annotated[
@@ -248,17 +202,9 @@ def agent(
         Nav2Names.of(robot, ros_namespace, frame=ros_frame, qos=ros_qos)  # names checked
     scenario = load_scenario(run.scenario)
     check_agent_id(scenario, robot)
-    security = resolve_security(
-        robot, team_dir, insecure, (tls_ca, tls_cert, tls_key), acl, scenario, zenoh_config
-    )
-    zenoh = zenoh_options(
-        team, listen, connect, multicast, protocol, security, zenoh_config, link_lease
-    )
-    world_options = None
-    if world_connect:
-        world_options = zenoh_options(
-            team, None, world_connect, False, protocol, security, None, link_lease
-        )
+    security = net.security(robot, scenario)
+    zenoh = net.options(security)
+    world_options = net.world_options(world_connect, security) if world_connect else None
     settings = LiveSettings(
         run,
         zenoh,
@@ -271,7 +217,7 @@ def agent(
         base=base_options,
         emulated=emulated,
     ).with_record_dir()
-    warn_insecure(insecure)
+    warn_insecure(net.insecure)
     if console:
         raise typer.Exit(_operator_console(settings, robot, port))
     raise typer.Exit(run_agent(settings, robot))

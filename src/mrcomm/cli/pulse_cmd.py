@@ -28,24 +28,7 @@ from typing import Annotated, TextIO
 import msgspec
 import typer
 
-from mrcomm.cli.live_cmd import (
-    AclOpt,
-    ConnectOpt,
-    InsecureOpt,
-    LinkLeaseOpt,
-    ListenOpt,
-    MulticastOpt,
-    ProtocolOpt,
-    TeamDirOpt,
-    TeamOpt,
-    TlsCaOpt,
-    TlsCertOpt,
-    TlsKeyOpt,
-    ZenohConfigOpt,
-    resolve_security,
-    warn_insecure,
-    zenoh_options,
-)
+from mrcomm.cli.zenoh_cli import ZenohCli, warn_insecure, with_zenoh_options
 from mrcomm.errors import InputError
 from mrcomm.live.journal import new_incarnation
 from mrcomm.messaging.messages import TOPIC_RSSI, Message
@@ -97,8 +80,10 @@ def run_pulse(
             sleep(wait)
 
 
+@with_zenoh_options
 def pulse(
     robot: Annotated[str, typer.Option("--robot", help="Id of the robot this pulse serves.")],
+    net: ZenohCli,
     iface: Annotated[
         str | None, typer.Option("--iface", help="Wireless interface to read, e.g. wlan0.")
     ] = None,
@@ -127,9 +112,6 @@ def pulse(
             "Zenoh option is given).",
         ),
     ] = False,
-    team: TeamOpt = "team",
-    listen: ListenOpt = None,
-    connect: ConnectOpt = None,
     world_connect: Annotated[
         list[str] | None,
         typer.Option(
@@ -138,16 +120,6 @@ def pulse(
             "(repeatable; default: the clock is heard over the --connect session).",
         ),
     ] = None,
-    multicast: MulticastOpt = False,
-    protocol: ProtocolOpt = "tcp",
-    team_dir: TeamDirOpt = None,
-    insecure: InsecureOpt = False,
-    tls_ca: TlsCaOpt = None,
-    tls_cert: TlsCertOpt = None,
-    tls_key: TlsKeyOpt = None,
-    acl: AclOpt = None,
-    zenoh_config: ZenohConfigOpt = None,
-    link_lease: LinkLeaseOpt = 10.0,
 ) -> None:
     """ESD pulse: publish the measured RSSI of each peer at --rate Hz.
 
@@ -158,7 +130,7 @@ def pulse(
     agent listens to; without one it prints JSON lines on stdout (--stdout: both).
     It needs no agent and keeps running when the agent dies.
     """
-    use_zenoh = bool(listen or connect or world_connect or multicast or zenoh_config)
+    use_zenoh = net.joins or bool(world_connect)
     if (iface is None) == (trace is None):
         raise InputError("give either --iface (and --peers) or --trace", field="--iface")
     if iface is not None and peers is None:
@@ -177,16 +149,10 @@ def pulse(
     zenoh = world = None
     if use_zenoh:
         # A pulse runs on its robot and presents the robot's certificate.
-        security = resolve_security(
-            robot, team_dir, insecure, (tls_ca, tls_cert, tls_key), acl, None, zenoh_config
-        )
-        zenoh = zenoh_options(
-            team, listen, connect, multicast, protocol, security, zenoh_config, link_lease
-        )
+        security = net.security(robot, None)
+        zenoh = net.options(security)
         if world_connect:
-            world = zenoh_options(
-                team, None, world_connect, False, protocol, security, None, link_lease
-            )
+            world = net.world_options(world_connect, security)
     period = 1.0 / rate
     incarnation = new_incarnation(None, owner)  # a pulse keeps no journal
     bus = FanOutBus(owner)
@@ -204,7 +170,7 @@ def pulse(
     if stdout or zenoh is None:
         bus.targets.append(JsonLinesBus(owner, sys.stdout))
     # Every input has been checked: only now open the sessions.
-    warn_insecure(insecure and zenoh is not None)
+    warn_insecure(net.insecure and zenoh is not None)
     with contextlib.ExitStack() as stack:
         clock: ZenohNode | None = None
         if zenoh is not None:

@@ -86,29 +86,56 @@ def with_run_options(command: Callable[..., None]) -> Callable[..., None]:
     """Give a command the run options. ``command``'s first parameter is ``run``: it
     receives the validated RunConfig built from them; its other parameters follow
     the run options on the command line."""
-    own = inspect.signature(command)
-    first, *rest = own.parameters.values()
-    if first.name != "run":
+    first = next(iter(inspect.signature(command).parameters))
+    if first != "run":
         raise TypeError(f"{command.__name__}: the first parameter must be 'run'")
-    shared = list(inspect.signature(_run_options).parameters.values())
-    names = [p.name for p in shared]
-    # Typer reads the annotations: resolve them here, in each function's own module.
-    from mrcomm.run.config import RunConfig  # commands name it only when type checking
+    return expand_parameter(command, "run", _run_options, run_config)
 
+
+def expand_parameter(
+    command: Callable[..., None],
+    name: str,
+    declaration: Callable[..., None],
+    make: Callable[..., Any],
+    names: dict[str, Any] | None = None,
+) -> Callable[..., None]:
+    """``command`` with its parameter ``name`` replaced, on the command line, by the
+    parameters of ``declaration`` (options declared once for several commands); the
+    command receives ``make(**their values)`` as ``name``. The parameters after it
+    become keyword-only (a command's own required option may follow the defaults).
+    ``names``: types the command's annotations name only when type checking."""
+    own = inspect.signature(command)
+    shared = list(inspect.signature(declaration).parameters.values())
+    keys = [p.name for p in shared]
+    # Typer reads the annotations: resolve them here, in each function's own module
+    # (commands name RunConfig only when type checking).
+    from mrcomm.run.config import RunConfig
+
+    local = {"RunConfig": RunConfig, **(names or {})}
     hints = {
-        **typing.get_type_hints(_run_options, include_extras=True),
-        **typing.get_type_hints(command, localns={"RunConfig": RunConfig}, include_extras=True),
+        **typing.get_type_hints(declaration, include_extras=True),
+        **typing.get_type_hints(command, localns=local, include_extras=True),
     }
-    parameters = [p.replace(annotation=hints[p.name]) for p in shared] + [
-        # Keyword-only: a command's own required option may follow the defaults.
-        p.replace(annotation=hints[p.name], kind=inspect.Parameter.KEYWORD_ONLY)
-        for p in rest
-    ]
+    parameters: list[inspect.Parameter] = []
+    after = False
+    for p in own.parameters.values():
+        if p.name == name:
+            kind = inspect.Parameter.KEYWORD_ONLY if parameters else p.kind
+            parameters += [s.replace(annotation=hints[s.name], kind=kind) for s in shared]
+            after = True
+        elif after:
+            parameters.append(
+                p.replace(annotation=hints[p.name], kind=inspect.Parameter.KEYWORD_ONLY)
+            )
+        else:
+            parameters.append(p.replace(annotation=hints[p.name]))
+    if not after:
+        raise TypeError(f"{command.__name__} has no parameter {name!r}")
 
     @functools.wraps(command)
-    def wrapper(**kwargs: Any) -> None:
-        options = {name: kwargs.pop(name) for name in names}
-        command(run_config(**options), **kwargs)
+    def wrapper(*args: Any, **kwargs: Any) -> None:
+        options = {key: kwargs.pop(key) for key in keys}
+        command(*args, **{name: make(**options)}, **kwargs)
 
     del wrapper.__wrapped__  # typer must see the new signature, not the command's
     wrapper.__signature__ = own.replace(parameters=parameters)  # type: ignore[attr-defined]
