@@ -74,8 +74,11 @@ def start_case(
     if sys.platform.startswith("linux"):
         command = ["taskset", "-c", str(core), *command]
     env = dict(os.environ)
-    if tree is not None:
-        env["PYTHONPATH"] = str(tree.resolve() / "src")
+    if tree is not None:  # its code, and its own example plugin (see same_results.py)
+        tree = tree.resolve()
+        env["PYTHONPATH"] = os.pathsep.join(
+            str(p) for p in (tree / "src", tree / "examples" / "mrcomm-repeat")
+        )
     return subprocess.Popen(command, stdout=subprocess.PIPE, text=True, cwd=ROOT, env=env)
 
 

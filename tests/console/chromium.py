@@ -48,6 +48,15 @@ def mrcomm_process(*args: str) -> subprocess.Popen[str]:
     )  # fmt: skip
 
 
+def console_url(proc: subprocess.Popen[str]) -> str:
+    """The console's address with its secret, as the command prints it on stderr."""
+    assert proc.stderr is not None
+    for line in proc.stderr:
+        if line.startswith("console: "):
+            return line.split()[1]
+    raise AssertionError(f"no console address printed (exit {proc.wait()})")
+
+
 def open_page(driver: Any, url: str, proc: subprocess.Popen[str]) -> None:
     """Load the page once the server answers (it starts within seconds)."""
 

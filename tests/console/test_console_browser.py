@@ -27,6 +27,7 @@ from tests.console.chromium import (
     MISSING,
     attr,
     click,
+    console_url,
     free_port,
     mrcomm_process,
     open_page,
@@ -47,7 +48,8 @@ def browser() -> Iterator[Any]:
 def _console(*options: str) -> tuple[subprocess.Popen[str], str]:
     port = free_port("127.0.0.1")
     args = ["run", str(S1_PATH), "--console", "--port", str(port), "--json", *options]
-    return mrcomm_process(*args), f"http://127.0.0.1:{port}/"
+    proc = mrcomm_process(*args)
+    return proc, console_url(proc)
 
 
 def _result(proc: subprocess.Popen[str]) -> dict[str, Any]:

@@ -62,7 +62,14 @@ def test_the_replay_page_plays_the_mission(recording: tuple[Path, Any]) -> None:
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support.ui import WebDriverWait
 
-    from tests.console.chromium import MISSING, free_port, mrcomm_process, open_page, start_browser
+    from tests.console.chromium import (
+        MISSING,
+        console_url,
+        free_port,
+        mrcomm_process,
+        open_page,
+        start_browser,
+    )
 
     if MISSING is not None:
         pytest.skip(MISSING)
@@ -70,7 +77,7 @@ def test_the_replay_page_plays_the_mission(recording: tuple[Path, Any]) -> None:
     proc = mrcomm_process("console", "--replay", str(recording[0]), "--port", str(port))
     driver = start_browser()
     try:
-        open_page(driver, f"http://127.0.0.1:{port}/", proc)
+        open_page(driver, console_url(proc), proc)
         wait = WebDriverWait(driver, 30, poll_frequency=0.2)
         wait.until(lambda d: d.find_elements(By.CSS_SELECTOR, "#robot-robot_1"))
         assert driver.find_element(By.ID, "clock").text.startswith("t = 0.0 s")  # spaces collapse

@@ -23,6 +23,7 @@ from tests.console.chromium import (  # noqa: E402
     MISSING,
     attr,
     click,
+    console_url,
     free_port,
     mrcomm_process,
     open_page,
@@ -42,7 +43,7 @@ def test_the_live_console_shows_the_robots_and_reassigns_a_task(tmp_path: Path) 
     )  # fmt: skip
     driver = start_browser()
     try:
-        open_page(driver, f"http://127.0.0.1:{port}/", proc)
+        open_page(driver, console_url(proc), proc)
         wait = WebDriverWait(driver, 90, poll_frequency=0.2)
         for robot in ("robot_1", "robot_2", "robot_3"):  # heard over Zenoh
             wait.until(lambda d, r=robot: attr(d, f"#robot-{r}", "cx"))

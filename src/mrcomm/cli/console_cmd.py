@@ -32,9 +32,11 @@ def console(
 ) -> None:
     """Open a recorded mission in the operator console (http://localhost:--port)."""
     need_console_extra("--replay", "mcap_protobuf")
+    from mrcomm.console.guard import ConsoleGuard
     from mrcomm.console.page import serve_replay
     from mrcomm.console.replay import load_replay
 
     loaded = load_replay(replay)
-    typer.echo(f"console: http://localhost:{port} ({loaded.label}, {loaded.end:.1f} s)", err=True)
-    serve_replay(loaded, port)
+    guard = ConsoleGuard(port)
+    typer.echo(f"console: {guard.url} ({loaded.label}, {loaded.end:.1f} s)", err=True)
+    serve_replay(loaded, guard)

@@ -178,13 +178,20 @@ def live(
         if record_dir is not None
         else Path(tempfile.mkdtemp(prefix="mrcomm-live-"))
     )
+    guard = None
+    if console:
+        from mrcomm.console.guard import ConsoleGuard
+
+        guard = ConsoleGuard(port)
     settings = LiveSettings(
         run, zenoh, directory, speed=speed, lease=lease, agent_clock=agent_clock,
         operator=operator, console_port=port if console else None, base=base_options,
-        emulated=emulate,
+        emulated=emulate, console_token=guard.token if guard is not None else None,
     )  # fmt: skip
     warn_ignored_settings(run)
     warn_insecure(insecure)
+    if guard is not None:
+        typer.echo(f"console: {guard.url}", err=True)
     display = LiveDisplay(directory, run.max_time, len(scenario.tasks), len(scenario.robots))
     try:
         with display, throwaway_team(team_dir, insecure, members) as used_dir:

@@ -14,6 +14,7 @@ with exit status 2.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -233,10 +234,12 @@ def _operator_console(settings: Any, robot: str, port: int) -> int:
     from mrcomm.cli.console_cmd import need_console_extra
 
     need_console_extra("--console")
+    from mrcomm.console.guard import ConsoleGuard
     from mrcomm.console.live_session import LiveConsole
     from mrcomm.console.page import serve
     from mrcomm.live.agent import AgentProcess
     from mrcomm.live.journal import new_incarnation
+    from mrcomm.live.settings import CONSOLE_TOKEN_ENV
 
     process = AgentProcess(settings, robot, new_incarnation(settings.record_dir, robot))
     host = process.operator
@@ -244,8 +247,10 @@ def _operator_console(settings: Any, robot: str, port: int) -> int:
     counts = process.bus.endpoints[OPERATOR_ID].counts
     page = LiveConsole(host.operator, process.resources.scenario.grid, counts)
     host.on_step = page.on_step
-    typer.echo(f"console: http://localhost:{port}", err=True)
-    status = serve(page, port, process.run)
+    # Started by mrcomm live: its secret comes in the environment (it printed the URL).
+    guard = ConsoleGuard(port, os.environ.get(CONSOLE_TOKEN_ENV) or None)
+    typer.echo(f"console: {guard.url}", err=True)
+    status = serve(page, guard, process.run)
     return 1 if status is None else status
 
 

@@ -148,12 +148,14 @@ def _run_with_console(
     from mrcomm.cli.console_cmd import need_console_extra
 
     need_console_extra("--console")
+    from mrcomm.console.guard import ConsoleGuard
     from mrcomm.console.page import serve
     from mrcomm.console.session import ConsoleSession
 
     session = ConsoleSession(config, resources, plan, speed if speed is not None else 1.0)
-    typer.echo(f"console: http://localhost:{port}", err=True)
-    serve(session, port, session.run)
+    guard = ConsoleGuard(port)
+    typer.echo(f"console: {guard.url}", err=True)
+    serve(session, guard, session.run)
     if session.result is None:
         raise InputError("the console stopped before the mission ended", field="--console")
     return session.result

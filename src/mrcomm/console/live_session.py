@@ -58,4 +58,4 @@ class LiveConsole:
             self._next_view = wall + VIEW_PERIOD
             counters = counters_of(self._counts.items())
             view = operator_snapshot(self.operator, now, self.desk.events, counters)
-            self.view = replace(view, notes=tuple(self.desk.notes[-5:]))
+            self.view = replace(view, notes=tuple(list(self.desk.notes)[-5:]))

@@ -20,6 +20,7 @@ from typing import Any, TypeVar
 
 from nicegui import app, ui
 
+from mrcomm.console.guard import ConsoleGuard
 from mrcomm.console.live_session import LiveConsole
 from mrcomm.console.replay import Replay
 from mrcomm.console.session import SPEEDS, ConsoleSession
@@ -142,14 +143,15 @@ def build(session: ConsoleSession | LiveConsole) -> None:
 
 def serve(
     console: ConsoleSession | LiveConsole,
-    port: int,
+    guard: ConsoleGuard,
     work: Callable[[], T],
     *,
     linger: float = 2.0,
 ) -> T | None:
-    """Serve the console page on ``port`` (localhost) while ``work`` — what steps the
-    mission: a session's run, a live operator process's loop — runs in its own thread;
-    stop the server ``linger`` s after it ends. Its return value (None if it raised)."""
+    """Serve the console page on ``guard.port`` (localhost, behind the guard: its URL
+    with the secret opens it) while ``work`` — what steps the mission: a session's run,
+    a live operator process's loop — runs in its own thread; stop the server ``linger``
+    s after it ends. Its return value (None if it raised)."""
     build(console)
     done: list[T] = []
 
@@ -160,12 +162,23 @@ def serve(
             threading.Timer(linger, app.shutdown).start()
 
     app.on_startup(lambda: threading.Thread(target=run, daemon=True).start())
-    _run_server(port, "MRComm console")
+    _run_server(guard, "MRComm console")
     return done[0] if done else None
 
 
-def _run_server(port: int, title: str) -> None:
-    ui.run(host="127.0.0.1", port=port, reload=False, show=False, title=title,
+class _Guarded:
+    """The NiceGUI app behind a :class:`ConsoleGuard` (Starlette's middleware form)."""
+
+    def __init__(self, inner: Any, guard: ConsoleGuard) -> None:
+        self._app = guard.middleware(inner)
+
+    async def __call__(self, scope: Any, receive: Any, send: Any) -> None:
+        await self._app(scope, receive, send)
+
+
+def _run_server(guard: ConsoleGuard, title: str) -> None:
+    app.add_middleware(_Guarded, guard=guard)
+    ui.run(host="127.0.0.1", port=guard.port, reload=False, show=False, title=title,
            show_welcome_message=False)  # fmt: skip
 
 
@@ -206,7 +219,8 @@ def build_replay(replay: Replay) -> None:
         show()
 
 
-def serve_replay(replay: Replay, port: int) -> None:
-    """Serve the replay page on ``port`` (localhost) until interrupted."""
+def serve_replay(replay: Replay, guard: ConsoleGuard) -> None:
+    """Serve the replay page on ``guard.port`` (localhost, behind the guard) until
+    interrupted."""
     build_replay(replay)
-    _run_server(port, "MRComm replay")
+    _run_server(guard, "MRComm replay")

@@ -73,9 +73,10 @@ class ConsoleSession:
 
     def submit(
         self, kind: str, robot: str = "", task: str = "", where: tuple[float, float] | None = None
-    ) -> None:
-        """Queue an operator command; it is sent at the next step."""
-        self.desk.submit(kind, robot, task, where)
+    ) -> bool:
+        """Queue an operator command; it is sent at the next step (False: refused,
+        see :class:`OperatorDesk`)."""
+        return self.desk.submit(kind, robot, task, where)
 
     def _end(self) -> None:
         self.end_requested = True
@@ -135,5 +136,5 @@ class ConsoleSession:
         view = snapshot(self.mission, self.operator, self.events)
         successful = self.result.mission["successful"] if self.result is not None else None
         self.view = replace(
-            view, ended=ended, successful=successful, notes=tuple(self.desk.notes[-5:])
+            view, ended=ended, successful=successful, notes=tuple(list(self.desk.notes)[-5:])
         )

@@ -37,7 +37,7 @@ from mrcomm.live.collect import collect
 from mrcomm.live.kernel_links import Emulation
 from mrcomm.live.netns import Netns
 from mrcomm.live.protocol import WORLD_ID
-from mrcomm.live.settings import LiveSettings
+from mrcomm.live.settings import CONSOLE_TOKEN_ENV, LiveSettings
 from mrcomm.net.pulse import pulse_id
 from mrcomm.net.signal.trace import RssiTrace
 from mrcomm.run.config import param_assignments
@@ -146,6 +146,8 @@ class LiveTeam:
         args = [*self.wrappers.get(host, []), sys.executable, "-c", _CLI, *self.command(name)]
         env = dict(os.environ)
         env.setdefault("PYTHONUNBUFFERED", "1")
+        if name == OPERATOR_ID and self.settings.console_token is not None:
+            env[CONSOLE_TOKEN_ENV] = self.settings.console_token
         if self.settings.base.kind == "nav2":
             # One host: ROS 2 discovery stays on it unless the user said otherwise.
             env.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")

@@ -23,6 +23,10 @@ AGENT_CLOCKS = ("shared", "host")
 BASES = ("native", "nav2")
 
 
+#: The environment variable that carries the console's secret to the operator's process.
+CONSOLE_TOKEN_ENV = "MRCOMM_CONSOLE_TOKEN"
+
+
 @dataclass(frozen=True)
 class BaseOptions:
     """An agent's robot base and, for ``nav2``, its ROS names (``ros2.runtime``)."""
@@ -63,6 +67,9 @@ class LiveSettings:
     operator: Path | None = None
     #: Serve the operator console on this port (from the operator's process).
     console_port: int | None = None
+    #: The console's per-run secret (the launcher hands it to the operator's process
+    #: in :data:`CONSOLE_TOKEN_ENV`, never on a command line other users can read).
+    console_token: str | None = None
     #: The robots' bases: the world's simulated ones over Zenoh, or Nav2 over ROS 2.
     base: BaseOptions = BaseOptions()
     #: Agents: the kernel applies the network model (``--emulate``), so their buses
