@@ -363,3 +363,35 @@ def _pump_all(bus: ZenohBus) -> bool:
             bus.handle(item)
         item = bus.node.poll(None)
     return True
+
+
+def test_messages_of_another_mission_are_refused() -> None:
+    """Every sample carries its mission's identity: statuses recorded in one mission
+    and replayed into the next (or a member of another run on the same team name) are
+    refused and counted; the mission's own still arrive."""
+    with nodes(mesh_options(3)) as (old, replay, node):
+        node.mission = b"mission2"
+        old.mission = replay.mission = b"mission1"
+        bus = ZenohBus(node, LinkRules(), PositionBook())
+        me = bus.endpoint("robot_2", stream(1, "loss", "robot_2"))
+        got: list[Message] = []
+        me.subscribe(TOPIC_POSE, got.append)
+        mate = ZenohBus(replay, LinkRules(), PositionBook()).endpoint(
+            "robot_1", stream(1, "loss", "robot_1")
+        )
+        wait_for(lambda: replay.peers() and node.peers(), 10, "the peers to connect")
+        for seq in range(20):
+            mate.publish(TOPIC_POSE, pose("robot_1", seq, 1.0))
+        wait_for(lambda: drain_into(bus) >= 20, 10, "the replayed poses")
+        assert got == [] and node.refused == {"other_mission": 20}
+        replay.mission = b"mission2"  # now in this mission
+        wait_for(lambda: _publish_pose_until(mate, bus, got), 10, "the mate's pose")
+        assert got
+
+
+def drain_into(bus: ZenohBus) -> int:
+    """Hand the bus what reached its node; the number refused so far."""
+    while (item := bus.node.poll(0.05)) is not None:
+        if item.channel == "bus":
+            bus.handle(item)
+    return sum(bus.node.refused.values())

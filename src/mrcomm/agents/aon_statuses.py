@@ -127,6 +127,7 @@ class AonStatuses(TaskExecutor):
                 (*message.team, message.sender),
                 lease=getattr(self.params, "aon_lease", DEFAULT_AON_LEASE),
                 on_deliver=self._on_aon_deliver,
+                payloads=(TaskStatus,),  # the team's statuses, nothing else
             )
 
     def before_state_step(self) -> None:

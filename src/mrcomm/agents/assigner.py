@@ -57,6 +57,8 @@ class TaskAssigner:
         # (task_id, robot) -> time the SUCCESS status first arrived
         self.success_received: dict[tuple[str, str], float] = {}
         self.status_log: list[tuple[float, TaskStatus]] = []
+        #: Statuses refused, by cause.
+        self.refused: Counter[str] = Counter()
         #: (task_id, robot) -> when an operator's confirmation arrived.
         self.confirmed: dict[tuple[str, str], float] = {}
         self._seq = 0
@@ -71,6 +73,7 @@ class TaskAssigner:
                 (*self.team, bus.owner),
                 lease=aon_lease,
                 on_deliver=lambda status, _id: self.record_status(status),
+                payloads=(TaskStatus,),  # the team's statuses, nothing else
             )
         bus.subscribe(TOPIC_TASK_STATUS, self._on_status)
         bus.subscribe(TOPIC_POSE, BatchHandler(self._on_poses))
@@ -125,7 +128,13 @@ class TaskAssigner:
             self.assigned = True
 
     def record_status(self, status: TaskStatus) -> None:
-        """Record a task status, whichever layer delivered it (plain topic or AON)."""
+        """Record a task status, whichever layer delivered it (plain topic or AON). A
+        robot reports only its own work: a status naming another robot than its sender
+        is refused (counted in ``refused``), so that a member cannot be credited with,
+        or rob another of, a task."""
+        if status.robot != status.sender:
+            self.refused["status of another robot"] += 1
+            return
         self.received[TOPIC_TASK_STATUS] += 1
         self.status_log.append((self._now, status))
         if status.state is TaskState.SUCCESS:

@@ -63,6 +63,8 @@ class CommandInbox:
                 on_deliver=self._deliver,
                 topic=TOPIC_COMMAND,
                 subscribe=False,  # this inbox hands it every message, this one first
+                origins=frozenset({OPERATOR_ID}),  # only the operator commands
+                payloads=(OperatorCommand,),
             )
         self.endpoint.receive(message)
 

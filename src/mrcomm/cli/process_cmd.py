@@ -30,12 +30,23 @@ if TYPE_CHECKING:
     from mrcomm.run.config import RunConfig
 
 
+MissionOpt = Annotated[
+    str | None,
+    typer.Option(
+        help="The mission's identity (16 hex digits; mrcomm live draws one): messages of "
+        "another mission are refused. The world draws one when none is given; an agent "
+        "without one adopts the world's."
+    ),
+]
+
+
 @with_run_options
 @with_zenoh_options
 def world(
     run: RunConfig,
     net: ZenohCli,
     speed: SpeedOpt = 1.0,
+    mission: MissionOpt = None,
     record_dir: RecordDirOpt = Path("live-records"),
     start_timeout: Annotated[
         float, typer.Option(help="Wall s to wait for every agent to be ready.")
@@ -87,8 +98,9 @@ def world(
     security = net.security(WORLD_ID, load_scenario(run.scenario))
     zenoh = net.options(security)
     settings = LiveSettings(
-        run, zenoh, record_dir.expanduser(), speed=speed, start_timeout=start_timeout
-    ).with_record_dir()
+        run, zenoh, record_dir.expanduser(), speed=speed, start_timeout=start_timeout,
+        mission=mission,
+    ).with_record_dir()  # fmt: skip
     warn_insecure(net.insecure)
     if not foxglove and not ros2 and emulation is None:
         raise typer.Exit(run_world(settings))
@@ -128,6 +140,7 @@ def agent(
     run: RunConfig,
     robot: Annotated[str, typer.Option(help="Robot id of this agent (or 'assigner').")],
     net: ZenohCli,
+    mission: MissionOpt = None,
     record_dir: RecordDirOpt = Path("live-records"),
     lease: LeaseOpt = None,
     world_connect: Annotated[
@@ -217,6 +230,7 @@ def agent(
         operator=operator,
         base=base_options,
         emulated=emulated,
+        mission=mission,
     ).with_record_dir()
     warn_insecure(net.insecure)
     if console:

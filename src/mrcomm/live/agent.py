@@ -62,7 +62,7 @@ from mrcomm.live.protocol import (
 from mrcomm.live.recorder import AgentRecorder
 from mrcomm.live.resync import Resync, reply_for
 from mrcomm.live.robot_base import AgentBase, open_base
-from mrcomm.live.settings import LiveSettings, config_crc
+from mrcomm.live.settings import LiveSettings, config_crc, mission_bytes
 from mrcomm.live.stop_signals import Stopped, stop_on_signals
 from mrcomm.live.tick_guard import IMPLAUSIBLE_TICK, TickGuard, tick_limit
 from mrcomm.messaging.messages import TOPIC_RSSI, RssiMsg, decode
@@ -73,7 +73,7 @@ from mrcomm.net.link_sensors import MeasuredSensor
 from mrcomm.net.pulse import pulse_id
 from mrcomm.net.zenoh_bus import LinkRules, PositionBook, ZenohBus
 from mrcomm.net.zenoh_config import check_key_chunk
-from mrcomm.net.zenoh_node import Incoming, Presence, ZenohNode, drain
+from mrcomm.net.zenoh_node import NO_MISSION, Incoming, Presence, ZenohNode, drain
 from mrcomm.run.agents import AgentAssembly, AgentOverrides
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.wiring import (
@@ -145,6 +145,8 @@ class AgentProcess:
             else self.node
         )
         self._enc = encoder()
+        if settings.mission is not None:  # else adopted from the world's first tick
+            self.node.mission = self.infra.mission = mission_bytes(settings.mission)
         positions = PositionBook()
         if spec.kind == "robot" and spec.host is not None:
             positions.aliases[ASSIGNER_ID] = spec.host
@@ -368,6 +370,11 @@ class AgentProcess:
         tick: Tick = item.value
         if not self.tick_guard.plausible(tick, time.monotonic()):
             self.node.refuse(IMPLAUSIBLE_TICK)  # counted with the bus edge's refusals
+            return None
+        if self.node.mission == NO_MISSION and len(tick.mission) == len(NO_MISSION):
+            self.node.mission = self.infra.mission = tick.mission  # this world's mission
+        if tick.mission != self.node.mission:
+            self.node.refuse("other_mission")  # the clock of another run's world
             return None
         if tick.time < self.tick_time:
             return None  # a stale tick overtaken by a newer one

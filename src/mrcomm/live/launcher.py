@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 import os
 import random
+import secrets
 import signal
 import socket
 import subprocess
@@ -75,6 +76,8 @@ class LiveTeam:
         """``addresses`` / ``wrappers`` place processes elsewhere: each listens on its
         own address (port 7447) and starts under its wrapper command (e.g.
         ``ip netns exec NS``); by default all listen on ``host``, on free ports."""
+        if settings.mission is None:  # one identity for every process of the run
+            settings = dataclasses.replace(settings, mission=secrets.token_hex(8))
         if team_dir is not None and settings.zenoh.protocol != "tls":
             # A team directory means TLS on every link: the endpoints say so.
             zenoh = dataclasses.replace(settings.zenoh, protocol="tls")
@@ -176,6 +179,7 @@ class LiveTeam:
             "--dt", f"{run.dt:g}",
             *(arg for item in param_assignments(run) for arg in ("--set", item)),
             "--team", s.zenoh.team,
+            "--mission", str(s.mission),
             "--record-dir", str(s.record_dir),
             "--listen", f"{proto}/{self.address(name)}:{self.ports[name]}",
             "--link-lease", f"{s.zenoh.link_lease:g}",

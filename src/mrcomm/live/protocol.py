@@ -48,7 +48,9 @@ class BaseState(msgspec.Struct, frozen=True, array_like=True):
 
 class Tick(msgspec.Struct, frozen=True):
     """The shared clock: simulated time ``time`` and every base's state at that time.
-    ``end`` is set once the mission is over (``end_time`` is when it ended)."""
+    ``end`` is set once the mission is over (``end_time`` is when it ended).
+    ``mission``: the mission's identity (8 bytes), which an agent started without one
+    adopts from its first tick."""
 
     time: float
     speed: float
@@ -56,6 +58,7 @@ class Tick(msgspec.Struct, frozen=True):
     end: bool = False
     end_time: float = 0.0
     timed_out: bool = False
+    mission: bytes = b""
 
 
 class BaseCommand(msgspec.Struct, frozen=True):

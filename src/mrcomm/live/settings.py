@@ -23,6 +23,20 @@ AGENT_CLOCKS = ("shared", "host")
 BASES = ("native", "nav2")
 
 
+def mission_bytes(text: str) -> bytes:
+    """The 8 bytes of a mission identity given as 16 hex digits (``--mission``)."""
+    try:
+        value = bytes.fromhex(text)
+    except ValueError:
+        value = b""
+    if len(value) != 8 or value == bytes(8):
+        raise InputError(
+            f"a mission identity is 16 hex digits, not all zero; got {text!r}",
+            field="--mission",
+        )
+    return value
+
+
 #: The environment variable that carries the console's secret to the operator's process.
 CONSOLE_TOKEN_ENV = "MRCOMM_CONSOLE_TOKEN"
 
@@ -67,6 +81,10 @@ class LiveSettings:
     operator: Path | None = None
     #: Serve the operator console on this port (from the operator's process).
     console_port: int | None = None
+    #: The mission's identity (16 hex digits; the world draws one when it is None, and
+    #: an agent without one adopts the world's): every message carries it, and one of
+    #: another mission is refused.
+    mission: str | None = None
     #: The console's per-run secret (the launcher hands it to the operator's process
     #: in :data:`CONSOLE_TOKEN_ENV`, never on a command line other users can read).
     console_token: str | None = None
@@ -81,6 +99,8 @@ class LiveSettings:
         return self.operator is not None or self.console_port is not None
 
     def __post_init__(self) -> None:
+        if self.mission is not None:
+            mission_bytes(self.mission)  # a one-line error for a bad one
         check_positive(self.speed, "--speed")
         if self.lease is not None:
             check_positive(self.lease, "--lease")

@@ -22,10 +22,13 @@ the agents have gone. It is not a team member: a crash of any agent leaves it ru
 
 from __future__ import annotations
 
+import secrets
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import asdict
 from typing import Protocol
+
+import msgspec
 
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.errors import InputError
@@ -47,7 +50,7 @@ from mrcomm.live.protocol import (
     encoder,
 )
 from mrcomm.live.pulse import PublishingEndpoint
-from mrcomm.live.settings import LiveSettings, config_crc
+from mrcomm.live.settings import LiveSettings, config_crc, mission_bytes
 from mrcomm.messaging.messages import TOPIC_RSSI, RssiMsg
 from mrcomm.messaging.topics import Lane
 from mrcomm.net.links import LinkState
@@ -115,6 +118,9 @@ class WorldProcess:
         self.incarnation = incarnation
         self.team = team_processes(scenario)
         self.node = ZenohNode(settings.zenoh)
+        # The mission's identity: every message of this run carries it.
+        mission = settings.mission
+        self.node.mission = mission_bytes(mission) if mission else secrets.token_bytes(8)
         self.journal = Journal(journal_path(settings.record_dir, WORLD_ID, incarnation))
         self._enc = encoder()
         self._applied: dict[str, tuple[int, int]] = {}  # robot -> (incarnation, seq)
@@ -296,6 +302,7 @@ class WorldProcess:
         return tuple(out)
 
     def _publish_tick(self, tick: Tick) -> None:
+        tick = msgspec.structs.replace(tick, mission=self.node.mission)
         self.node.put(self.node.key(WORLD_ID, CH_TICK), self._enc.encode(tick), Lane.BEST_EFFORT)
 
     # -- the end ---------------------------------------------------------------------------

@@ -49,6 +49,15 @@ What it can honestly promise over lossy links (and no more):
   kept, and when it is heard again it is brought up to date (the messages are re-sent
   to it) and a second, ``late`` report follows once it has them.
 
+What a peer can make it hold is bounded (:data:`MAX_INTRODUCED`, :data:`MAX_SEQ_AHEAD`,
+:data:`MAX_INCARNATIONS`): a member (or an intruder with a member's certificate) that
+floods the team with messages fills only its own share, and the team's own messages
+still go through. A payload is taken only from the member that authored it (its header
+names the entry's origin; a task status names its own sender as its robot). Every
+refusal is counted by cause (:attr:`AonEndpoint.refused`). Publications carry at most
+:data:`MAX_ENTRIES` entries each (more go in several), so none outgrows a transport's
+message size.
+
 Limits: the endpoint is single-threaded (the bus must call its handler from the
 agent's thread, between ``step`` calls, or from inside them). A member that restarts
 with a new incarnation has lost what it held; peers still count its former
@@ -59,6 +68,7 @@ left-out members is kept until they return.
 from __future__ import annotations
 
 import math
+from collections import Counter
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -91,6 +101,26 @@ FinishFn = Callable[[MessageId, FinishReport], None]
 # delivered before the first step); fixed up at the first step.
 _UNSET = -math.inf
 
+#: Unfinished messages a member may bring into this endpoint (those it was first to
+#: publish here, whoever their origin); the endpoint holds at most this many per member.
+MAX_INTRODUCED = 256
+#: How far past the oldest unfinished sequence number of an origin's incarnation a new
+#: message may be (a sender's numbers grow one by one).
+MAX_SEQ_AHEAD = 1024
+#: Incarnations of one origin whose finished messages are remembered (restarts are few).
+MAX_INCARNATIONS = 8
+#: Entries in one publication (more are published in several).
+MAX_ENTRIES = 64
+
+
+def authored_by(payload: object, origin: str) -> bool:
+    """Whether ``payload`` is what member ``origin`` may send: its header names
+    ``origin`` as its sender, and a task status names its sender as its robot."""
+    sender = getattr(payload, "sender", None)
+    if sender != origin:
+        return False
+    return not isinstance(payload, TaskStatus) or payload.robot == sender
+
 
 class AonEndpoint:
     """One agent's AON endpoint (see the module docstring for the protocol)."""
@@ -109,10 +139,13 @@ class AonEndpoint:
         on_finished: FinishFn | None = None,
         topic: str = TOPIC_AON,
         subscribe: bool = True,
+        origins: frozenset[str] | None = None,
+        payloads: tuple[type, ...] = (TaskStatus, OperatorCommand),
     ) -> None:
         """``topic``: where this team's AON messages travel (one AON team per topic);
         ``subscribe=False``: the owner hands the endpoint its messages
-        (:meth:`receive`) instead of the bus."""
+        (:meth:`receive`) instead of the bus; ``origins``: the members whose messages
+        it takes (None: every member); ``payloads``: the payload types it takes."""
         if resend_period <= 0.0:
             raise ValueError("resend_period must be positive")
         if failsafe_timeout <= 0.0:
@@ -130,6 +163,8 @@ class AonEndpoint:
         self._failsafe = failsafe_timeout
         self._lease = lease
         self._on_deliver = on_deliver
+        self._origins = origins
+        self._payloads = payloads
         self._on_finished = on_finished
         self._seq = 0
         self._pub_seq = 0
@@ -141,7 +176,12 @@ class AonEndpoint:
         self._last_heard: dict[str, float] = {}
         self._heard: set[str] = set()  # publishers heard since the last step
         self._expired_bits = 0
+        #: Unfinished messages each member brought in (see :data:`MAX_INTRODUCED`).
+        self._introduced: Counter[str] = Counter()
+        self._introducer: dict[MessageId, str] = {}
         self.stats = AonStats()
+        #: Entries refused, by cause (a forged payload, a member over its share, ...).
+        self.refused: Counter[str] = Counter()
         self.topic = topic
         if subscribe:
             bus.subscribe(topic, self._on_message)
@@ -248,9 +288,9 @@ class AonEndpoint:
             return
         self._heard.add(message.sender)
         for entry in message.entries:
-            self._on_entry(publisher_bit, entry)
+            self._on_entry(publisher_bit, entry, message.sender)
 
-    def _on_entry(self, publisher_bit: int, entry: AonEntry) -> None:
+    def _on_entry(self, publisher_bit: int, entry: AonEntry, publisher: str = "") -> None:
         sender_bit = self._team.bit.get(entry.sender)
         if sender_bit is None:
             return
@@ -279,6 +319,12 @@ class AonEndpoint:
             # Knowledge about a message we never held: nothing to deliver, and keeping
             # bitmaps without the payload would not let us help anyone.
             return
+        cause = self._refusal(entry, record, publisher)
+        if cause:
+            self.refused[cause] += 1
+            return
+        self._introduced[publisher] += 1
+        self._introducer[msg_id] = publisher
         now = self._time()
         st = MsgState(
             payload=entry.payload,
@@ -294,6 +340,25 @@ class AonEndpoint:
         self._on_deliver(entry.payload, msg_id)
         self._advance(msg_id, st)
 
+    def _refusal(self, entry: AonEntry, record: SeqRecord | None, publisher: str) -> str:
+        """Why a message new to this endpoint is not taken ("": it is)."""
+        if self._origins is not None and entry.sender not in self._origins:
+            return "origin may not send on this topic"
+        if not isinstance(entry.payload, self._payloads):
+            return "payload of the wrong type"
+        if not authored_by(entry.payload, entry.sender):
+            return "payload not authored by its origin"
+        if self._introduced[publisher] >= MAX_INTRODUCED:
+            return "member over its share of unfinished messages"
+        floor = record.watermark if record is not None else 0
+        if entry.seq >= floor + MAX_SEQ_AHEAD or entry.seq < 0:
+            return "sequence number out of range"
+        if record is None:
+            known = [inc for sender, inc in self._records if sender == entry.sender]
+            if len(known) >= MAX_INCARNATIONS and entry.incarnation < max(known):
+                return "incarnation out of range"
+        return ""
+
     # ------------------------------------------------------------------ progress
 
     def _advance(self, msg_id: MessageId, st: MsgState) -> None:
@@ -307,16 +372,29 @@ class AonEndpoint:
     def _finish(self, msg_id: MessageId, st: MsgState) -> None:
         now = self._time()
         del self._states[msg_id]
+        introducer = self._introducer.pop(msg_id, None)
+        if introducer is not None:
+            self._introduced[introducer] -= 1
         if msg_id in self._dirty:
             # We set *received* in this very step (the last bit missing): the others
             # still need to hear it, from the finished record ("all set received").
             self._dirty.discard(msg_id)
             self._replies.add(msg_id)
-        self._records.setdefault((msg_id[0], msg_id[1]), SeqRecord()).add(msg_id[2])
+        self._remember(msg_id)
         if st.reported_left_out is None:
             self._report(msg_id, st, (), now, late=False)
         elif st.reported_left_out:
             self._report(msg_id, st, (), now, late=True)
+
+    def _remember(self, msg_id: MessageId) -> None:
+        """Record ``msg_id`` as finished; of one origin, only the newest
+        :data:`MAX_INCARNATIONS` incarnations are remembered."""
+        key = (msg_id[0], msg_id[1])
+        if key not in self._records:
+            known = sorted(inc for sender, inc in self._records if sender == msg_id[0])
+            for old in known[: max(0, len(known) + 1 - MAX_INCARNATIONS)]:
+                del self._records[(msg_id[0], old)]
+        self._records.setdefault(key, SeqRecord()).add(msg_id[2])
 
     def _report(
         self,
@@ -409,21 +487,22 @@ class AonEndpoint:
             entries.append(AonEntry(msg_id[0], msg_id[1], msg_id[2], full_bytes, full_bytes))
         self._dirty.clear()
         self._replies.clear()
+        for start in range(0, len(entries), MAX_ENTRIES):
+            self._bus.publish(
+                self.topic,
+                AonMsg(
+                    sender=self.owner,
+                    incarnation=self.incarnation,
+                    seq=self._pub_seq,
+                    stamp=now,
+                    team_crc=self._team.crc,
+                    entries=tuple(entries[start : start + MAX_ENTRIES]),
+                ),
+            )
+            self._pub_seq += 1
+            self.stats.publications += 1
         if not entries:
             return
-        self._bus.publish(
-            self.topic,
-            AonMsg(
-                sender=self.owner,
-                incarnation=self.incarnation,
-                seq=self._pub_seq,
-                stamp=now,
-                team_crc=self._team.crc,
-                entries=tuple(entries),
-            ),
-        )
-        self._pub_seq += 1
-        self.stats.publications += 1
         self.stats.replies += replies
         if asked:
             self.stats.resend_publications += 1

@@ -364,6 +364,8 @@ class ZenohBus:
         sender = self.node.sender_of(key)
         message = item.value
         refusal = self._refusal(topic, sender, message)
+        if refusal is None and item.mission != self.node.mission:
+            refusal = "other_mission"  # a replay of another run, or a member of one
         if refusal is not None:
             self.node.refuse(refusal)
             return

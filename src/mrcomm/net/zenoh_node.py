@@ -52,11 +52,16 @@ REFUSALS = (
     "not_member",  # from an agent that is not in the team
     "implausible_tick",  # a clock tick the world cannot have sent (live/tick_guard.py)
     "bad_relay",  # a relayed copy whose content no robot may relay (net/zenoh_bus.py)
+    "other_mission",  # sent in another mission (a replay, or a team member of another run)
 )
-_STAMP = struct.Struct("<q")  # wall-clock send time (ns) carried as a Zenoh attachment
+#: Every attachment: the mission's identity (8 bytes; zero: not known yet) and the
+#: sender's wall-clock send time (ns).
+_STAMP = struct.Struct("<8sq")
 #: With a radio the attachment also carries the sender's mission time at publication
 #: and the radio delay of its queue (s; NaN: the queue overflowed and lost it).
-_RADIO_STAMP = struct.Struct("<qdd")
+_RADIO_STAMP = struct.Struct("<8sqdd")
+#: The identity of a mission not known yet.
+NO_MISSION = bytes(8)
 
 #: A message's radio facts from its sender: (mission time published, delay or NaN).
 Airtime = tuple[float, float]
@@ -73,6 +78,7 @@ class Incoming:
     recv_wall: float
     radio: Airtime | None = None  # the sender's radio queue (radio network model only)
     size: int = 0  # bytes of the encoded message
+    mission: bytes = NO_MISSION  # the mission its sender was in
 
 
 @dataclass(frozen=True, slots=True)
@@ -150,6 +156,9 @@ class ZenohNode:
         self._closed = False
         #: Samples refused at the edge, by cause (:data:`REFUSALS`).
         self.refused: dict[str, int] = {}
+        #: The mission this process is in (:data:`NO_MISSION` until it is known): sent
+        #: with every sample; the bus refuses samples of another mission.
+        self.mission = NO_MISSION
         self._refused_lock = threading.Lock()
 
     # -- keys ------------------------------------------------------------------------
@@ -168,9 +177,9 @@ class ZenohNode:
             return
         publisher = self._publisher(key, lane)
         if radio is None:
-            attachment = _STAMP.pack(time.time_ns())
+            attachment = _STAMP.pack(self.mission, time.time_ns())
         else:
-            attachment = _RADIO_STAMP.pack(time.time_ns(), *radio)
+            attachment = _RADIO_STAMP.pack(self.mission, time.time_ns(), *radio)
         if lane is Lane.BEST_EFFORT:
             with contextlib.suppress(self._zenoh.ZError):
                 publisher.put(data, attachment=attachment)
@@ -232,17 +241,18 @@ class ZenohNode:
                 return
             sent: float | None = None
             radio: Airtime | None = None
+            mission = NO_MISSION
             attachment = sample.attachment
             if attachment is not None:
                 raw = attachment.to_bytes()
                 if len(raw) == _STAMP.size:
-                    sent = _STAMP.unpack(raw)[0] / 1e9
+                    mission, stamp_ns = _STAMP.unpack(raw)
+                    sent = stamp_ns / 1e9
                 elif len(raw) == _RADIO_STAMP.size:
-                    stamp_ns, published, delay = _RADIO_STAMP.unpack(raw)
+                    mission, stamp_ns, published, delay = _RADIO_STAMP.unpack(raw)
                     sent, radio = stamp_ns / 1e9, (published, delay)
-            inbox.put(
-                Incoming(channel, str(sample.key_expr), value, sent, recv, radio, len(payload))
-            )
+            key = str(sample.key_expr)
+            inbox.put(Incoming(channel, key, value, sent, recv, radio, len(payload), mission))
 
         self._subscribers.append(self.session.declare_subscriber(key_expr, on_sample))
 
