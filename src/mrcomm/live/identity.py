@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.agents.commands import OPERATOR_ID
 from mrcomm.errors import InputError
+from mrcomm.live.leftovers import remove_stale_teams, team_prefix
 from mrcomm.live.protocol import WORLD_ID
 from mrcomm.net.pulse import pulse_id
 from mrcomm.net.team_dir import init_team, load_team, member_files
@@ -151,7 +152,8 @@ def throwaway_team(
     if team_dir is not None or insecure:
         yield team_dir
         return
-    holder = Path(tempfile.mkdtemp(prefix="mrcomm-team-"))  # mode 0700
+    remove_stale_teams()  # of runs killed before they could remove theirs
+    holder = Path(tempfile.mkdtemp(prefix=team_prefix()))  # mode 0700
     try:
         yield init_team(holder / "team", members, days=1, name="mrcomm throwaway team").path
     finally:

@@ -36,6 +36,7 @@ from mrcomm.agents.commands import OPERATOR_ID
 from mrcomm.errors import InputError, MissionFailed
 from mrcomm.live.collect import collect
 from mrcomm.live.kernel_links import Emulation
+from mrcomm.live.leftovers import die_with_parent
 from mrcomm.live.netns import Netns
 from mrcomm.live.protocol import WORLD_ID
 from mrcomm.live.settings import CONSOLE_TOKEN_ENV, LiveSettings
@@ -154,7 +155,10 @@ class LiveTeam:
         if self.settings.base.kind == "nav2":
             # One host: ROS 2 discovery stays on it unless the user said otherwise.
             env.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-        process = subprocess.Popen(args, stdout=handle, stderr=subprocess.STDOUT, env=env)
+        # It dies with this process, however this one ends (leftovers.die_with_parent).
+        process = subprocess.Popen(
+            args, stdout=handle, stderr=subprocess.STDOUT, env=env, preexec_fn=die_with_parent()
+        )
         child = Child(name, self.ports.get(name, 0), process, log, handle)
         self.children[name] = child
         return child
