@@ -66,6 +66,30 @@ def test_yaml_alias_bomb(tmp_path: Path) -> None:
         path.unlink()
 
 
+def test_a_large_yaml_is_refused_quickly(tmp_path: Path) -> None:
+    """A 15.8 MB file (under the old 16 MB bound) once took 219 s and 5.6 GB to refuse:
+    now a file of many values is refused while it is parsed, before anything is built,
+    and a larger file unread. (Timed by the process's CPU, not asserted tightly: the
+    bound is what keeps it under ~2 s.)"""
+    import resource
+
+    from mrcomm.errors import InputError
+    from mrcomm.world.yamlfile import MAX_VALUES, MAX_YAML_BYTES, read_yaml
+
+    many = tmp_path / "many.yaml"
+    many.write_text("[" + ",".join(["1"] * (MAX_VALUES + 1)) + "]")
+    huge = tmp_path / "huge.yaml"
+    huge.write_text("# " + "x" * (MAX_YAML_BYTES + 1))
+    flood = tmp_path / "flood.yaml"
+    flood.write_text("[" + ",".join(["1"] * (7 * 1024 * 1024)) + "]")  # 15 MB
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_utime
+    for path, why in ((many, "values"), (huge, "larger than"), (flood, "larger than")):
+        with pytest.raises(InputError, match=why):
+            read_yaml(path)
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_utime - before < 30
+    refused("run", str(many), cwd=tmp_path, needle=f"more than {MAX_VALUES:,} values")
+
+
 def test_model_json_nested_thousands_deep(tmp_path: Path) -> None:
     model = tmp_path / "model.json"
     model.write_text("[" * 100_000 + "]" * 100_000)

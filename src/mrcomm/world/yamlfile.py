@@ -3,9 +3,11 @@
 
 * :func:`read_yaml` — parse a file strictly (duplicate keys are an error, because
   PyYAML would otherwise keep the last one silently) and within limits: at most
-  :data:`MAX_YAML_BYTES`, nested at most :data:`MAX_DEPTH` levels, and at most
-  :data:`MAX_NODES` values once every alias is expanded (a few hundred bytes of nested
-  aliases can stand for billions of values: the "billion laughs").
+  :data:`MAX_YAML_BYTES` (refused unread), :data:`MAX_VALUES` values written out and
+  nesting :data:`MAX_DEPTH` levels deep (refused while parsing, before anything is
+  built: no file takes more than ~2 s or ~200 MB), and :data:`MAX_NODES` values once
+  every alias is expanded (a few hundred bytes of nested aliases can stand for billions
+  of values: the "billion laughs"). libyaml (PyYAML's C extension) parses.
 * :func:`validation_error` — the first error of a pydantic ``ValidationError`` as
   ``file: [3].location.x: must be a number, got 'abc'``, with "did you mean" for
   unknown keys.
@@ -22,8 +24,14 @@ import yaml
 
 from mrcomm.errors import InputError, did_you_mean
 
-#: Largest input file read (bytes): the biggest real scenario or schema is a few kB.
-MAX_YAML_BYTES = 16 * 1024 * 1024
+#: Largest input file read (bytes): larger ones are refused before anything is parsed.
+#: The biggest bundled input is campus1000's tasks (260 kB).
+MAX_YAML_BYTES = 8 * 1024 * 1024
+#: Most values (scalars, collections, aliases) a document may write out: counted while
+#: it is parsed, before any is built, so that no file takes more than ~2 s or ~200 MB to
+#: read or refuse (each value costs ~12 µs to parse and build; a 1,000-task list holds
+#: ~8,000).
+MAX_VALUES = 150_000
 #: Deepest nesting of collections.
 MAX_DEPTH = 64
 #: Most values a document may hold with its aliases expanded.
@@ -63,23 +71,57 @@ def _expanded_size(node: yaml.Node, sizes: dict[int, int]) -> int:
     return size
 
 
-def _construct_unique_mapping(loader: _UniqueKeyLoader, node: yaml.MappingNode) -> Any:
+def _construct_unique_mapping(loader: Any, node: yaml.MappingNode) -> Any:
+    loader.flatten_mapping(node)  # merge keys (<<) as SafeLoader does
+    pairs = loader.construct_pairs(node, deep=True)
     seen: set[Any] = set()
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=True)
+    for (key, _), (key_node, _) in zip(pairs, node.value, strict=True):
         if key in seen:
             line = key_node.start_mark.line + 1
             raise yaml.constructor.ConstructorError(
                 None, None, f"key '{key}' given twice (line {line})", key_node.start_mark
             )
         seen.add(key)
-    return loader.construct_mapping(node, deep=True)
+    return dict(pairs)
 
 
 _UniqueKeyLoader.add_constructor(
     yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG,
     _construct_unique_mapping,
 )
+
+#: libyaml's parser (PyYAML's C extension), about 20 times as fast as the pure-Python
+#: one; without it the pure-Python loader does the same checks.
+_CLoader: Any = getattr(yaml, "CSafeLoader", None)
+if _CLoader is not None:
+
+    class _FastUniqueKeyLoader(_CLoader):
+        """libyaml's SafeLoader that rejects a key given twice in one mapping (the
+        nesting is checked before it composes: :func:`_check_depth`)."""
+
+    _FastUniqueKeyLoader.add_constructor(
+        yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_unique_mapping
+    )
+
+
+def _check_shape(text: str, path: Path) -> None:
+    """Refuse a document of more than :data:`MAX_VALUES` values or nested deeper than
+    :data:`MAX_DEPTH`, from libyaml's event stream (a loop, not a recursion: no depth
+    can exhaust a stack here), before anything is built."""
+    depth = values = 0
+    for event in yaml.parse(text, Loader=_CLoader):
+        if isinstance(event, yaml.NodeEvent):
+            values += 1
+            if values > MAX_VALUES:
+                raise InputError(f"more than {MAX_VALUES:,} values: not an input file", file=path)
+        if isinstance(event, yaml.SequenceStartEvent | yaml.MappingStartEvent):
+            depth += 1
+            if depth > MAX_DEPTH:
+                problem = f"nested deeper than {MAX_DEPTH} levels"
+                mark: Any = event.start_mark
+                raise yaml.composer.ComposerError(None, None, problem, mark)
+        elif isinstance(event, yaml.SequenceEndEvent | yaml.MappingEndEvent):
+            depth -= 1
 
 
 def read_yaml(path: str | Path, *, field: str | None = None) -> Any:
@@ -102,9 +144,13 @@ def read_yaml(path: str | Path, *, field: str | None = None) -> Any:
         raise InputError("is a directory, expected a YAML file", file=path, field=field) from None
     except (OSError, UnicodeDecodeError) as err:
         raise InputError(f"cannot read file ({err})", file=path, field=field) from None
-    loader: _UniqueKeyLoader | None = None
+    loader: Any = None
     try:
-        loader = _UniqueKeyLoader(text)  # reading the text can already fail
+        if _CLoader is not None:
+            _check_shape(text, path)
+            loader = _FastUniqueKeyLoader(text)
+        else:
+            loader = _UniqueKeyLoader(text)  # reading the text can already fail
         node = loader.get_single_node()
         if node is None:
             return None
@@ -116,6 +162,8 @@ def read_yaml(path: str | Path, *, field: str | None = None) -> Any:
     except RecursionError:
         raise InputError(f"nested deeper than {MAX_DEPTH} levels", file=path) from None
     except yaml.MarkedYAMLError as err:
+        if "maximum nesting depth" in str(err.problem):  # libyaml's own limit (1,000)
+            raise InputError(f"nested deeper than {MAX_DEPTH} levels", file=path) from None
         mark = err.problem_mark or err.context_mark
         where = f" (line {mark.line + 1}, column {mark.column + 1})" if mark else ""
         problem = err.problem or err.context or "syntax error"
