@@ -56,6 +56,20 @@ def test_a_directory_holding_another_scenario_is_refused(tmp_path: Path) -> None
         load_experiment(schema)
 
 
+@pytest.mark.parametrize("target", ["grid-n3.yaml", "grid-n3_tasks.yaml", "MANIFEST.sha256"])
+def test_a_hand_edited_generated_scenario_is_refused(tmp_path: Path, target: str) -> None:
+    """Its header unchanged, a task moved: the cache was once used silently, storing runs
+    of two different scenarios under one configuration id."""
+    schema = write(tmp_path, robots="[3]")
+    load_experiment(schema)
+    folder = next((tmp_path / "generated").iterdir())
+    edited = folder / target
+    assert edited.exists(), sorted(p.name for p in folder.iterdir())
+    edited.write_text(edited.read_text() + "\n# edited\n")
+    with pytest.raises(InputError, match="was changed since it was made"):
+        load_experiment(schema)
+
+
 @pytest.mark.parametrize(
     ("robots", "tasks", "message"),
     [

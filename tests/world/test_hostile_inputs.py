@@ -134,3 +134,14 @@ def test_a_fifo_for_an_image_is_not_read(tmp_path: Path) -> None:
 
 def test_a_step_of_a_nanosecond(tmp_path: Path) -> None:
     refused("run", str(S1_PATH), "--dt", "1e-9", cwd=tmp_path, needle="--dt")
+
+
+@pytest.mark.parametrize("command", ["run", "live", "team"])
+def test_a_robot_id_too_long_for_a_certificate(tmp_path: Path, command: str) -> None:
+    """An id of 70 characters once crashed live and team init with a traceback (an
+    X.509 name holds 64)."""
+    path = scenario(tmp_path)
+    path.write_text(path.read_text().replace("robot_1", "robot_" + "x" * 64))
+    args = {"run": ["run", str(path)], "live": ["live", str(path)],
+            "team": ["team", "init", str(tmp_path / "t"), "--scenario", str(path)]}[command]
+    refused(*args, cwd=tmp_path, needle="at most 48 characters")

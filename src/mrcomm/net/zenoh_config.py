@@ -35,8 +35,9 @@ PROTOCOLS = ("tcp", "udp", "tls")
 _ENDPOINT = re.compile(
     r"^(?P<proto>[a-z0-9-]+)/(?P<host>\[[0-9a-fA-F:.]+\]|[^/:\s]+):(?P<port>\d+)$"
 )
-#: Characters that would change the meaning of a Zenoh key expression.
-_KEY_CHUNK = re.compile(r"^[A-Za-z0-9_.\-]+$")
+#: Characters that would change the meaning of a Zenoh key expression; at most 48 of
+#: them (an id names a certificate: X.509 names hold 64 characters).
+_KEY_CHUNK = re.compile(r"^[A-Za-z0-9_.\-]{1,48}$")
 #: Message kinds that speak *as* their sender (Zenoh 1.x vocabulary): a member may send
 #: them only under its own key chunks.
 _ACL_AUTHORED = ["put", "delete", "liveliness_token"]
@@ -87,7 +88,8 @@ def check_key_chunk(value: str, option: str) -> str:
     """A team or agent id must be one plain Zenoh key chunk (no ``/``, ``*``, ``$``)."""
     if not _KEY_CHUNK.match(value):
         raise InputError(
-            f"{value!r} is not a valid id (letters, digits, '_', '-', '.' only)", field=option
+            f"{value[:60]!r} is not a valid id (1-48 letters, digits, '_', '-', '.')",
+            field=option,
         )
     return value
 

@@ -51,6 +51,9 @@ from mrcomm.world.yamlfile import read_yaml, validation_error
 ROBOT_RADIUS = 0.18
 #: Robot ids become part of live-mode key expressions, so keep them plain.
 ID_PATTERN = r"^[A-Za-z0-9_\-]+$"
+#: Longest robot id: it names the robot's certificate (X.509 names hold 64 characters,
+#: and its pulse's is the id and ``-pulse``).
+MAX_ID_LENGTH = 48
 
 Number = Annotated[float, Field(allow_inf_nan=False)]
 Coordinate = Annotated[float, Field(allow_inf_nan=False, ge=-MAX_COORDINATE, le=MAX_COORDINATE)]
@@ -102,7 +105,7 @@ class TaskModel(_Model):
 
 
 class RobotModel(_Model):
-    id: str = Field(pattern=ID_PATTERN)
+    id: str = Field(pattern=ID_PATTERN, max_length=MAX_ID_LENGTH)
     pose: PoseModel
 
 
