@@ -142,6 +142,9 @@ def test_a_robot_id_too_long_for_a_certificate(tmp_path: Path, command: str) -> 
     X.509 name holds 64)."""
     path = scenario(tmp_path)
     path.write_text(path.read_text().replace("robot_1", "robot_" + "x" * 64))
-    args = {"run": ["run", str(path)], "live": ["live", str(path)],
-            "team": ["team", "init", str(tmp_path / "t"), "--scenario", str(path)]}[command]
+    args = {
+        "run": ["run", str(path)],
+        "live": ["live", str(path)],
+        "team": ["team", "init", str(tmp_path / "t"), "--scenario", str(path)],
+    }[command]
     refused(*args, cwd=tmp_path, needle="at most 48 characters")

@@ -249,23 +249,27 @@ def drive(
         for future in done:
             task = in_flight.pop(future)
             try:
-                finish(future.result())
+                outcome = future.result()
             except BrokenExecutor:
                 broken = True
                 pending.appendleft(task)
                 strikes[task.spec.run_id] = strikes.get(task.spec.run_id, 0) + 1
+                continue
             except Exception as err:  # e.g. a Dask worker lost, a result not unpickled
-                finish(failed_outcome(task, "error", f"{type(err).__name__}: {err}", None))
+                outcome = failed_outcome(task, "error", f"{type(err).__name__}: {err}", None)
+            finish(outcome)  # storage failing (a full disk) stops the sweep here
         if not broken:
             continue
         # A broken pool fails every run in flight; collect them all before going on.
         for future in wait(in_flight).done:
             task = in_flight.pop(future)
             try:
-                finish(future.result())
+                outcome = future.result()
             except Exception:
                 pending.appendleft(task)
                 strikes[task.spec.run_id] = strikes.get(task.spec.run_id, 0) + 1
+                continue
+            finish(outcome)
         # The run that killed its worker is among those in flight; each was in flight
         # at most MAX_STRIKES times before it is recorded as failed.
         for task in [t for t in pending if strikes.get(t.spec.run_id, 0) >= MAX_STRIKES]:

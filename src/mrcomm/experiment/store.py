@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import datetime as dt
 import json
 from dataclasses import dataclass, field
@@ -22,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import duckdb
 
-from mrcomm.errors import InputError
+from mrcomm.errors import InputError, MissionFailed
 from mrcomm.experiment.rows import Rows, check_rows
 from mrcomm.experiment.schema import Experiment
 from mrcomm.experiment.tables import (
@@ -239,6 +240,10 @@ class ResultStore:
             )
             self._register(experiment)
             con.execute("COMMIT")
+        except duckdb.Error as err:
+            with contextlib.suppress(duckdb.Error):
+                con.execute("ROLLBACK")
+            raise MissionFailed(f"cannot write to {self.path}: {_cause(err)}") from None
         except BaseException:
             con.execute("ROLLBACK")
             raise
@@ -317,6 +322,16 @@ class ResultStore:
                 # statement instead of register / insert / unregister.
                 con.execute(f"INSERT INTO {table} SELECT * FROM new_rows")
             con.execute("COMMIT")
+        except duckdb.Error as err:
+            # Storage failing (a full disk, a file gone) stops a sweep: more runs would
+            # fail the same way. (ROLLBACK can fail then too: the first cause is named.)
+            with contextlib.suppress(duckdb.Error):
+                con.execute("ROLLBACK")
+            raise MissionFailed(
+                f"cannot store run {run_id} in {self.path}: {_cause(err)}; nothing of it "
+                "was kept, the runs stored before it are (run the same command again to "
+                "go on)"
+            ) from None
         except BaseException:
             con.execute("ROLLBACK")
             raise
@@ -346,3 +361,9 @@ class ResultStore:
 
     def close(self) -> None:
         self.con.close()
+
+
+def _cause(err: BaseException) -> str:
+    """The first line of a DuckDB error, without its type's prefix."""
+    text = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
+    return text.split(": ", 1)[1] if text.startswith(("IO Error", "TransactionContext")) else text
