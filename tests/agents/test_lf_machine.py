@@ -199,7 +199,8 @@ def scenario_a_completion_the_assigner_missed_is_reported_back(h: Harness) -> No
     AON leaves it out; idle, robot_1 drives to the assigner's base station and, the
     assigner heard again, brings it up to date, then settles (and only then is done)."""
     h.agent.params = h.agent.params.model_copy(update={"report_back": True, "aon_lease": 5.0})
-    h.agent._assigner_at = (0.0, -8.0)  # a base station (as the scenario's wiring sets)
+    assert h.agent.statuses is not None
+    h.agent.statuses._assigner_at = (0.0, -8.0)  # a base station (as the scenario says)
     h.assign([task("t", 1.0, 0.0)], team=("robot_1",))
     assigner_bus = FakeBus("assigner")
     delivered: list[object] = []

@@ -15,38 +15,25 @@ Communication-aware behaviours subclass this executor (LF encloses NB).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Collection, Mapping, Sequence
-from typing import Any, ClassVar, cast
-
-from transitions import Machine
+from typing import Any, ClassVar
 
 from mrcomm.agents import agenda
 from mrcomm.agents.avoidance import Avoidance
-from mrcomm.agents.behaviour import AgentContext, require_params
+from mrcomm.agents.behaviour import AgentContext
 from mrcomm.agents.collision import Mate
-from mrcomm.agents.commands import CommandInbox, command_team
 from mrcomm.agents.executor_params import ExecutorParams
-from mrcomm.agents.machine_table import StateEntry, build_table, quiet_rebinding
 from mrcomm.agents.making_way import aside_goals, in_way
 from mrcomm.agents.occupied_goal import OccupiedGoal
 from mrcomm.agents.passage_queue import PassageQueue
-from mrcomm.agents.team_view import TeamView
+from mrcomm.agents.runtime import ExecutorRuntime
 from mrcomm.messaging.messages import (
-    TOPIC_ASSIGNMENT,
-    TOPIC_POSE,
-    TOPIC_TASK_STATUS,
-    Assignment,
     CommandKind,
-    Message,
     OperatorCommand,
-    PoseMsg,
-    TaskSpec,
     TaskState,
-    TaskStatus,
 )
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ACTIVITY
-from mrcomm.ports import BatchHandler, LinkSensor, NavStatus
+from mrcomm.ports import NavStatus
 from mrcomm.world.geometry import Pose
 
 NB_STATES = [
@@ -86,147 +73,38 @@ _ACTIVITY_OF_STATE = {
 }
 
 
-class TaskExecutor:
-    """NB task executor: a stepped state machine acting through the Bus and Base ports."""
+class TaskExecutor(ExecutorRuntime):
+    """NB: the behaviour every other builds on, on the runtime every behaviour rides on
+    (:class:`~mrcomm.agents.runtime.ExecutorRuntime`)."""
 
-    #: Whether task statuses travel with AON (the assigner then listens with AON too).
-    uses_aon = False
-
-    states: list[Any] = NB_STATES
-    transitions: list[dict[str, Any]] = NB_TRANSITIONS
+    states: ClassVar[list[Any]] = NB_STATES
+    transitions: ClassVar[list[dict[str, Any]]] = NB_TRANSITIONS
     initial = "unassigned"
-    machine_class: type[Machine] = Machine
-    Params: ClassVar[type[ExecutorParams]] = ExecutorParams
     #: Leaf states stepped by no handler (``unassigned``: the step chooses a task).
     PASSIVE_STATES: ClassVar[frozenset[str]] = frozenset({"unassigned"})
-    #: Each leaf state's entry (handler, leaf, top), built and checked per class.
-    STATE_TABLE: ClassVar[dict[str, StateEntry]] = {}
-
-    def __init_subclass__(cls, **kwargs: Any) -> None:
-        super().__init_subclass__(**kwargs)
-        cls.STATE_TABLE = build_table(cls, cls.states, cls.PASSIVE_STATES)
-
-    state: str
-    trigger: Callable[..., bool]
 
     def __init__(self, context: AgentContext, params: ExecutorParams) -> None:
-        """``context``: the robot's ports and what the scenario tells it; ``params``:
-        the behaviour's validated parameters, of type ``Params`` (anything else is
-        refused: a behaviour never runs on parameters it was not given)."""
-        require_params(type(self), params)
-        bus = context.bus
-        self.bus = bus
-        self.base = context.base
-        self.timeline = context.timeline
-        self.params = params
-        self.link_sensor: LinkSensor = context.link_sensor
-        self.incarnation = context.incarnation
-        tie_break_rank = context.tie_break_rank
-        self._rank = tie_break_rank
-        self.robot_id = bus.owner
-        self.team: tuple[str, ...] = ()
-        self.agenda: list[TaskSpec] = []
-        self.completed: list[str] = []
-        self.known_done: set[str] = set()  # task ids any robot reported complete
-        self.team_view = TeamView()
-        self.goal: TaskSpec | None = None
-        self._now = 0.0
-        self._t0: float | None = None  # assignment received: mission start for this robot
-        self._seq = 0
-        self._next_pose = 0.0
-        self._moved_once = False
-        self._state_since = 0.0
-        self.avoidance = Avoidance(self.robot_id, self.params, tie_break_rank)
+        """NB's parts besides the runtime's: collision avoidance with right of way,
+        queueing at one-lane passages, making way, the occupied-goal breaker."""
+        super().__init__(context, params)
+        p = self.params
+        self.avoidance = Avoidance(self.robot_id, p, context.tie_break_rank)
         self.queue: PassageQueue | None = None
         passages = context.passages
         if passages is not None and len(passages):
-            p = self.params
             self.queue = PassageQueue(
                 passages, p.queue_distance, p.queue_timeout, p.collision.moving_speed,
-                tie_break_rank, self.robot_id,
+                context.tie_break_rank, self.robot_id,
             )  # fmt: skip
         self._clearing_goals: list[tuple[float, float]] = []
-        self._occupied = OccupiedGoal(self.params.occupied_goal)
+        self._occupied = OccupiedGoal(p.occupied_goal)
         self._execute_until = 0.0
-        self._agenda_reported = False
-        with quiet_rebinding():
-            self.machine = self.machine_class(
-                model=self,
-                states=self.states,
-                transitions=self.transitions,
-                initial=self.initial,
-                auto_transitions=False,
-                after_state_change="_after_state_change",
-            )
-        bus.subscribe(TOPIC_ASSIGNMENT, self._on_assignment)
-        bus.subscribe(TOPIC_POSE, BatchHandler(self._on_poses))
-        bus.subscribe(TOPIC_TASK_STATUS, self._on_status)
-        self.paused = False  # by the operator
-        self._new_tasks = False  # the operator gave tasks: plan again once idle
-        self._assigner_id = ""
-        self.commands = CommandInbox(bus, self.incarnation, self._command_team, self.on_command)
-
-    # -- the agent's life ----------------------------------------------------------
-    @property
-    def mates(self) -> Mapping[str, PoseMsg]:
-        """Each mate's last received pose (:attr:`TeamView.poses`)."""
-        return self.team_view.poses
 
     @property
     def done(self) -> bool:
         """Nothing left to do: agenda complete and nothing left to communicate."""
         return self._t0 is not None and not self.agenda and self.leaf() == "idle"
 
-    def leaf(self) -> str:
-        """Innermost state name (``na_navigating`` -> ``navigating``)."""
-        return self.STATE_TABLE[self.state].leaf
-
-    def rank(self, robot: str) -> float:
-        """``robot``'s place in the team-wide tie-break order."""
-        return self._rank(robot)
-
-    @property
-    def now(self) -> float:
-        """The agent's current time (simulated s since the mission began)."""
-        return self._now
-
-    def set_time(self, now: float) -> None:
-        """The time of the coming delivery and step: messages handled before ``step``
-        are stamped with it (the runtime calls this first)."""
-        self._now = now
-
-    def mate_presence(self, mate: str, present: bool) -> None:
-        """The runtime says a mate's process has gone (its liveliness vanished) or is
-        back (live mode). A behaviour treats a departed mate as gone: LF's followers
-        of a departed leader dissolve the group and carry on."""
-        if present:
-            self.team_view.departed.discard(mate)
-        else:
-            self.team_view.departed.add(mate)
-
-    def step(self, now: float) -> None:
-        self._now = now
-        if self._t0 is None:
-            return
-        self.commands.step(now)
-        if self.leaf() == "unassigned" and not self.paused:
-            self._select_next()
-        if now >= self._next_pose:
-            self._publish_pose()
-            self._next_pose = max(self._next_pose + self.params.pose_period, now)
-        if self.paused:
-            return  # stopped by the operator: shares its pose, decides nothing
-        self.before_state_step()
-        # A behaviour may handle a nested state itself (``_step_leader_holding``);
-        # otherwise the NB handler of the innermost state runs (see machine_table).
-        handler = self.STATE_TABLE[self.state].handler
-        if handler is not None:
-            handler(self)
-
-    def before_state_step(self) -> None:
-        """Hook run every step before the state handler (LF monitors links here)."""
-
-    # -- state handlers --------------------------------------------------------------
     def _step_navigating(self) -> None:
         if self.goal is not None and self.goal not in self.agenda:
             self.drop_goal()  # the operator reassigned the task it was driving to
@@ -287,18 +165,6 @@ class TaskExecutor:
 
     def _step_waiting(self) -> None:
         self._select_next()
-
-    def known_mates(self) -> Mapping[str, Mate]:
-        """The mates as collision avoidance and making way see them now: fresh enough,
-        and moved on for their age (:meth:`TeamView.known`)."""
-        params = self.params
-        return self.team_view.known(self._now, params.mate_max_age, params.mate_extrapolation)
-
-    def _mates_near(self, pose: Pose, reach: float) -> Collection[Mate]:
-        """The mates of :meth:`known_mates` that may lie within ``reach`` of ``pose``
-        along both axes, in the same order (:meth:`TeamView.near`: without a loop over
-        the whole team when it is large); the caller tests each one."""
-        return self._mates_near_point(pose.x, pose.y, reach)
 
     def _plan_new_tasks(self) -> None:
         self._new_tasks = False
@@ -393,13 +259,6 @@ class TaskExecutor:
         self.base.navigate_to(task.x, task.y)
         self.trigger("go")
 
-    def _mates_near_point(self, x: float, y: float, reach: float) -> Collection[Mate]:
-        """:meth:`_mates_near` of a point (the passage queue asks about its passages)."""
-        params = self.params
-        return self.team_view.near(
-            x, y, reach, self._now, params.mate_max_age, params.mate_extrapolation
-        )
-
     def _queued(self, pose: Pose) -> bool:
         """Whether the robot stops to queue at a one-lane passage ahead (then it is)."""
         assert self.queue is not None
@@ -438,95 +297,12 @@ class TaskExecutor:
         self.trigger("conflict")
 
     # -- communication ---------------------------------------------------------------
-    def rejoined(self) -> None:
-        """Back after being away (live mode: its process was stopped and its links
-        dropped): statuses published around then may never have left. Report every
-        completed task again — the assigner counts a task once. Behaviours that send
-        statuses with AON need not: AON re-sends by itself."""
-        for task_id in self.completed:
-            self.send_status(task_id, TaskState.SUCCESS)
-
-    def send_status(self, task_id: str, state: TaskState) -> None:
-        """NB: publish once, no acknowledgement (communication-aware behaviours
-        override this to send with AON)."""
-        self.bus.publish(TOPIC_TASK_STATUS, self.status_message(task_id, state))
-
-    def status_message(self, task_id: str, state: TaskState) -> TaskStatus:
-        """A new status message of this robot (the next sequence number, now)."""
-        self._seq += 1
-        return TaskStatus(
-            sender=self.robot_id,
-            incarnation=self.incarnation,
-            seq=self._seq,
-            stamp=self._now,
-            robot=self.robot_id,
-            task_id=task_id,
-            state=state,
-        )
-
-    def _publish_pose(self) -> None:
-        pose = self.base.pose
-        self._seq += 1
-        self.bus.publish(
-            TOPIC_POSE,
-            PoseMsg(
-                sender=self.robot_id,
-                incarnation=self.incarnation,
-                seq=self._seq,
-                stamp=self._now,
-                x=pose.x,
-                y=pose.y,
-                theta=pose.theta,
-                v=self.base.speed,
-                goal_dist=self._goal_distance(),
-                role=self.current_role(),
-                leader=self.current_leader(),
-            ),
-        )
-
-    def current_role(self) -> str:
-        """Team role shared in pose messages (NB has none)."""
-        return ""
-
-    def current_leader(self) -> str:
-        """The robot this one follows, shared in pose messages (NB: nobody)."""
-        return ""
-
     def _goal_distance(self) -> float:
         target = self.navigation_target()
         if target is None or self.leaf() not in ("navigating", "avoiding", "following"):
             return -1.0
         pose = self.base.pose
         return math.hypot(target[0] - pose.x, target[1] - pose.y)
-
-    def _on_assignment(self, message: Message) -> None:
-        assert isinstance(message, Assignment)
-        if message.robot != self.robot_id or self._t0 is not None:
-            return
-        self.agenda = list(message.tasks)
-        self.team = tuple(r for r in message.team if r != self.robot_id)
-        self._assigner_id = message.sender
-        self._t0 = self._now
-        self.timeline.event(L.ASSIGNMENT_RECEIVED, self._now, tasks=len(self.agenda))
-        self.timeline.set_state(ACTIVITY, L.INIT, self._now)
-
-    def _on_poses(self, messages: Sequence[Message]) -> None:
-        """Mates' poses that reached the robot, in order (one, or a step's batch)."""
-        self.team_view.hear_all(cast("Sequence[PoseMsg]", messages), self._now, self.robot_id)
-
-    def _on_status(self, message: Message) -> None:
-        assert isinstance(message, TaskStatus)
-        self.on_team_status(message)
-
-    def on_team_status(self, status: TaskStatus) -> None:
-        """A team mate's status reached us (by whatever layer)."""
-        if status.state is TaskState.SUCCESS:
-            self.known_done.add(status.task_id)
-
-    # -- the operator's commands (agents/commands.py) --------------------------------
-    def _command_team(self) -> tuple[str, ...] | None:
-        team = (*self.team, self.robot_id)  # AON orders members itself
-        return None if self._t0 is None else command_team(team, self._assigner_id)
 
     def drop_goal(self) -> None:
         """Its goal was reassigned: stop and choose again (LF's leader dissolves)."""
@@ -584,11 +360,3 @@ class TaskExecutor:
             self.timeline.event(L.AGENDA_COMPLETE, self._now)
             self.send_status("", TaskState.AGENDA_COMPLETE)
         self.on_state_change()
-
-    def on_state_change(self) -> None:
-        """Hook after every state change (LF records roles here)."""
-
-
-TaskExecutor.STATE_TABLE = build_table(
-    TaskExecutor, TaskExecutor.states, TaskExecutor.PASSIVE_STATES
-)

@@ -50,6 +50,7 @@ from mrcomm.agents import agenda
 from mrcomm.agents.aon_statuses import AonStatuses
 from mrcomm.agents.behaviour import AgentContext, require_params
 from mrcomm.agents.collision import Mate
+from mrcomm.agents.executor import TaskExecutor
 from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.agents.lf_groups import joins, nearest_leader, round_leaders
 from mrcomm.agents.lf_machine import (
@@ -81,7 +82,7 @@ NA_IDLE = "na_idle"  # transitions' name of NA's idle state
 HOME_REACH = 1.0  # m: the assigner's robot is home this close to its start
 
 
-class LeaderFollowerExecutor(AonStatuses):
+class LeaderFollowerExecutor(TaskExecutor):
     """LF task executor (see the module docstring)."""
 
     states = LF_STATES
@@ -89,6 +90,7 @@ class LeaderFollowerExecutor(AonStatuses):
     initial = "na"
     machine_class = HierarchicalMachine
     Params = LfParams
+    Statuses = AonStatuses  # statuses go with AON
 
     def __init__(self, context: AgentContext, params: ExecutorParams) -> None:
         require_params(type(self), params)  # before any use of them
@@ -121,9 +123,15 @@ class LeaderFollowerExecutor(AonStatuses):
     def done(self) -> bool:
         """Agenda complete, back in NA (or the assigner's robot on its way home), and
         every status finished with AON (and, reporting back, the assigner has them)."""
-        home = self.state == NA_IDLE or (self._in("reporting") and self.hosts_assigner())
+        home = self.state == NA_IDLE or (
+            self._in("reporting") and self.aon_statuses.hosts_assigner()
+        )
         settled = self._t0 is not None and not self.agenda and home
-        return settled and self.aon_settled() and not (self._reports_back() and self.unreported())
+        return (
+            settled
+            and self.aon_statuses.settled()
+            and not (self._reports_back() and self.aon_statuses.unreported())
+        )
 
     def on_team_status(self, status: TaskStatus) -> None:
         super().on_team_status(status)
@@ -133,7 +141,6 @@ class LeaderFollowerExecutor(AonStatuses):
 
     # -- every step ----------------------------------------------------------------------
     def before_state_step(self) -> None:
-        super().before_state_step()  # AON first
         # Idle robots join rounds but never open one (in groups, neither does one without
         # work left that makes way); links are judged at the pose rate.
         if (
@@ -146,7 +153,7 @@ class LeaderFollowerExecutor(AonStatuses):
             self._monitor_links()
         elif self.state == NA_IDLE and self._reports_back() and self._to_report():
             self._follow_target = None  # the assigner missed a completion: report it
-            self.report_tour.reset()
+            self.aon_statuses.report_tour.reset()
             self.trigger("report")
 
     def _monitor_links(self) -> None:
@@ -552,11 +559,11 @@ class LeaderFollowerExecutor(AonStatuses):
         """Where to go for reporting back: the assigner's robot, its work done, goes
         home to be found; a robot whose completion the assigner missed goes to find it
         (:meth:`report_target`). None: nothing to report."""
-        home = self.assigner_home
-        if self.hosts_assigner() and home is not None and not self.agenda:
+        home = self.aon_statuses.assigner_home
+        if self.aon_statuses.hosts_assigner() and home is not None and not self.agenda:
             pose = self.base.pose
             return home if math.dist((pose.x, pose.y), home) > HOME_REACH else None
-        return self.report_target() if self.unreported() else None
+        return self.aon_statuses.report_target() if self.aon_statuses.unreported() else None
 
     def _step_reporting_navigating(self) -> None:
         """Reporting back (:meth:`_to_report`) until there is nothing to report."""

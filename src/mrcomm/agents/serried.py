@@ -33,7 +33,7 @@ from typing import Any
 
 from mrcomm.agents.aon_statuses import AonStatuses
 from mrcomm.agents.behaviour import AgentContext
-from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS
+from mrcomm.agents.executor import NB_STATES, NB_TRANSITIONS, TaskExecutor
 from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.messaging.messages import TaskState, TaskStatus
 from mrcomm.metrics import labels as L
@@ -77,13 +77,19 @@ SERRIED_TRANSITIONS: list[dict[str, Any]] = [
 _ACTIVITY = {"following": L.MOVING, "holding": L.LEADER_DISCONNECT}
 
 
-class SerriedExecutor(AonStatuses):
+class SerriedStatuses(AonStatuses):
+    """Serried's statuses part: the end of each agenda goes with AON too."""
+
+    AON_STATES = frozenset({TaskState.SUCCESS, TaskState.AGENDA_COMPLETE})
+
+
+class SerriedExecutor(TaskExecutor):
     """The team as one group, led by each robot in turn (see the module docstring)."""
 
     states = SERRIED_STATES
     transitions = SERRIED_TRANSITIONS
     Params = SerriedParams
-    AON_STATES = frozenset({TaskState.SUCCESS, TaskState.AGENDA_COMPLETE})
+    Statuses = SerriedStatuses
 
     def __init__(self, context: AgentContext, params: ExecutorParams) -> None:
         #: Robots whose agenda is done, as this robot knows.
@@ -103,7 +109,9 @@ class SerriedExecutor(AonStatuses):
         """Every robot's agenda done (as far as this robot knows), it idles, and its
         statuses have reached everyone."""
         everyone = all(m in self.finished for m in self.team)
-        return self.leaf() == "idle" and not self.agenda and everyone and self.aon_settled()
+        return (
+            self.leaf() == "idle" and not self.agenda and everyone and self.aon_statuses.settled()
+        )
 
     def activity_of(self, state: str) -> str | None:
         return _ACTIVITY.get(state) or super().activity_of(state)
