@@ -274,3 +274,128 @@ def test_a_rogue_member_certificate_cannot_forge_statuses_ticks_or_presence(
         assert set(refused) <= {"undecodable"}, (robot, refused)
         # ... and it was connected and heard.
         assert refused.get("undecodable", 0) > 10, (robot, refused)
+
+
+def test_a_rogue_member_cannot_falsify_the_result_from_its_own_keys(tmp_path: Path) -> None:
+    """A process holding robot_3's certificate, knowing the mission's identity (it is in
+    the traffic), attacks all mission long from robot_3's own key space, where the ACL
+    lets it speak: statuses crediting robot_1's and robot_2's tasks, AON entries whose
+    payload names another robot or whose origin is another member, the operator's
+    pause commands for robot_1 and robot_2 in its own name, and a flood of AON messages
+    of its own. The LF mission's result is the true one — every task credited to the
+    robot that did it, none paused — and every refusal is counted in the result's live
+    report. (Before: the assigner credited robot_1's and robot_2's tasks and both were
+    paused; the result said successful with 2 of 7 tasks done.)"""
+    from mrcomm.live.identity import live_members
+    from mrcomm.messaging.aon_state import TeamIndex
+    from mrcomm.messaging.messages import (
+        AonEntry,
+        AonMsg,
+        CommandKind,
+        OperatorCommand,
+        TaskState,
+        TaskStatus,
+        encode,
+    )
+    from mrcomm.messaging.topics import lane_of
+    from mrcomm.world.scenario import load_scenario
+
+    scenario = load_scenario(S1)
+    team_dir = init_team(tmp_path / "team", live_members(scenario), days=1).path
+    config = make_config(None, scenario=S1, behaviour="lf", network="ah", threshold="slt")
+    settings = LiveSettings(config, make_options(), tmp_path / "records", speed=20.0)
+    stop = threading.Event()
+    robots = tuple(r.id for r in scenario.robots)
+    team = TeamIndex((*robots, "assigner"))
+    commands = TeamIndex((*robots, "assigner", "operator"))
+    nothing = team.encode(0)
+
+    def status(robot: str, task: str, seq: int) -> TaskStatus:
+        return TaskStatus(sender="robot_3", incarnation=1, seq=seq, stamp=0.0, robot=robot,
+                          task_id=task, state=TaskState.SUCCESS)  # fmt: skip
+
+    def attack(node: ZenohNode) -> None:
+        seq = 0
+        while not stop.is_set():
+            seq += 1
+            entries = []
+            for robot, task in (("robot_1", "1"), ("robot_2", "2"), ("robot_1", "4")):
+                node.put(node.key("robot_3", "task_status"), encode(status(robot, task, seq)),
+                         lane_of("task_status"))  # fmt: skip
+                entries.append(AonEntry("robot_3", 7, seq, nothing, nothing,
+                                        payload=status(robot, task, seq)))  # fmt: skip
+                entries.append(AonEntry(robot, 1, seq, nothing, nothing,
+                                        payload=status(robot, task, seq)))  # fmt: skip
+            # A flood of its own messages (each with its own new sequence number).
+            entries += [
+                AonEntry(
+                    "robot_3",
+                    9,
+                    100 * seq + k,
+                    nothing,
+                    nothing,
+                    payload=status("robot_3", f"bogus{seq}-{k}", seq),
+                )
+                for k in range(20)
+            ]
+            aon = AonMsg(sender="robot_3", incarnation=7, seq=seq, stamp=0.0,
+                         team_crc=team.crc, entries=tuple(entries))  # fmt: skip
+            node.put(node.key("robot_3", "aon"), encode(aon), lane_of("aon"))
+            pauses = tuple(
+                AonEntry(
+                    "robot_3",
+                    8,
+                    2 * seq + i,
+                    commands.encode(0),
+                    commands.encode(0),
+                    payload=OperatorCommand(
+                        sender="robot_3",
+                        incarnation=8,
+                        seq=seq,
+                        stamp=0.0,
+                        command=CommandKind.PAUSE,
+                        robot=robot,
+                    ),
+                )
+                for i, robot in enumerate(("robot_1", "robot_2"))
+            )
+            command = AonMsg(sender="robot_3", incarnation=8, seq=seq, stamp=0.0,
+                             team_crc=commands.crc, entries=pauses)  # fmt: skip
+            node.put(node.key("robot_3", "command"), encode(command), lane_of("command"))
+            stop.wait(0.1)
+
+    with LiveTeam(settings, team_dir=team_dir) as t:
+        t.start(hold=("robot_3",))
+        peers = [f"tls/127.0.0.1:{port}" for port in t.ports.values()]
+        rogue = ZenohNode(
+            make_options(
+                team=settings.zenoh.team, connect=peers, tls_ca=team_dir / "ca.pem",
+                tls_cert=team_dir / "robot_3.pem", tls_key=team_dir / "robot_3.key",
+            )
+        )  # fmt: skip
+        assert t.settings.mission is not None
+        rogue.mission = bytes.fromhex(t.settings.mission)  # what the traffic tells
+        thread = threading.Thread(target=attack, args=(rogue,))
+        thread.start()
+        try:
+            wait_for(lambda: rogue.peers() >= len(t.children), 60, "the rogue's links")
+            t.spawn("robot_3")
+            t.wait()
+        finally:
+            stop.set()
+            thread.join()
+            rogue.close()
+        result, report = t.collect()
+    assert report["died"] == []
+    mission = result.mission
+    assert mission["timed_out"] is False and mission["successful"] is True
+    for robot in robots:  # every task credited was done by its robot, none paused
+        metrics = result.robots[robot]
+        assert metrics["tasks_completed"] == metrics["tasks_assigned"], (robot, metrics)
+    refused: dict[str, int] = {}
+    for process in report["processes"].values():
+        for cause, count in process["refused"].items():
+            refused[cause] = refused.get(cause, 0) + count
+    assert refused.get("assigner: status of another robot", 0) > 10, refused
+    assert refused.get("aon: payload not authored by its origin", 0) > 10, refused
+    assert refused.get("aon: origin may not send on this topic", 0) > 10, refused

@@ -1,8 +1,12 @@
 """The behaviour contract: what a task executor is given, what it may read, and the
 hooks a behaviour implements.
 
-A behaviour is a :class:`~mrcomm.agents.executor.TaskExecutor` subclass with its own
-parameter model (``Params``, a subclass of ``ExecutorParams``). Every executor is made
+A behaviour is a :class:`~mrcomm.agents.executor.TaskExecutor` (NB, the policy every
+behaviour builds on) subclass with its own parameter model (``Params``, a subclass of
+``ExecutorParams``); both ride on the runtime every behaviour shares
+(:class:`~mrcomm.agents.runtime.ExecutorRuntime`). A behaviour whose statuses must
+reach every member holds an AON part (``Statuses = AonStatuses``,
+``agents/aon_statuses.py``) instead of publishing them plainly. Every executor is made
 by the run's agent assembly (``run/agents.py``) as ``cls(context, params)``: the
 :class:`AgentContext` (the robot's ports and what the scenario tells it) and the
 behaviour's validated parameters, of type ``cls.Params`` — anything else is refused
@@ -23,8 +27,8 @@ publish, subscribe), ``timeline`` (where its intervals and events are recorded).
 **The hooks a behaviour implements** (each has NB's meaning by default):
 
 * ``send_status(task_id, state)`` — how a task status is communicated (NB: one plain
-  publish; ``status_message`` makes the message). A behaviour whose statuses go with
-  AON holds an AON part (``agents/aon_statuses.py``).
+  publish, or with the AON part when the behaviour holds one; ``status_message`` makes
+  the message).
 * ``before_state_step()`` — every step, before the state's handler.
 * ``_step_<state>()`` — the handler of each state the behaviour adds to ``states`` /
   ``transitions`` (a ``transitions`` machine as data; checked when the class is

@@ -5,6 +5,7 @@ journal format is described in :mod:`mrcomm.live.journal`."""
 
 from __future__ import annotations
 
+from collections import Counter
 from typing import Any
 
 from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
@@ -96,14 +97,30 @@ class AgentRecorder:
             out[ASSIGNER_ID] = self.assigner.aon
         return out
 
+    def refusals(self) -> dict[str, int]:
+        """Everything refused in this process so far, by cause."""
+        causes = Counter(self.bus.node.refused)
+        endpoints = list(self.aon_endpoints().values())
+        for owner in (self.executor, self.assigner):
+            inbox = getattr(owner, "commands", None)
+            if inbox is not None and inbox.endpoint is not None:
+                endpoints.append(inbox.endpoint)
+        for endpoint in endpoints:
+            causes.update({f"aon: {cause}": n for cause, n in endpoint.refused.items()})
+        if self.assigner is not None:
+            causes.update({f"assigner: {c}": n for c, n in self.assigner.refused.items()})
+        return dict(causes)
+
     def counts(self) -> None:
         """Cumulative message counts and AON statistics (the last snapshot counts)."""
         self.journal.write("counts", agents=self.bus.counts_by_agent())
         relay = self.bus.relay_stats()
         if relay:
             self.journal.write("relay", agents=relay)
-        # What peers sent that the bus edge refused (cumulative, by cause).
-        self.journal.write("refused", causes=dict(self.bus.node.refused))
+        # What peers sent that was refused (cumulative, by cause): at the bus edge, by
+        # AON (a payload not of its author, a member over its share, ...) and by the
+        # task assigner (a status of another robot).
+        self.journal.write("refused", causes=self.refusals())
         for agent, aon in self.aon_endpoints().items():
             st = aon.stats
             self.journal.write(
