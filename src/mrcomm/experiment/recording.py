@@ -34,6 +34,8 @@ Foxglove app (``mrcomm run --foxglove``).
 from __future__ import annotations
 
 import dataclasses
+import math
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -83,14 +85,24 @@ _TYPED_CHANNELS: dict[str, type[Any]] = {
 }
 
 
+#: A latched message (the map) is sent again to new subscribers at most this often (s of
+#: wall time): subscribing and unsubscribing in a loop once had it re-sent 11,449 times
+#: in 15 s, the process grown to 2.4 GB and the recording to 180 MB.
+RESEND_PERIOD = 2.0
+#: Messages queued for one WebSocket client that does not read (the SDK's default is
+#: 1,024: with the 2.5 MB map that was 2.6 GB a client).
+CLIENT_BACKLOG = 64
+
+
 class _Latch(ServerListener):
-    """The WebSocket server's listener: a new subscriber gets the latched messages."""
+    """The WebSocket server's listener: a new subscriber gets the latched messages
+    (only marked here, on the server's thread: the mission's thread sends them)."""
 
     def __init__(self, sink: RecordingSink) -> None:
         self._sink = sink
 
     def on_subscribe(self, client: Client, channel: ChannelView) -> None:
-        self._sink.resend(channel.topic)
+        self._sink.want_resend(channel.topic)
 
 
 class RecordingSink:
@@ -100,9 +112,16 @@ class RecordingSink:
     times from ``clock``."""
 
     def __init__(self, path: Path | None, clock: scene.RecordingClock) -> None:
-        """``path``: the MCAP file (None: no file, e.g. only a live server)."""
+        """``path``: the MCAP file (None: no file, e.g. only a live server). The file
+        and the live server have a context each, so that what clients do (subscribe)
+        never reaches the file: it depends on the mission alone."""
         self.clock = clock
-        self.context = foxglove.Context()
+        self.context = foxglove.Context()  # the file's
+        self.live_context = foxglove.Context()  # the server's
+        self._live: dict[str, Any] = {}
+        self._pending: set[str] = set()  # latched topics a client subscribed to
+        self._pending_lock = threading.Lock()
+        self._resent: dict[str, float] = {}  # topic -> when it was last sent again
         options = MCAPWriteOptions(profile="")  # no ROS profile; zstd chunks
         self._mcap = (
             foxglove.open_mcap(
@@ -119,17 +138,23 @@ class RecordingSink:
     def add_typed(self, topic: str, channel_class: type[Any]) -> None:
         """A channel of one of the SDK's message types (encoded by the SDK)."""
         self._channels[topic] = channel_class(topic, context=self.context)
+        self._live[topic] = channel_class(topic, context=self.live_context)
 
     def add_json(self, topic: str, schema: scene.Schema) -> None:
         """One of mrcomm's own channels: JSON messages described by a JSON schema."""
         self._channels[topic] = foxglove.Channel(topic, schema=schema, context=self.context)
+        self._live[topic] = foxglove.Channel(topic, schema=schema, context=self.live_context)
 
     def write(self, topic: str, t: float, message: Any) -> None:
         """Log ``message`` (an SDK message, or a JSON-able payload for a JSON channel)
-        at mission time ``t``."""
+        at mission time ``t``, to the file and to the live server's subscribers."""
         if isinstance(message, dict):
             message = self._encode(message)
-        self._channels[topic].log(message, log_time=self.clock.ns(t))
+        ns = self.clock.ns(t)
+        self._channels[topic].log(message, log_time=ns)
+        live = self._live[topic]
+        if live.has_sinks():
+            live.log(message, log_time=ns)
 
     def write_scene(
         self,
@@ -139,7 +164,9 @@ class RecordingSink:
         links: LinkState | None,
         robot_radius: float,
     ) -> None:
-        """The scene at mission time ``t``, each robot's pose and the link matrices."""
+        """The scene at mission time ``t``, each robot's pose and the link matrices
+        (first the latched messages new subscribers are due)."""
+        self.resend_due()
         when = self.clock.timestamp(t)
         update = scene.scene_update(when, robots, tasks, links, robot_radius=robot_radius)
         self.write(TOPIC_SCENE, t, update)
@@ -155,15 +182,17 @@ class RecordingSink:
     def serve(self, host: str, port: int) -> int:
         """Also send every channel to a Foxglove WebSocket server (live view in the
         Foxglove app); returns the port it listens on. Messages sent once (the map)
-        are sent again whenever a client subscribes to their channel, as a latched ROS
-        topic would be (so they are in the file again too, at that time)."""
+        are sent again to the server when a client subscribes to their channel, as a
+        latched ROS topic would be (at most every ``RESEND_PERIOD`` s; never to the
+        file); at most ``CLIENT_BACKLOG`` messages wait for a client that reads slowly."""
         try:
             self._server = foxglove.start_server(
                 name="mrcomm",
                 host=host,
                 port=port,
-                context=self.context,
+                context=self.live_context,
                 server_listener=_Latch(self),
+                message_backlog_size=CLIENT_BACKLOG,
             )
         except RuntimeError as err:  # the SDK's FoxgloveError, e.g. the port in use
             message = str(err).removeprefix("FoxgloveError: ")
@@ -175,9 +204,27 @@ class RecordingSink:
         self._latched[topic] = (t, message)
         self.write(topic, t, message)
 
-    def resend(self, topic: str) -> None:
+    def want_resend(self, topic: str) -> None:
+        """A client subscribed to ``topic`` (any thread): send it its latched message."""
         if topic in self._latched:
-            self.write(topic, *self._latched[topic])
+            with self._pending_lock:
+                self._pending.add(topic)
+
+    def resend_due(self) -> None:
+        """Send the latched messages clients asked for to the live server, each at
+        most once every ``RESEND_PERIOD`` s (the mission's thread calls this)."""
+        if not self._pending:
+            return
+        now = time.monotonic()
+        with self._pending_lock:
+            due = {
+                t for t in self._pending if now - self._resent.get(t, -math.inf) >= RESEND_PERIOD
+            }
+            self._pending -= due
+        for topic in sorted(due):
+            self._resent[topic] = now
+            t, message = self._latched[topic]
+            self._live[topic].log(message, log_time=self.clock.ns(t))
 
     def close(self) -> None:
         if self._mcap is not None:
