@@ -11,7 +11,9 @@ import json
 import subprocess
 import sys
 import threading
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -238,33 +240,7 @@ def test_a_rogue_member_certificate_cannot_forge_statuses_ticks_or_presence(
             sent["samples"] += 2 * len(others) + 3
             stop.wait(0.05)
 
-    with LiveTeam(settings, team_dir=team_dir) as t:
-        # The mission starts when every member is present: robot_3 joins only once the
-        # rogue's TLS links to the other processes are up, so the attack covers the
-        # whole mission however slowly a loaded machine starts processes.
-        t.start(hold=("robot_3",))
-        peers = [f"tls/127.0.0.1:{port}" for port in t.ports.values()]
-        rogue = ZenohNode(
-            make_options(
-                team=settings.zenoh.team,
-                connect=peers,
-                tls_ca=team_dir / "ca.pem",
-                tls_cert=team_dir / "robot_3.pem",
-                tls_key=team_dir / "robot_3.key",
-            )
-        )
-        thread = threading.Thread(target=attack, args=(rogue,))
-        thread.start()
-        try:
-            started = len(t.children)
-            wait_for(lambda: rogue.peers() >= started, 60, "the rogue's links to the team")
-            t.spawn("robot_3")
-            t.wait()
-        finally:
-            stop.set()
-            thread.join()
-            rogue.close()
-        result, report = t.collect()
+    result, report = mission_with_rogue(settings, team_dir, attack, stop)
     assert report["died"] == []
     assert result.mission["successful"] is True and result.mission["timed_out"] is False
     assert sent["samples"] > 1000
@@ -298,6 +274,8 @@ def test_a_rogue_member_cannot_falsify_the_result_from_its_own_keys(tmp_path: Pa
         encode,
     )
     from mrcomm.messaging.topics import lane_of
+    from mrcomm.net.origin_signatures import OriginSigner, pack_signatures
+    from mrcomm.net.team_dir import load_team, member_files
     from mrcomm.world.scenario import load_scenario
 
     scenario = load_scenario(S1)
@@ -314,6 +292,25 @@ def test_a_rogue_member_cannot_falsify_the_result_from_its_own_keys(tmp_path: Pa
         return TaskStatus(sender="robot_3", incarnation=1, seq=seq, stamp=0.0, robot=robot,
                           task_id=task, state=TaskState.SUCCESS)  # fmt: skip
 
+    # It holds robot_3's key: it signs the entries whose origin is robot_3 (those then
+    # meet AON's own checks); the others it cannot sign.
+    key_files = member_files(load_team(team_dir), "robot_3")
+    signer = OriginSigner.from_options(
+        make_options(
+            tls_ca=key_files.ca,
+            tls_cert=key_files.cert,
+            tls_key=key_files.key,
+            acl_grants=grants(live_members(scenario), scenario),
+        )
+    )
+    assert signer is not None
+
+    def own_signatures(topic: str, message: AonMsg) -> bytes:
+        return pack_signatures([
+            (e.sender, e.incarnation, e.seq, signer.sign(topic, e))
+            for e in message.entries if e.sender == "robot_3"
+        ])  # fmt: skip
+
     def attack(node: ZenohNode) -> None:
         seq = 0
         while not stop.is_set():
@@ -326,6 +323,17 @@ def test_a_rogue_member_cannot_falsify_the_result_from_its_own_keys(tmp_path: Pa
                                         payload=status(robot, task, seq)))  # fmt: skip
                 entries.append(AonEntry(robot, 1, seq, nothing, nothing,
                                         payload=status(robot, task, seq)))  # fmt: skip
+                forged = TaskStatus(
+                    sender=robot,
+                    incarnation=1,
+                    seq=seq,
+                    stamp=0.0,
+                    robot=robot,
+                    task_id=task,
+                    state=TaskState.SUCCESS,
+                )
+                entries.append(AonEntry(robot, 1, 5000 + seq, nothing, nothing,
+                                        payload=forged))  # fmt: skip
             # A flood of its own messages (each with its own new sequence number).
             entries += [
                 AonEntry(
@@ -340,16 +348,19 @@ def test_a_rogue_member_cannot_falsify_the_result_from_its_own_keys(tmp_path: Pa
             ]
             aon = AonMsg(sender="robot_3", incarnation=7, seq=seq, stamp=0.0,
                          team_crc=team.crc, entries=tuple(entries))  # fmt: skip
-            node.put(node.key("robot_3", "aon"), encode(aon), lane_of("aon"))
+            node.put(node.key("robot_3", "aon"), encode(aon), lane_of("aon"),
+                     signatures=own_signatures("aon", aon))  # fmt: skip
+            # Pauses in its own name, and in the operator's (a consistent forgery: the
+            # entry's origin and its payload's sender both say "operator").
             pauses = tuple(
                 AonEntry(
-                    "robot_3",
+                    origin,
                     8,
                     2 * seq + i,
                     commands.encode(0),
                     commands.encode(0),
                     payload=OperatorCommand(
-                        sender="robot_3",
+                        sender=origin,
                         incarnation=8,
                         seq=seq,
                         stamp=0.0,
@@ -357,35 +368,16 @@ def test_a_rogue_member_cannot_falsify_the_result_from_its_own_keys(tmp_path: Pa
                         robot=robot,
                     ),
                 )
+                for origin in ("robot_3", "operator")
                 for i, robot in enumerate(("robot_1", "robot_2"))
             )
             command = AonMsg(sender="robot_3", incarnation=8, seq=seq, stamp=0.0,
                              team_crc=commands.crc, entries=pauses)  # fmt: skip
-            node.put(node.key("robot_3", "command"), encode(command), lane_of("command"))
+            node.put(node.key("robot_3", "command"), encode(command), lane_of("command"),
+                     signatures=own_signatures("command", command))  # fmt: skip
             stop.wait(0.1)
 
-    with LiveTeam(settings, team_dir=team_dir) as t:
-        t.start(hold=("robot_3",))
-        peers = [f"tls/127.0.0.1:{port}" for port in t.ports.values()]
-        rogue = ZenohNode(
-            make_options(
-                team=settings.zenoh.team, connect=peers, tls_ca=team_dir / "ca.pem",
-                tls_cert=team_dir / "robot_3.pem", tls_key=team_dir / "robot_3.key",
-            )
-        )  # fmt: skip
-        assert t.settings.mission is not None
-        rogue.mission = bytes.fromhex(t.settings.mission)  # what the traffic tells
-        thread = threading.Thread(target=attack, args=(rogue,))
-        thread.start()
-        try:
-            wait_for(lambda: rogue.peers() >= len(t.children), 60, "the rogue's links")
-            t.spawn("robot_3")
-            t.wait()
-        finally:
-            stop.set()
-            thread.join()
-            rogue.close()
-        result, report = t.collect()
+    result, report = mission_with_rogue(settings, team_dir, attack, stop, knows_mission=True)
     assert report["died"] == []
     mission = result.mission
     assert mission["timed_out"] is False and mission["successful"] is True
@@ -399,3 +391,46 @@ def test_a_rogue_member_cannot_falsify_the_result_from_its_own_keys(tmp_path: Pa
     assert refused.get("assigner: status of another robot", 0) > 10, refused
     assert refused.get("aon: payload not authored by its origin", 0) > 10, refused
     assert refused.get("aon: origin may not send on this topic", 0) > 10, refused
+    # The consistent forgeries (in robot_1's and the operator's names, payload and all)
+    # carry no signature of their origin: dropped at the bus edge.
+    assert refused.get("unsigned_entry", 0) > 10, refused
+
+
+def mission_with_rogue(
+    settings: LiveSettings,
+    team_dir: Path,
+    attack: Callable[[ZenohNode], None],
+    stop: threading.Event,
+    *,
+    knows_mission: bool = False,
+) -> tuple[Any, dict[str, Any]]:
+    """A live mission with a rogue node holding robot_3's certificate running ``attack``
+    (until ``stop``) in a thread of its own; ``knows_mission``: it uses the mission's
+    identity (as a process reading the traffic could). The mission starts when every
+    member is present: robot_3 joins only once the rogue's TLS links to the other
+    processes are up, so the attack covers the whole mission however slowly a loaded
+    machine starts processes."""
+    with LiveTeam(settings, team_dir=team_dir) as t:
+        t.start(hold=("robot_3",))
+        peers = [f"tls/127.0.0.1:{port}" for port in t.ports.values()]
+        rogue = ZenohNode(
+            make_options(
+                team=settings.zenoh.team, connect=peers, tls_ca=team_dir / "ca.pem",
+                tls_cert=team_dir / "robot_3.pem", tls_key=team_dir / "robot_3.key",
+            )
+        )  # fmt: skip
+        if knows_mission:
+            assert t.settings.mission is not None
+            rogue.mission = bytes.fromhex(t.settings.mission)
+        thread = threading.Thread(target=attack, args=(rogue,))
+        thread.start()
+        try:
+            started = len(t.children)
+            wait_for(lambda: rogue.peers() >= started, 60, "the rogue's links to the team")
+            t.spawn("robot_3")
+            t.wait()
+        finally:
+            stop.set()
+            thread.join()
+            rogue.close()
+        return t.collect()

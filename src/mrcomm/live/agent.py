@@ -70,6 +70,7 @@ from mrcomm.messaging.topics import Lane
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import Timeline
 from mrcomm.net.link_sensors import MeasuredSensor
+from mrcomm.net.origin_signatures import OriginSigner
 from mrcomm.net.pulse import pulse_id
 from mrcomm.net.zenoh_bus import LinkRules, PositionBook, ZenohBus
 from mrcomm.net.zenoh_config import check_key_chunk
@@ -163,6 +164,7 @@ class AgentProcess:
             positions,
             members=frozenset((*self.robot_ids, ASSIGNER_ID, OPERATOR_ID)),
             robots=self.robot_ids,
+            signer=OriginSigner.from_options(settings.zenoh),  # None: --insecure
         )
         self.journal = Journal(journal_path(settings.record_dir, agent, incarnation))
         self.agents = agents = AgentAssembly(

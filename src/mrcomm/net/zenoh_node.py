@@ -53,13 +53,15 @@ REFUSALS = (
     "implausible_tick",  # a clock tick the world cannot have sent (live/tick_guard.py)
     "bad_relay",  # a relayed copy whose content no robot may relay (net/zenoh_bus.py)
     "other_mission",  # sent in another mission (a replay, or a team member of another run)
+    "unsigned_entry",  # an AON entry without its origin's signature (net/origin_signatures.py)
 )
-#: Every attachment: the mission's identity (8 bytes; zero: not known yet) and the
-#: sender's wall-clock send time (ns).
-_STAMP = struct.Struct("<8sq")
-#: With a radio the attachment also carries the sender's mission time at publication
-#: and the radio delay of its queue (s; NaN: the queue overflowed and lost it).
-_RADIO_STAMP = struct.Struct("<8sqdd")
+#: Every attachment: whether the radio's facts follow (1) or not (0), the mission's
+#: identity (8 bytes; zero: not known yet) and the sender's wall-clock send time (ns);
+#: then, with a radio, the sender's mission time at publication and the radio delay of
+#: its queue (s; NaN: the queue overflowed and lost it); then the origin signatures of
+#: the message's AON entries, if any (net/origin_signatures.py).
+_STAMP = struct.Struct("<B8sq")
+_RADIO = struct.Struct("<dd")
 #: The identity of a mission not known yet.
 NO_MISSION = bytes(8)
 
@@ -79,6 +81,7 @@ class Incoming:
     radio: Airtime | None = None  # the sender's radio queue (radio network model only)
     size: int = 0  # bytes of the encoded message
     mission: bytes = NO_MISSION  # the mission its sender was in
+    signatures: bytes = b""  # the origin signatures the sample came with
 
 
 @dataclass(frozen=True, slots=True)
@@ -170,16 +173,24 @@ class ZenohNode:
         return key[len(self.prefix) + 1 :].split("/", 1)[0]
 
     # -- publishing ------------------------------------------------------------------
-    def put(self, key: str, data: bytes, lane: Lane, radio: Airtime | None = None) -> None:
+    def put(
+        self,
+        key: str,
+        data: bytes,
+        lane: Lane,
+        radio: Airtime | None = None,
+        signatures: bytes = b"",
+    ) -> None:
         """Publish without ever blocking the caller (blocking lanes use a worker);
-        ``radio``: the message's facts from the sender's radio queue."""
+        ``radio``: the message's facts from the sender's radio queue; ``signatures``:
+        its AON entries' origin signatures."""
         if self._closed:
             return
         publisher = self._publisher(key, lane)
-        if radio is None:
-            attachment = _STAMP.pack(self.mission, time.time_ns())
-        else:
-            attachment = _RADIO_STAMP.pack(self.mission, time.time_ns(), *radio)
+        attachment = _STAMP.pack(radio is not None, self.mission, time.time_ns())
+        if radio is not None:
+            attachment += _RADIO.pack(*radio)
+        attachment += signatures
         if lane is Lane.BEST_EFFORT:
             with contextlib.suppress(self._zenoh.ZError):
                 publisher.put(data, attachment=attachment)
@@ -241,18 +252,21 @@ class ZenohNode:
                 return
             sent: float | None = None
             radio: Airtime | None = None
-            mission = NO_MISSION
+            mission, signatures = NO_MISSION, b""
             attachment = sample.attachment
-            if attachment is not None:
-                raw = attachment.to_bytes()
-                if len(raw) == _STAMP.size:
-                    mission, stamp_ns = _STAMP.unpack(raw)
-                    sent = stamp_ns / 1e9
-                elif len(raw) == _RADIO_STAMP.size:
-                    mission, stamp_ns, published, delay = _RADIO_STAMP.unpack(raw)
-                    sent, radio = stamp_ns / 1e9, (published, delay)
+            raw = attachment.to_bytes() if attachment is not None else b""
+            if len(raw) >= _STAMP.size:
+                has_radio, mission, stamp_ns = _STAMP.unpack_from(raw)
+                sent, rest = stamp_ns / 1e9, _STAMP.size
+                if has_radio and len(raw) >= rest + _RADIO.size:
+                    radio = _RADIO.unpack_from(raw, rest)
+                    rest += _RADIO.size
+                signatures = raw[rest:]
             key = str(sample.key_expr)
-            inbox.put(Incoming(channel, key, value, sent, recv, radio, len(payload), mission))
+            item = Incoming(
+                channel, key, value, sent, recv, radio, len(payload), mission, signatures
+            )
+            inbox.put(item)
 
         self._subscribers.append(self.session.declare_subscriber(key_expr, on_sample))
 

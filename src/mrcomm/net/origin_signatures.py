@@ -1,0 +1,148 @@
+"""Origin signatures: an AON payload travels with its author's signature, so that no
+member can put words in another's mouth, even inside its own publications.
+
+The access-control list binds a publication to its publisher's key; AON's members
+re-publish each other's payloads (that is how a message reaches everyone), so a
+publication can carry payloads of other origins, and the ACL cannot tell a faithful
+copy from a forgery. In a live team with certificates, the member that originates an
+AON entry signs it with its certificate's key (ECDSA P-256, the key of its TLS
+identity), and every copy carries that signature — in the Zenoh attachment, not in the
+message, so simulated results and message sizes do not change; a receiving bus verifies
+it against the certificate of the member that may speak for the origin (the grants of
+the team's ACL: the assigner's entries by the robot that hosts it) and drops an entry
+whose signature is missing or wrong (counted: ``unsigned_entry``). The signatures a
+process has verified are remembered (at most :data:`MAX_REMEMBERED`) to go with the
+copies it publishes.
+
+Without certificates (``--insecure``) nothing is signed: anyone could forge anything
+anyway.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import msgspec
+from cryptography.exceptions import InvalidSignature
+from cryptography.hazmat.primitives import hashes, serialization
+from cryptography.hazmat.primitives.asymmetric import ec
+
+from mrcomm.messaging.messages import TOPIC_AON, TOPIC_COMMAND, AonEntry, encode
+from mrcomm.net.zenoh_config import ZenohOptions
+
+#: The topics whose entries are signed by their origin.
+SIGNED_TOPICS = frozenset({TOPIC_AON, TOPIC_COMMAND})
+#: Verified signatures remembered to go with copies this process publishes.
+MAX_REMEMBERED = 8192
+_DOMAIN = b"mrcomm-origin-v1\0"
+
+#: (topic, origin, incarnation, sequence number): one AON message.
+Key = tuple[str, str, int, int]
+_encode_key = msgspec.msgpack.Encoder().encode
+
+
+def signed_bytes(topic: str, entry: AonEntry) -> bytes:
+    """What the origin signs: the message's identity and its payload."""
+    key = (topic, entry.sender, entry.incarnation, entry.seq)
+    return _DOMAIN + _encode_key(key) + encode(entry.payload)  # type: ignore[arg-type]
+
+
+class OriginSigner:
+    """One process's signing key and the team's verifying keys (see the module
+    docstring)."""
+
+    def __init__(
+        self,
+        key: ec.EllipticCurvePrivateKey,
+        speakers: Mapping[str, ec.EllipticCurvePublicKey] | None,
+    ) -> None:
+        """``speakers``: origin (a key chunk) -> the public key of the certificate that
+        may speak for it (None: not every member's certificate is at hand, so this
+        process signs its own entries but verifies none)."""
+        self._key = key
+        self.verifies = speakers is not None
+        self._speakers = dict(speakers or {})
+        self._remembered: OrderedDict[Key, bytes] = OrderedDict()
+
+    @classmethod
+    def from_options(cls, options: ZenohOptions) -> OriginSigner | None:
+        """The signer of a process with a team's certificates: its own key, and each
+        member's certificate from the directory its own is in (a team directory holds
+        them all; without one of them, this process verifies nothing). None without
+        TLS and access control, or with a key of another kind."""
+        if options.tls is None or options.acl_grants is None:
+            return None
+        try:
+            private = serialization.load_pem_private_key(options.tls.key.read_bytes(), None)
+        except (OSError, ValueError):
+            return None
+        if not isinstance(private, ec.EllipticCurvePrivateKey):
+            return None
+        return cls(private, _speakers(Path(options.tls.cert).parent, options.acl_grants))
+
+    def sign(self, topic: str, entry: AonEntry) -> bytes:
+        """Sign an entry this process originates (and remember it for copies)."""
+        signature = self._key.sign(signed_bytes(topic, entry), ec.ECDSA(hashes.SHA256()))
+        self._remember((topic, entry.sender, entry.incarnation, entry.seq), signature)
+        return signature
+
+    def verify(self, topic: str, entry: AonEntry, signature: bytes | None) -> bool:
+        """Whether ``signature`` is the entry's origin's (then it is remembered)."""
+        public = self._speakers.get(entry.sender)
+        if signature is None or public is None:
+            return False
+        try:
+            public.verify(signature, signed_bytes(topic, entry), ec.ECDSA(hashes.SHA256()))
+        except InvalidSignature:
+            return False
+        self._remember((topic, entry.sender, entry.incarnation, entry.seq), signature)
+        return True
+
+    def remembered(self, topic: str, entry: AonEntry) -> bytes | None:
+        """The signature verified (or made) earlier for this entry's message."""
+        return self._remembered.get((topic, entry.sender, entry.incarnation, entry.seq))
+
+    def _remember(self, key: Key, signature: bytes) -> None:
+        self._remembered[key] = signature
+        self._remembered.move_to_end(key)
+        while len(self._remembered) > MAX_REMEMBERED:
+            self._remembered.popitem(last=False)
+
+
+def _speakers(
+    folder: Path, grants: tuple[tuple[str, tuple[str, ...]], ...]
+) -> dict[str, ec.EllipticCurvePublicKey] | None:
+    """Origin -> public key of the member certificate that may speak for it, from the
+    members' certificates in ``folder`` (None when one is missing or not ECDSA)."""
+    from cryptography import x509
+
+    speakers: dict[str, ec.EllipticCurvePublicKey] = {}
+    for member, chunks in grants:
+        try:
+            cert = x509.load_pem_x509_certificate((folder / f"{member}.pem").read_bytes())
+        except (OSError, ValueError):
+            return None
+        public = cert.public_key()
+        if not isinstance(public, ec.EllipticCurvePublicKey):
+            return None
+        speakers.update(dict.fromkeys(chunks, public))
+    return speakers
+
+
+def pack_signatures(signatures: list[tuple[str, int, int, bytes]]) -> bytes:
+    """The attachment's tail: (origin, incarnation, seq, signature) of each entry."""
+    return msgspec.msgpack.encode(signatures) if signatures else b""
+
+
+def unpack_signatures(data: bytes) -> dict[tuple[str, int, int], bytes]:
+    """What :func:`pack_signatures` packed (nothing for malformed bytes)."""
+    if not data:
+        return {}
+    try:
+        items: Any = msgspec.msgpack.decode(data, type=list[tuple[str, int, int, bytes]])
+    except (msgspec.DecodeError, msgspec.ValidationError):
+        return {}
+    return {(origin, inc, seq): sig for origin, inc, seq, sig in items[:1024]}
