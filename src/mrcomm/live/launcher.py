@@ -37,7 +37,7 @@ from mrcomm.errors import InputError, MissionFailed
 from mrcomm.live.collect import collect
 from mrcomm.live.kernel_links import Emulation
 from mrcomm.live.leftovers import die_with_parent
-from mrcomm.live.netns import Netns
+from mrcomm.live.netns import Netns, remove_stale_namespaces
 from mrcomm.live.protocol import WORLD_ID
 from mrcomm.live.settings import CONSOLE_TOKEN_ENV, LiveSettings
 from mrcomm.net.pulse import pulse_id
@@ -442,6 +442,7 @@ def _run_emulated(
     told where every link node is (``live.kernel_links``)."""
     names = LiveTeam(settings, team_dir=team_dir).names
     scenario = load_scenario(settings.run.scenario)
+    remove_stale_namespaces()  # of an emulated run killed before it could remove them
     with Netns(names, spared=(WORLD_ID,)) as net:
         addresses = {r.id: net.ip[r.id] for r in scenario.robots}
         host = scenario.assigner.host if scenario.assigner.kind == "robot" else ASSIGNER_ID

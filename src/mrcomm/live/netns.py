@@ -14,11 +14,36 @@ never dropped. Per-pair drops between namespaces are rules on the hub's bridge
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import subprocess
 from collections.abc import Iterable
 
 IFACE = "m0"
+
+
+#: Namespaces of a run are named ``mrc<pid of the launcher>hub`` and ``...n<k>``.
+NETNS_PREFIX = "mrc"
+_NETNS_NAME = re.compile(rf"^{NETNS_PREFIX}(\d+)(hub|n\d+)$")
+
+
+def remove_stale_namespaces() -> list[str]:
+    """Delete the namespaces (and with them their links and nftables tables) of runs
+    whose launcher has gone (killed before it could delete them); their names."""
+    from mrcomm.live.leftovers import alive
+
+    try:
+        listing = run_tool("ip", "netns", "list")
+    except (OSError, subprocess.SubprocessError):
+        return []
+    removed = []
+    for line in listing.splitlines():
+        name = line.split(" ", 1)[0]
+        match = _NETNS_NAME.match(name)
+        if match is not None and not alive(int(match.group(1))):
+            subprocess.run(["ip", "netns", "del", name], capture_output=True, timeout=30)
+            removed.append(name)
+    return removed
 
 
 def run_tool(*args: str, stdin: str | None = None) -> str:
@@ -53,7 +78,7 @@ class Netns:
 
     def __init__(self, names: Iterable[str], spared: Iterable[str] = ()) -> None:
         self.names = tuple(names)
-        tag = f"mrc{os.getpid() % 100000}"  # unique on this host while we run
+        tag = f"{NETNS_PREFIX}{os.getpid()}"  # unique on this host while we run
         self.hub = f"{tag}hub"
         self.ns = {name: f"{tag}n{i}" for i, name in enumerate(self.names)}
         self.ip = {name: f"10.77.0.{i + 1}" for i, name in enumerate(self.names)}
