@@ -97,3 +97,30 @@ def test_signatures_pack_and_bad_bytes_are_none() -> None:
     packed = pack_signatures([("robot_1", 1, 0, b"sig")])
     assert unpack_signatures(packed) == {("robot_1", 1, 0): b"sig"}
     assert unpack_signatures(b"\xc1 garbage") == {} and unpack_signatures(b"") == {}
+
+
+def test_a_relayed_status_carries_its_origins_signature(team: Path) -> None:
+    """robot_2 relays robot_1's status with robot_1's signature (received with it); a
+    status robot_2 makes up in robot_1's name has none, and robot_3's bus refuses it."""
+    from mrcomm.messaging.messages import TOPIC_RELAYED, TOPIC_TASK_STATUS, RelayedMsg, encode
+
+    one, two, three = (signer(team, m) for m in ("robot_1", "robot_2", "operator"))
+    refused: list[str] = []
+    status = TaskStatus(sender="robot_1", incarnation=1, seq=4, stamp=0.0, robot="robot_1",
+                        task_id="1", state=TaskState.SUCCESS)  # fmt: skip
+    sent = one.signatures_for(TOPIC_TASK_STATUS, status, {"robot_1"})
+    assert two.checked(TOPIC_TASK_STATUS, status, sent, refused.append) is status
+
+    def relayed(inner: TaskStatus) -> RelayedMsg:
+        return RelayedMsg(sender="robot_2", incarnation=1, seq=9, stamp=0.0,
+                          topic=TOPIC_TASK_STATUS, hop=2, payload=encode(inner))  # fmt: skip
+
+    copy = relayed(status)
+    carried = two.signatures_for(TOPIC_RELAYED, copy, {"robot_2"})
+    assert three.checked(TOPIC_RELAYED, copy, carried, refused.append) is copy
+    invented = TaskStatus(sender="robot_1", incarnation=1, seq=5, stamp=0.0, robot="robot_1",
+                          task_id="4", state=TaskState.SUCCESS)  # fmt: skip
+    made_up = relayed(invented)
+    forged = two.signatures_for(TOPIC_RELAYED, made_up, {"robot_2"})
+    assert three.checked(TOPIC_RELAYED, made_up, forged, refused.append) is None
+    assert refused == ["unsigned_entry"]

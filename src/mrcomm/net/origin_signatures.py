@@ -21,7 +21,7 @@ anyway.
 from __future__ import annotations
 
 from collections import OrderedDict
-from collections.abc import Mapping
+from collections.abc import Callable, Collection, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -30,10 +30,23 @@ from cryptography.exceptions import InvalidSignature
 from cryptography.hazmat.primitives import hashes, serialization
 from cryptography.hazmat.primitives.asymmetric import ec
 
-from mrcomm.messaging.messages import TOPIC_AON, TOPIC_COMMAND, AonEntry, encode
+from mrcomm.messaging.messages import (
+    TOPIC_AON,
+    TOPIC_COMMAND,
+    TOPIC_RELAYED,
+    TOPIC_TASK_STATUS,
+    AonEntry,
+    AonMsg,
+    Message,
+    RelayedMsg,
+    TaskStatus,
+    decode,
+    encode,
+)
 from mrcomm.net.zenoh_config import ZenohOptions
 
-#: The topics whose entries are signed by their origin.
+#: The topics whose entries are signed by their origin (task statuses are signed too,
+#: for the copies relaying robots pass on).
 SIGNED_TOPICS = frozenset({TOPIC_AON, TOPIC_COMMAND})
 #: Verified signatures remembered to go with copies this process publishes.
 MAX_REMEMBERED = 8192
@@ -44,10 +57,17 @@ Key = tuple[str, str, int, int]
 _encode_key = msgspec.msgpack.Encoder().encode
 
 
-def signed_bytes(topic: str, entry: AonEntry) -> bytes:
+def signed_bytes(topic: str, origin: str, incarnation: int, seq: int, payload: Any) -> bytes:
     """What the origin signs: the message's identity and its payload."""
-    key = (topic, entry.sender, entry.incarnation, entry.seq)
-    return _DOMAIN + _encode_key(key) + encode(entry.payload)  # type: ignore[arg-type]
+    return _DOMAIN + _encode_key((topic, origin, incarnation, seq)) + encode(payload)
+
+
+def _of(entry: AonEntry) -> tuple[str, int, int, Any]:
+    return entry.sender, entry.incarnation, entry.seq, entry.payload
+
+
+def _of_status(status: TaskStatus) -> tuple[str, int, int, Any]:
+    return status.sender, status.incarnation, status.seq, status
 
 
 class OriginSigner:
@@ -83,27 +103,123 @@ class OriginSigner:
             return None
         return cls(private, _speakers(Path(options.tls.cert).parent, options.acl_grants))
 
-    def sign(self, topic: str, entry: AonEntry) -> bytes:
-        """Sign an entry this process originates (and remember it for copies)."""
-        signature = self._key.sign(signed_bytes(topic, entry), ec.ECDSA(hashes.SHA256()))
-        self._remember((topic, entry.sender, entry.incarnation, entry.seq), signature)
+    def sign(self, topic: str, entry: AonEntry | TaskStatus) -> bytes:
+        """Sign an AON entry (or a task status) this process originates, and remember
+        the signature for copies."""
+        origin, inc, seq, payload = (
+            _of_status(entry) if isinstance(entry, TaskStatus) else _of(entry)
+        )
+        data = signed_bytes(topic, origin, inc, seq, payload)
+        signature = self._key.sign(data, ec.ECDSA(hashes.SHA256()))
+        self._remember((topic, origin, inc, seq), signature)
         return signature
 
-    def verify(self, topic: str, entry: AonEntry, signature: bytes | None) -> bool:
-        """Whether ``signature`` is the entry's origin's (then it is remembered)."""
-        public = self._speakers.get(entry.sender)
+    def verify(self, topic: str, entry: AonEntry | TaskStatus, signature: bytes | None) -> bool:
+        """Whether ``signature`` is the origin's (then it is remembered)."""
+        origin, inc, seq, payload = (
+            _of_status(entry) if isinstance(entry, TaskStatus) else _of(entry)
+        )
+        public = self._speakers.get(origin)
         if signature is None or public is None:
             return False
         try:
-            public.verify(signature, signed_bytes(topic, entry), ec.ECDSA(hashes.SHA256()))
+            data = signed_bytes(topic, origin, inc, seq, payload)
+            public.verify(signature, data, ec.ECDSA(hashes.SHA256()))
         except InvalidSignature:
             return False
-        self._remember((topic, entry.sender, entry.incarnation, entry.seq), signature)
+        self._remember((topic, origin, inc, seq), signature)
         return True
 
-    def remembered(self, topic: str, entry: AonEntry) -> bytes | None:
-        """The signature verified (or made) earlier for this entry's message."""
+    def remembered(self, topic: str, entry: AonEntry | TaskStatus) -> bytes | None:
+        """The signature verified (or made) earlier for this message."""
         return self._remembered.get((topic, entry.sender, entry.incarnation, entry.seq))
+
+    # -- what a bus does with them --------------------------------------------------
+    def checked(
+        self, topic: str, message: Any, signatures: bytes, refuse: Callable[[str], None]
+    ) -> Any:
+        """A received message as far as its origins signed it: AON entries unsigned
+        left out; a relayed copy whose status (or AON entries) its origin did not sign
+        refused (None); a task status's signature remembered, for the copies relays
+        make. ``refuse`` counts what is dropped (``unsigned_entry``)."""
+        if topic in SIGNED_TOPICS:
+            return self._signed_only(topic, message, signatures, refuse)
+        if topic == TOPIC_TASK_STATUS:
+            given = unpack_signatures(signatures)
+            key = (message.sender, message.incarnation, message.seq)
+            self.verify(topic, message, given.get(key))  # remembered when valid
+            return message
+        if topic != TOPIC_RELAYED:
+            return message
+        try:
+            inner = decode(message.payload)
+        except msgspec.DecodeError:
+            return message  # the endpoint refuses it as a bad relay
+        if isinstance(inner, TaskStatus):
+            given = unpack_signatures(signatures)
+            key = (inner.sender, inner.incarnation, inner.seq)
+            if not self.verify(message.topic, inner, given.get(key)):
+                refuse("unsigned_entry")
+                return None
+        elif isinstance(inner, AonMsg) and message.topic in SIGNED_TOPICS:
+            kept = self._signed_only(message.topic, inner, signatures, refuse)
+            if kept is not inner:
+                return msgspec.structs.replace(message, payload=encode(kept))
+        return message
+
+    def signatures_for(self, topic: str, message: Message, own: Collection[str]) -> bytes:
+        """The origin signatures that go with a message this process publishes: of
+        the AON entries in it, of its own task statuses, and of what a relayed copy
+        carries (``own``: the agents of this process)."""
+        if isinstance(message, RelayedMsg):
+            try:
+                inner = decode(message.payload)
+            except msgspec.DecodeError:
+                return b""
+            topic, message = message.topic, inner
+        if isinstance(message, AonMsg) and topic in SIGNED_TOPICS:
+            return self._sign_entries(topic, message, own)
+        if isinstance(message, TaskStatus) and topic == TOPIC_TASK_STATUS:
+            mine = message.sender in own
+            signature = self.sign(topic, message) if mine else self.remembered(topic, message)
+            if signature is not None:
+                return pack_signatures(
+                    [(message.sender, message.incarnation, message.seq, signature)]
+                )
+        return b""
+
+    def _signed_only(
+        self, topic: str, message: AonMsg, signatures: bytes, refuse: Callable[[str], None]
+    ) -> AonMsg:
+        """The AON message with the entries whose payload its origin did not sign left
+        out (each counted: ``unsigned_entry``)."""
+        given = unpack_signatures(signatures)
+        kept = []
+        for entry in message.entries:
+            if entry.payload is not None:
+                signature = given.get((entry.sender, entry.incarnation, entry.seq))
+                if not self.verify(topic, entry, signature):
+                    refuse("unsigned_entry")
+                    continue
+            kept.append(entry)
+        if len(kept) == len(message.entries):
+            return message
+        return msgspec.structs.replace(message, entries=tuple(kept))
+
+    def _sign_entries(self, topic: str, message: AonMsg, own: Collection[str]) -> bytes:
+        """The origin signatures of an AON message's entries with a payload: this
+        process's own made now, others' as verified when they arrived."""
+        out = []
+        for entry in message.entries:
+            if entry.payload is None:
+                continue
+            if entry.sender in own:
+                signature: bytes | None = self.sign(topic, entry)
+            else:
+                signature = self.remembered(topic, entry)
+            if signature is not None:
+                out.append((entry.sender, entry.incarnation, entry.seq, signature))
+        return pack_signatures(out)
 
     def _remember(self, key: Key, signature: bytes) -> None:
         self._remembered[key] = signature

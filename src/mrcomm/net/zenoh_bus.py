@@ -47,7 +47,6 @@ import numpy as np
 
 from mrcomm.messaging.messages import (
     TOPIC_RELAYED,
-    AonMsg,
     Message,
     PoseMsg,
     RelayedMsg,
@@ -64,12 +63,7 @@ from mrcomm.net.delivery import (
 )
 from mrcomm.net.inprocess import DeliveryObserver
 from mrcomm.net.network import NetworkModel, Wlan
-from mrcomm.net.origin_signatures import (
-    SIGNED_TOPICS,
-    OriginSigner,
-    pack_signatures,
-    unpack_signatures,
-)
+from mrcomm.net.origin_signatures import OriginSigner
 from mrcomm.net.radio.links import RadioLinks
 from mrcomm.net.relay import RELAYED_TOPICS, Relay
 from mrcomm.net.zenoh_node import Airtime, Incoming, ZenohNode
@@ -177,9 +171,8 @@ class ZenohEndpoint:
             # Queued here, at the sender, as in simulation; receivers learn the delay.
             delay = radio.transmit(self._owner, bus.now, radio.bits_of(len(data)))
             airtime = (bus.now, math.nan if delay is None else delay)
-        signatures = b""
-        if bus.signer is not None and topic in SIGNED_TOPICS and isinstance(message, AonMsg):
-            signatures = bus.sign_entries(topic, message)
+        signer = bus.signer
+        signatures = signer.signatures_for(topic, message, bus.endpoints) if signer else b""
         node.put(node.key(self._owner, topic), data, lane_of(topic), airtime, signatures)
 
     def subscribe(self, topic: str, handler: Handler) -> None:
@@ -394,43 +387,13 @@ class ZenohBus:
             # without a sender's queue) and its bits on the air (from the payload's size).
             published, delay = item.radio if item.radio is not None else (self.now, 0.0)
             on_air = (published, delay, self.rules.radio.bits_of(item.size))
-        if self.signer is not None and self.signer.verifies and topic in SIGNED_TOPICS:
-            message = self._signed_only(topic, message, item.signatures)
+        if self.signer is not None and self.signer.verifies:
+            checked = self.signer.checked(topic, message, item.signatures, self.node.refuse)
+            if checked is None:
+                return
+            message = checked
         for endpoint in self.endpoints.values():
             endpoint._receive(topic, sender, message, on_air)
-
-    def _signed_only(self, topic: str, message: AonMsg, signatures: bytes) -> AonMsg:
-        """The AON message with the entries whose payload its origin did not sign left
-        out (each counted: ``unsigned_entry``)."""
-        assert self.signer is not None
-        given = unpack_signatures(signatures)
-        kept = []
-        for entry in message.entries:
-            if entry.payload is not None:
-                signature = given.get((entry.sender, entry.incarnation, entry.seq))
-                if not self.signer.verify(topic, entry, signature):
-                    self.node.refuse("unsigned_entry")
-                    continue
-            kept.append(entry)
-        if len(kept) == len(message.entries):
-            return message
-        return msgspec.structs.replace(message, entries=tuple(kept))
-
-    def sign_entries(self, topic: str, message: AonMsg) -> bytes:
-        """The origin signatures of an AON message's entries with a payload: this
-        process's own made now, others' as verified when they arrived."""
-        assert self.signer is not None
-        out = []
-        for entry in message.entries:
-            if entry.payload is None:
-                continue
-            if entry.sender in self.endpoints:
-                signature: bytes | None = self.signer.sign(topic, entry)
-            else:
-                signature = self.signer.remembered(topic, entry)
-            if signature is not None:
-                out.append((entry.sender, entry.incarnation, entry.seq, signature))
-        return pack_signatures(out)
 
     def _refusal(self, topic: str, sender: str, message: Any) -> str | None:
         """Why the edge refuses this message (None: it may reach the agents)."""
