@@ -120,3 +120,37 @@ def test_the_socket_refuses_foreign_pages(console: tuple[str, subprocess.Popen[s
 
     assert asyncio.run(connect(base)).startswith("0")  # engine.io's open packet
     assert asyncio.run(connect("http://evil.example")).startswith("refused")
+
+
+def test_only_a_few_page_sockets_at_once(console: tuple[str, subprocess.Popen[str]]) -> None:
+    """Each page socket holds a page's state in the process: an authenticated client
+    opening sockets in a loop is held to MAX_SOCKETS of them."""
+    import websockets
+
+    from mrcomm.console.guard import MAX_SOCKETS
+
+    url, _ = console
+    parts = urlsplit(url)
+    base = f"{parts.scheme}://{parts.netloc}"
+    cookie = httpx.get(url).cookies[COOKIE]
+    target = f"ws://{parts.netloc}{SOCKET.replace('polling', 'websocket')}"
+
+    async def flood() -> tuple[int, int]:
+        opened, refused = [], 0
+        try:
+            for _ in range(MAX_SOCKETS + 4):
+                try:
+                    socket = await websockets.connect(
+                        target, origin=base, additional_headers={"Cookie": f"{COOKIE}={cookie}"}
+                    )
+                    await asyncio.wait_for(socket.recv(), 10)  # served: the open packet
+                    opened.append(socket)
+                except Exception:
+                    refused += 1
+            return len(opened), refused
+        finally:
+            for socket in opened:
+                await socket.close()
+
+    opened, refused = asyncio.run(flood())
+    assert opened <= MAX_SOCKETS and refused >= 4, (opened, refused)

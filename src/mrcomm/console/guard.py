@@ -17,7 +17,9 @@ WebSocket alike — passes :class:`ConsoleGuard` first:
   'none'``, ``X-Frame-Options: DENY``) and sniffing, and sends no referrer (the URL
   holds the secret).
 
-Refusals are answered 403 (HTTP) or a closed socket, and counted by cause.
+At most :data:`MAX_SOCKETS` page sockets are open at once (each holds a page's state
+in this process); more are refused (``too many clients``). Refusals are answered 403
+(HTTP) or a closed socket, and counted by cause.
 """
 
 from __future__ import annotations
@@ -37,6 +39,8 @@ Send = Callable[[Message], Awaitable[None]]
 App = Callable[[Scope, Receive, Send], Awaitable[None]]
 
 COOKIE = "mrcomm_console"
+#: Page sockets open at once (an operator and a few observers).
+MAX_SOCKETS = 8
 #: Headers of every HTTP response.
 SECURITY_HEADERS: tuple[tuple[bytes, bytes], ...] = (
     (b"content-security-policy", b"frame-ancestors 'none'"),
@@ -56,6 +60,7 @@ class ConsoleGuard:
         self.origins = frozenset(f"http://{host}" for host in self.hosts)
         self.refused: Counter[str] = Counter()
         self._lock = threading.Lock()
+        self._sockets = 0
 
     @property
     def url(self) -> str:
@@ -85,6 +90,14 @@ class ConsoleGuard:
             return "", False
         return "missing token", False
 
+    def _open_socket(self) -> bool:
+        """Take one of the :data:`MAX_SOCKETS` (False: none left)."""
+        with self._lock:
+            if self._sockets >= MAX_SOCKETS:
+                return False
+            self._sockets += 1
+            return True
+
     def count(self, cause: str) -> None:
         with self._lock:
             self.refused[cause] += 1
@@ -102,7 +115,15 @@ class ConsoleGuard:
                 await _refuse(scope, receive, send, cause)
                 return
             if scope["type"] == "websocket":
-                await app(scope, receive, send)
+                if not self._open_socket():
+                    self.count("too many clients")
+                    await _refuse(scope, receive, send, "too many clients")
+                    return
+                try:
+                    await app(scope, receive, send)
+                finally:
+                    with self._lock:
+                        self._sockets -= 1
                 return
 
             async def send_with_headers(message: Message) -> None:
