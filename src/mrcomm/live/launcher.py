@@ -309,12 +309,13 @@ class LiveTeam:
         ]
 
     def _stop_if_team_dead(self) -> None:
-        """Every agent process (robots, task assigner, operator) has exited while the
+        """Every agent process (robots, task assigner, operator) has died while the
         world still runs: no one is left to end the mission, so stop now instead of
-        waiting out its time limit, naming the first to die and its log."""
+        waiting out its time limit, naming the first to die and its log. (An agent that
+        exits cleanly has seen the end of the mission: the world is ending too.)"""
         agents = [self.children.get(name) for name in self.names if name != WORLD_ID]
         for child in agents:
-            if child is not None and child.process.poll() is not None:
+            if child is not None and child.process.poll() not in (None, 0):
                 self.gone.setdefault(child.name, time.monotonic())
         if not agents or any(c is None or c.name not in self.gone for c in agents):
             return
