@@ -38,6 +38,12 @@ HOST_FRESH = 30.0
 DEFAULT_AON_LEASE = 60.0
 
 
+def lease_of(params: object) -> float | None:
+    """The team's AON lease: a behaviour's ``aon_lease`` parameter, else the default."""
+    lease: float | None = getattr(params, "aon_lease", DEFAULT_AON_LEASE)
+    return lease
+
+
 class AonStatuses:
     """The AON part of one executor (see the module docstring)."""
 
@@ -66,7 +72,7 @@ class AonStatuses:
             e.robot_id,
             e.incarnation,
             (*message.team, message.sender),
-            lease=getattr(e.params, "aon_lease", DEFAULT_AON_LEASE),
+            lease=lease_of(e.params),
             on_deliver=self._on_aon_deliver,
             payloads=(TaskStatus,),  # the team's statuses, nothing else
         )
@@ -119,6 +125,11 @@ class AonStatuses:
         if known is not None and view.age(host, self.executor.now) <= HOST_FRESH:
             return (known.x, known.y)
         return self._assigner_at or self.assigner_home
+
+    @property
+    def assigner_host(self) -> str:
+        """The robot carrying the task assigner ("": a base station or virtual)."""
+        return self._assigner_host
 
     def hosts_assigner(self) -> bool:
         """This robot carries the task assigner."""

@@ -99,6 +99,9 @@ class TaskExecutor(ExecutorRuntime):
         self._clearing_goals: list[tuple[float, float]] = []
         self._occupied = OccupiedGoal(p.occupied_goal)
         self._execute_until = 0.0
+        self._moved_once = False  # the robot has started to move
+        self._state_since = 0.0  # when the machine entered its state
+        self._agenda_reported = False  # its agenda's end was reported
 
     @property
     def done(self) -> bool:

@@ -98,9 +98,6 @@ class ExecutorRuntime:
         self._t0: float | None = None  # assignment received: mission start for this robot
         self._seq = 0
         self._next_pose = 0.0
-        self._moved_once = False
-        self._state_since = 0.0
-        self._agenda_reported = False
         with quiet_rebinding():
             self.machine = self.machine_class(
                 model=self,

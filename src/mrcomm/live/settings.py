@@ -31,7 +31,7 @@ def mission_bytes(text: str) -> bytes:
         value = b""
     if len(value) != 8 or value == bytes(8):
         raise InputError(
-            f"a mission identity is 16 hex digits, not all zero; got {text!r}",
+            f"a mission identity is 16 hex digits, not all zero; got {text[:40]!r}",
             field="--mission",
         )
     return value

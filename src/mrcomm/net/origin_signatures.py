@@ -11,8 +11,9 @@ message, so simulated results and message sizes do not change; a receiving bus v
 it against the certificate of the member that may speak for the origin (the grants of
 the team's ACL: the assigner's entries by the robot that hosts it) and drops an entry
 whose signature is missing or wrong (counted: ``unsigned_entry``). The signatures a
-process has verified are remembered (at most :data:`MAX_REMEMBERED`) to go with the
-copies it publishes.
+process has verified (or made) are remembered (at most :data:`MAX_REMEMBERED`): they
+go with the copies it publishes, and an entry heard again with the same signature and
+payload is not verified again, nor is its own entry signed again when AON re-sends it.
 
 Without certificates (``--insecure``) nothing is signed: anyone could forge anything
 anyway.
@@ -45,9 +46,11 @@ from mrcomm.messaging.messages import (
 )
 from mrcomm.net.zenoh_config import ZenohOptions
 
-#: The topics whose entries are signed by their origin (task statuses are signed too,
-#: for the copies relaying robots pass on).
+#: The topics whose entries are signed by their origin.
 SIGNED_TOPICS = frozenset({TOPIC_AON, TOPIC_COMMAND})
+#: With relaying on, task statuses are signed too (for the copies relaying robots pass
+#: on), and relayed copies carry their origin's signatures.
+RELAY_SIGNED_TOPICS = frozenset({TOPIC_TASK_STATUS, TOPIC_RELAYED})
 #: Verified signatures remembered to go with copies this process publishes.
 MAX_REMEMBERED = 8192
 _DOMAIN = b"mrcomm-origin-v1\0"
@@ -85,7 +88,8 @@ class OriginSigner:
         self._key = key
         self.verifies = speakers is not None
         self._speakers = dict(speakers or {})
-        self._remembered: OrderedDict[Key, bytes] = OrderedDict()
+        #: (signature, the bytes it signs) of the messages verified or made here.
+        self._remembered: OrderedDict[Key, tuple[bytes, bytes]] = OrderedDict()
 
     @classmethod
     def from_options(cls, options: ZenohOptions) -> OriginSigner | None:
@@ -105,13 +109,18 @@ class OriginSigner:
 
     def sign(self, topic: str, entry: AonEntry | TaskStatus) -> bytes:
         """Sign an AON entry (or a task status) this process originates, and remember
-        the signature for copies."""
+        the signature for copies (an origin never reuses a message's identity: the
+        remembered one is given again when AON re-sends it)."""
         origin, inc, seq, payload = (
             _of_status(entry) if isinstance(entry, TaskStatus) else _of(entry)
         )
+        key = (topic, origin, inc, seq)
+        known = self._remembered.get(key)
+        if known is not None:
+            return known[0]
         data = signed_bytes(topic, origin, inc, seq, payload)
         signature = self._key.sign(data, ec.ECDSA(hashes.SHA256()))
-        self._remember((topic, origin, inc, seq), signature)
+        self._remember(key, signature, data)
         return signature
 
     def verify(self, topic: str, entry: AonEntry | TaskStatus, signature: bytes | None) -> bool:
@@ -122,17 +131,21 @@ class OriginSigner:
         public = self._speakers.get(origin)
         if signature is None or public is None:
             return False
+        key = (topic, origin, inc, seq)
+        data = signed_bytes(topic, origin, inc, seq, payload)
+        if self._remembered.get(key) == (signature, data):
+            return True  # heard before, the same payload with the same signature
         try:
-            data = signed_bytes(topic, origin, inc, seq, payload)
             public.verify(signature, data, ec.ECDSA(hashes.SHA256()))
         except InvalidSignature:
             return False
-        self._remember((topic, origin, inc, seq), signature)
+        self._remember(key, signature, data)
         return True
 
     def remembered(self, topic: str, entry: AonEntry | TaskStatus) -> bytes | None:
         """The signature verified (or made) earlier for this message."""
-        return self._remembered.get((topic, entry.sender, entry.incarnation, entry.seq))
+        known = self._remembered.get((topic, entry.sender, entry.incarnation, entry.seq))
+        return known[0] if known is not None else None
 
     # -- what a bus does with them --------------------------------------------------
     def checked(
@@ -213,16 +226,14 @@ class OriginSigner:
         for entry in message.entries:
             if entry.payload is None:
                 continue
-            if entry.sender in own:
-                signature: bytes | None = self.sign(topic, entry)
-            else:
-                signature = self.remembered(topic, entry)
+            mine = entry.sender in own
+            signature = self.sign(topic, entry) if mine else self.remembered(topic, entry)
             if signature is not None:
                 out.append((entry.sender, entry.incarnation, entry.seq, signature))
         return pack_signatures(out)
 
-    def _remember(self, key: Key, signature: bytes) -> None:
-        self._remembered[key] = signature
+    def _remember(self, key: Key, signature: bytes, data: bytes) -> None:
+        self._remembered[key] = (signature, data)
         self._remembered.move_to_end(key)
         while len(self._remembered) > MAX_REMEMBERED:
             self._remembered.popitem(last=False)

@@ -63,7 +63,7 @@ from mrcomm.net.delivery import (
 )
 from mrcomm.net.inprocess import DeliveryObserver
 from mrcomm.net.network import NetworkModel, Wlan
-from mrcomm.net.origin_signatures import OriginSigner
+from mrcomm.net.origin_signatures import RELAY_SIGNED_TOPICS, SIGNED_TOPICS, OriginSigner
 from mrcomm.net.radio.links import RadioLinks
 from mrcomm.net.relay import RELAYED_TOPICS, Relay
 from mrcomm.net.zenoh_node import Airtime, Incoming, ZenohNode
@@ -171,8 +171,9 @@ class ZenohEndpoint:
             # Queued here, at the sender, as in simulation; receivers learn the delay.
             delay = radio.transmit(self._owner, bus.now, radio.bits_of(len(data)))
             airtime = (bus.now, math.nan if delay is None else delay)
-        signer = bus.signer
-        signatures = signer.signatures_for(topic, message, bus.endpoints) if signer else b""
+        signatures = b""
+        if bus.signer is not None and topic in bus.signed_topics:
+            signatures = bus.signer.signatures_for(topic, message, bus.endpoints)
         node.put(node.key(self._owner, topic), data, lane_of(topic), airtime, signatures)
 
     def subscribe(self, topic: str, handler: Handler) -> None:
@@ -317,7 +318,8 @@ class ZenohBus:
     ) -> None:
         """``members``: the agents of the team (None: anyone); ``robots``: the ones
         among them that relay when the network model's relaying is on; ``signer``: the
-        origin signatures of AON entries (a team with certificates; None: unsigned)."""
+        origin signatures of AON entries, and with relaying of task statuses and relayed
+        copies (a team with certificates; None: unsigned)."""
         self.node = node
         self.signer = signer
         self.rules = rules
@@ -331,6 +333,12 @@ class ZenohBus:
             ids = (*robots, *sorted(members - set(robots)))
             self.relay = Relay(ids, range(len(robots)), hops)
             self._relay_ids = {agent: i for i, agent in enumerate(ids)}
+        #: The topics whose messages carry origin signatures (none without a signer).
+        self.signed_topics = (
+            frozenset()
+            if signer is None
+            else SIGNED_TOPICS | (RELAY_SIGNED_TOPICS if self.relay is not None else frozenset())
+        )
         self.endpoints: dict[str, ZenohEndpoint] = {}
         self._topics: set[str] = set()
         self.observer: DeliveryObserver | None = None
@@ -387,7 +395,7 @@ class ZenohBus:
             # without a sender's queue) and its bits on the air (from the payload's size).
             published, delay = item.radio if item.radio is not None else (self.now, 0.0)
             on_air = (published, delay, self.rules.radio.bits_of(item.size))
-        if self.signer is not None and self.signer.verifies:
+        if self.signer is not None and self.signer.verifies and topic in self.signed_topics:
             checked = self.signer.checked(topic, message, item.signatures, self.node.refuse)
             if checked is None:
                 return

@@ -45,7 +45,7 @@ from mrcomm.net.zenoh_config import ZenohOptions, build_config
 MAX_SAMPLE_BYTES = 256 * 1024
 #: Why the bus edge refused a sample.
 REFUSALS = (
-    "oversized",  # larger than MAX_SAMPLE_BYTES
+    "oversized",  # larger than MAX_SAMPLE_BYTES (or its attachment than MAX_ATTACHMENT_BYTES)
     "undecodable",  # not one of the team's messages
     "wrong_type",  # a message of another type than its topic carries
     "forged_sender",  # its sender field names another agent than its key
@@ -62,6 +62,9 @@ REFUSALS = (
 #: the message's AON entries, if any (net/origin_signatures.py).
 _STAMP = struct.Struct("<B8sq")
 _RADIO = struct.Struct("<dd")
+#: Largest attachment taken (the stamps and a publication's origin signatures: ~100
+#: bytes an entry, at most 64 entries); a larger one is refused as oversized.
+MAX_ATTACHMENT_BYTES = 16 * 1024
 #: The identity of a mission not known yet.
 NO_MISSION = bytes(8)
 
@@ -255,6 +258,9 @@ class ZenohNode:
             mission, signatures = NO_MISSION, b""
             attachment = sample.attachment
             raw = attachment.to_bytes() if attachment is not None else b""
+            if len(raw) > MAX_ATTACHMENT_BYTES:
+                self.refuse("oversized")
+                return
             if len(raw) >= _STAMP.size:
                 has_radio, mission, stamp_ns = _STAMP.unpack_from(raw)
                 sent, rest = stamp_ns / 1e9, _STAMP.size

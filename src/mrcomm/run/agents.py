@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from mrcomm.agents.aon_statuses import DEFAULT_AON_LEASE
+from mrcomm.agents.aon_statuses import lease_of
 from mrcomm.agents.assigner import ASSIGNER_ID, TaskAssigner
 from mrcomm.agents.behaviour import AgentContext
 from mrcomm.agents.commands import OPERATOR_ID
@@ -155,7 +155,7 @@ class AgentAssembly:
             self.resources.scenario.tasks,
             incarnation=incarnation,
             use_aon=self.spec.uses_aon,
-            aon_lease=getattr(self.params, "aon_lease", DEFAULT_AON_LEASE),
+            aon_lease=lease_of(self.params),
         )
 
     def operator(self, bus: Bus, *, incarnation: int = 1) -> Operator:

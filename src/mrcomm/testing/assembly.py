@@ -101,6 +101,7 @@ def non_default_values(model: type[BaseModel]) -> tuple[dict[str, Any], list[str
 
 def executor_summary(executor: TaskExecutor, robots: tuple[str, ...]) -> dict[str, Any]:
     """What an executor was made with, as plain data."""
+    statuses = executor.statuses
     return {
         "class": f"{type(executor).__module__}.{type(executor).__qualname__}",
         "params": executor.params.model_dump(mode="json"),
@@ -109,8 +110,9 @@ def executor_summary(executor: TaskExecutor, robots: tuple[str, ...]) -> dict[st
         "link_sensor": type(executor.link_sensor).__name__,
         "link_sensor_settings": _plain(vars(executor.link_sensor)),
         "queues_at_passages": executor.queue is not None,
-        "assigner_home": getattr(executor, "assigner_home", None),
-        "assigner_host": getattr(executor, "_assigner_host", None),
+        "statuses": type(statuses).__name__ if statuses is not None else None,
+        "assigner_home": statuses.assigner_home if statuses is not None else None,
+        "assigner_host": statuses.assigner_host if statuses is not None else None,
     }
 
 
