@@ -18,7 +18,6 @@ used: runs of two different scenarios would be stored under one configuration id
 
 from __future__ import annotations
 
-import hashlib
 import math
 from pathlib import Path
 from typing import Any
@@ -28,6 +27,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from mrcomm.errors import InputError
 from mrcomm.fileio import atomic_write_text
+from mrcomm.run.provenance import file_hash
 from mrcomm.run.resources import checked_scenario
 from mrcomm.world.generate.make import Request, make_scenario, parse_size
 from mrcomm.world.yamlfile import validation_error
@@ -130,11 +130,11 @@ def _made_by(scenario: Path, request: Request) -> bool:
 
 
 def _manifest(folder: Path) -> str:
-    """``<sha256>  <name>`` of every file of a generated scenario but the manifest."""
+    """``<sha256 (16 digits)>  <name>`` of every file of a generated scenario but the
+    manifest (``run.provenance.file_hash``, the hash runs record of their inputs)."""
     lines = []
     for path in sorted(p for p in folder.rglob("*") if p.is_file() and p.name != MANIFEST):
-        digest = hashlib.sha256(path.read_bytes()).hexdigest()
-        lines.append(f"{digest}  {path.relative_to(folder).as_posix()}\n")
+        lines.append(f"{file_hash(path)}  {path.relative_to(folder).as_posix()}\n")
     return "".join(lines)
 
 

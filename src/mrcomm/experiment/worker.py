@@ -23,6 +23,7 @@ from types import FrameType
 
 from mrcomm.experiment.rows import Rows, failure_rows, result_rows
 from mrcomm.experiment.schema import RunSpec
+from mrcomm.live.leftovers import alive
 from mrcomm.run.config import RunConfig
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.run.result import MissionResult
@@ -180,11 +181,7 @@ def start_worker(sweep_pid: int) -> None:
     def watch() -> None:
         while True:
             time.sleep(PARENT_CHECK_S)
-            try:
-                os.kill(sweep_pid, 0)  # signal 0: only asks whether it exists
-            except ProcessLookupError:
+            if not alive(sweep_pid):  # (a recycled pid of another user's counts)
                 os._exit(1)
-            except PermissionError:
-                pass  # exists, owned by someone else (a recycled pid): keep going
 
     threading.Thread(target=watch, name="sweep-watch", daemon=True).start()
