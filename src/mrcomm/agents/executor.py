@@ -15,11 +15,11 @@ Communication-aware behaviours subclass this executor (LF encloses NB).
 from __future__ import annotations
 
 import math
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from mrcomm.agents import agenda
 from mrcomm.agents.avoidance import Avoidance
-from mrcomm.agents.behaviour import AgentContext
+from mrcomm.agents.behaviour import AgentContext, BehaviourView
 from mrcomm.agents.collision import Mate
 from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.agents.making_way import aside_goals, in_way
@@ -363,3 +363,9 @@ class TaskExecutor(ExecutorRuntime):
             self.timeline.event(L.AGENDA_COMPLETE, self._now)
             self.send_status("", TaskState.AGENDA_COMPLETE)
         self.on_state_change()
+
+
+if TYPE_CHECKING:  # mypy holds NB (and so every behaviour) to the contract it documents
+
+    def _reads_as_documented(executor: TaskExecutor) -> BehaviourView:
+        return executor

@@ -95,7 +95,7 @@ def with_run_options(command: Callable[..., None]) -> Callable[..., None]:
 def expand_parameter(
     command: Callable[..., None],
     name: str,
-    declaration: Callable[..., None],
+    declaration: Callable[..., object],
     make: Callable[..., Any],
     names: dict[str, Any] | None = None,
 ) -> Callable[..., None]:

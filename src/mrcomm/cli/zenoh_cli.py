@@ -68,41 +68,25 @@ ZenohConfigOpt = Annotated[Path | None, typer.Option(help="Zenoh JSON5 config fi
 LinkLeaseOpt = Annotated[float, typer.Option(help="Zenoh link lease, wall s.")]
 
 
-def _zenoh_parameters(
-    team: TeamOpt = "team",
-    listen: ListenOpt = None,
-    connect: ConnectOpt = None,
-    multicast: MulticastOpt = False,
-    protocol: ProtocolOpt = "tcp",
-    team_dir: TeamDirOpt = None,
-    insecure: InsecureOpt = False,
-    tls_ca: TlsCaOpt = None,
-    tls_cert: TlsCertOpt = None,
-    tls_key: TlsKeyOpt = None,
-    acl: AclOpt = None,
-    zenoh_config: ZenohConfigOpt = None,
-    link_lease: LinkLeaseOpt = 10.0,
-) -> None:
-    """The Zenoh options every process that joins a team takes (their one declaration)."""
-
-
 @dataclass(frozen=True)
 class ZenohCli:
-    """What a command was given of the Zenoh options (see the module docstring)."""
+    """What a command was given of the Zenoh options (see the module docstring). Its
+    fields are the options' one declaration: their command-line types, help and
+    defaults."""
 
-    team: str = "team"
-    listen: list[str] | None = None
-    connect: list[str] | None = None
-    multicast: bool = False
-    protocol: str = "tcp"
-    team_dir: Path | None = None
-    insecure: bool = False
-    tls_ca: Path | None = None
-    tls_cert: Path | None = None
-    tls_key: Path | None = None
-    acl: str | None = None
-    zenoh_config: Path | None = None
-    link_lease: float = 10.0
+    team: TeamOpt = "team"
+    listen: ListenOpt = None
+    connect: ConnectOpt = None
+    multicast: MulticastOpt = False
+    protocol: ProtocolOpt = "tcp"
+    team_dir: TeamDirOpt = None
+    insecure: InsecureOpt = False
+    tls_ca: TlsCaOpt = None
+    tls_cert: TlsCertOpt = None
+    tls_key: TlsKeyOpt = None
+    acl: AclOpt = None
+    zenoh_config: ZenohConfigOpt = None
+    link_lease: LinkLeaseOpt = 10.0
 
     @property
     def joins(self) -> bool:
@@ -160,7 +144,8 @@ class ZenohCli:
 def with_zenoh_options(command: Callable[..., None]) -> Callable[..., None]:
     """Give a command the Zenoh options in place of its parameter ``net``, which
     receives them as one :class:`ZenohCli`."""
-    return expand_parameter(command, "net", _zenoh_parameters, ZenohCli, {"ZenohCli": ZenohCli})
+    # The class declares the options (its fields) and makes what the command receives.
+    return expand_parameter(command, "net", ZenohCli, ZenohCli, {"ZenohCli": ZenohCli})
 
 
 def warn_insecure(insecure: bool) -> None:
