@@ -76,15 +76,21 @@ def test_a_bad_parameter_is_a_one_line_error() -> None:
     assert "--set behaviour.repeats" in done.stderr
 
 
-def test_a_sweep_takes_the_parameter_as_a_factor(tmp_path: Path) -> None:
-    schema = tmp_path / "repeat.yaml"
+def sweep(folder: Path, repetitions: int, seed: int, factors: str, jobs: int) -> Path:
+    """``mrcomm sweep`` of S1 with ``factors`` into a new database (its path)."""
+    schema = folder / "study.yaml"
     schema.write_text(
-        f"scenario: {S1}\nrepetitions: 2\nbase_seed: 3\n"
-        "factors: {behaviour: [repeat], spl: [50], behaviour.repeats: [1, 3]}\n"
+        f"scenario: {S1}\nrepetitions: {repetitions}\nbase_seed: {seed}\nfactors: {factors}\n"
     )
-    db = tmp_path / "r.duckdb"
-    done = mrcomm("sweep", str(schema), "--db", str(db), "--jobs", "1")
+    db = folder / "study.duckdb"
+    done = mrcomm("sweep", str(schema), "--db", str(db), "--jobs", str(jobs))
     assert done.returncode == 0, done.stderr
+    return db
+
+
+def test_a_sweep_takes_the_parameter_as_a_factor(tmp_path: Path) -> None:
+    factors = "{behaviour: [repeat], spl: [50], behaviour.repeats: [1, 3]}"
+    db = sweep(tmp_path, 2, 3, factors, jobs=1)
     from mrcomm.experiment.api import load_results
 
     results = load_results(db)
@@ -103,14 +109,8 @@ def test_its_team_metric_is_stored_analysed_and_drawn(tmp_path: Path) -> None:
     """The plugin's team metric (declared in its spec, no MRComm file edited) is a
     column of the results, a metric ``mrcomm analyze`` tests and a figure of
     ``mrcomm report``."""
-    schema = tmp_path / "copies.yaml"
-    schema.write_text(
-        f"scenario: {S1}\nrepetitions: 3\nbase_seed: 4\n"
-        "factors: {behaviour: [repeat], spl: [0, 50], behaviour.repeats: [2, 3]}\n"
-    )
-    db = tmp_path / "c.duckdb"
-    done = mrcomm("sweep", str(schema), "--db", str(db), "--jobs", "2")
-    assert done.returncode == 0, done.stderr
+    factors = "{behaviour: [repeat], spl: [0, 50], behaviour.repeats: [2, 3]}"
+    db = sweep(tmp_path, 3, 4, factors, jobs=2)
     from mrcomm.experiment.api import load_results
 
     runs = load_results(db).runs
