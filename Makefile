@@ -70,8 +70,9 @@ test: system-deps
 	MPLBACKEND=Agg $(BIN)/pytest -q -n 2 --dist loadfile -m "not alone" tests/live
 	MPLBACKEND=Agg $(BIN)/pytest -q -m alone tests/live
 	@if [ -f $(ROS_VENV)/.installed ]; then \
-	  MPLBACKEND=Agg $(ROS_VENV)/bin/pytest -q tests/ros2; \
-	else echo "ROS 2 tests skipped: $$(cat $(ROS_VENV)/.skipped)"; fi
+	  MPLBACKEND=Agg MRCOMM_ROS2_ENV=1 $(ROS_VENV)/bin/pytest -q tests/ros2; \
+	else echo "ROS 2 tests skipped: $$(cat $(ROS_VENV)/.skipped)"; \
+	  if [ "$$MRCOMM_REQUIRE_ALL" = 1 ]; then echo "MRCOMM_REQUIRE_ALL=1: failing"; exit 1; fi; fi
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks scripts examples

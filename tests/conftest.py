@@ -28,3 +28,36 @@ def s1_resources():  # type: ignore[no-untyped-def]
     from mrcomm.run.resources import ScenarioResources
 
     return ScenarioResources.load(S1_PATH)
+
+
+# With MRCOMM_REQUIRE_ALL=1 (.ci/run sets it), a skip for something `make test`
+# installs (tests/needs.py) fails the session: CI is green only when everything ran.
+_REQUIRED_SKIPS: list[str] = []
+
+
+def _note_required_skip(report: pytest.CollectReport | pytest.TestReport) -> None:
+    from tests.needs import is_required_skip
+
+    if report.skipped and is_required_skip(report.longrepr):
+        _REQUIRED_SKIPS.append(f"{report.nodeid}: {report.longrepr}")
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    _note_required_skip(report)
+
+
+def pytest_collectreport(report: pytest.CollectReport) -> None:
+    _note_required_skip(report)
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    from tests.needs import REQUIRE_ALL
+
+    if REQUIRE_ALL and _REQUIRED_SKIPS and not hasattr(session.config, "workerinput"):
+        reporter = session.config.pluginmanager.get_plugin("terminalreporter")
+        if reporter is not None:
+            title = "MRCOMM_REQUIRE_ALL=1: skipped for want of what make test installs"
+            reporter.write_sep("=", title)
+            for line in sorted(set(_REQUIRED_SKIPS)):
+                reporter.write_line(line)
+        session.exitstatus = pytest.ExitCode.TESTS_FAILED

@@ -20,10 +20,12 @@ from typing import Any
 
 import pytest
 
+from tests import needs
+
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 pytestmark = pytest.mark.skipif(
     CHROMIUM is None,
-    reason="chromium not installed (apt-get install chromium): the browser check is skipped",
+    reason=needs.reason("chromium not installed (make system-deps installs it as root)"),
 )
 
 FLAGS = (

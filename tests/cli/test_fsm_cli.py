@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import pytest
 
 from mrcomm.agents.diagram import mermaid
+from tests import needs
 from tests.cli.test_run_cli import mrcomm
 
 
@@ -34,10 +34,7 @@ def test_nb_diagram_has_only_nb_states() -> None:
     assert "leader" not in text
 
 
-@pytest.mark.skipif(
-    shutil.which("dot") is None,
-    reason="graphviz (dot) not installed: `make test` installs it as root",
-)
+@needs.needs_commands("dot")
 def test_svg_through_graphviz(tmp_path: Path) -> None:
     out = tmp_path / "lf.svg"
     proc = mrcomm("fsm", "--behaviour", "lf", "--out", str(out))
@@ -55,7 +52,7 @@ def test_bad_behaviour_or_format_exits_2(tmp_path: Path) -> None:
     assert not any(tmp_path.iterdir())
 
 
-@pytest.mark.skipif(shutil.which("dot") is None, reason="graphviz (dot) not installed")
+@needs.needs_commands("dot")
 @pytest.mark.parametrize("behaviour", ["lf", "nb"])
 def test_edge_labels_do_not_overlap(behaviour: str) -> None:
     """Every label of the SVG diagram, boxed by its position, font size and length

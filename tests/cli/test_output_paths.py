@@ -83,8 +83,6 @@ def test_bad_output_files_fail_first(
     monkeypatch: pytest.MonkeyPatch,
     no_work: None,
 ) -> None:
-    if args[:2] == ("signal", "fit") and not Path(args[2]).is_file():
-        pytest.skip(f"no calibration CSV at {args[2]}")
     for _, path, message in _file_cases(tmp_path, suffix):
         before = _tree(tmp_path)
         out = in_process(capsys, monkeypatch, *args, option, str(path))

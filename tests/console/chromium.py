@@ -17,15 +17,12 @@ from selenium.webdriver.support.ui import WebDriverWait
 
 from mrcomm.live.launcher import free_port
 from tests.conftest import ROOT
+from tests.needs import missing_commands
 
 CHROMIUM = shutil.which("chromium")
 DRIVER = shutil.which("chromedriver")
 #: Why the browser tests cannot run here (None: they can).
-MISSING = (
-    "chromium and chromium-driver are not installed (make system-deps)"
-    if CHROMIUM is None or DRIVER is None
-    else None
-)
+MISSING = missing_commands("chromium", "chromedriver")
 
 __all__ = ["free_port"]
 

@@ -14,16 +14,17 @@ from typing import Any
 
 import pytest
 
+from tests import needs
 from tests.conftest import S1_PATH
 
-pytest.importorskip("selenium.webdriver", reason="selenium not installed")
-pytest.importorskip("nicegui", reason="the console extra (nicegui) is not installed")
+needs.module("selenium.webdriver")
+needs.module("nicegui", extra="console")
 
-from selenium.common.exceptions import StaleElementReferenceException
-from selenium.webdriver.common.by import By
-from selenium.webdriver.support.ui import WebDriverWait
+from selenium.common.exceptions import StaleElementReferenceException  # noqa: E402 (after the skip for a missing package)
+from selenium.webdriver.common.by import By  # noqa: E402 (after the skip for a missing package)
+from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402 (after the skip for a missing package)
 
-from tests.console.chromium import (
+from tests.console.chromium import (  # noqa: E402 (after the skip for a missing package)
     MISSING,
     attr,
     click,

@@ -14,11 +14,12 @@ import httpx
 import pytest
 
 from mrcomm.console.guard import COOKIE, ConsoleGuard
+from tests import needs
 from tests.conftest import S1_PATH
 
-pytest.importorskip("nicegui", reason="the console extra (nicegui) is not installed")
+needs.module("nicegui", extra="console")
 
-from tests.console.chromium import console_url, free_port, mrcomm_process
+from tests.console.chromium import console_url, free_port, mrcomm_process  # noqa: E402 (after the skip for a missing package)
 
 SOCKET = "/_nicegui_ws/socket.io/?EIO=4&transport=polling"
 

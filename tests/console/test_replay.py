@@ -14,9 +14,10 @@ from mrcomm.errors import InputError
 from mrcomm.experiment.recording import run_and_record
 from mrcomm.run.config import make_config
 from mrcomm.run.resources import ScenarioResources
+from tests import needs
 from tests.conftest import S1_PATH
 
-pytest.importorskip("mcap_protobuf", reason="the console extra is not installed")
+needs.module("mcap_protobuf", extra="console")
 
 
 @pytest.fixture(scope="module")
@@ -58,7 +59,7 @@ def test_a_file_that_is_not_a_recording_is_one_line(tmp_path: Path) -> None:
 
 
 def test_the_replay_page_plays_the_mission(recording: tuple[Path, Any]) -> None:
-    pytest.importorskip("selenium.webdriver", reason="selenium not installed")
+    needs.module("selenium.webdriver")
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support.ui import WebDriverWait
 

@@ -13,9 +13,10 @@ from mrcomm.console.session import ConsoleSession
 from mrcomm.console.view import STALE_AFTER, Pixels, map_png, snapshot, svg
 from mrcomm.run.config import make_config
 from mrcomm.run.resources import ScenarioResources
+from tests import needs
 from tests.conftest import S1_PATH
 
-pytest.importorskip("PIL")
+needs.module("PIL")
 
 
 def _session(spl: float, seed: int, network: str = "wlan") -> ConsoleSession:

@@ -8,9 +8,10 @@ import pytest
 
 from mrcomm.experiment.runner import dask_executor, execute_sweep, plan_sweep, process_pool
 from mrcomm.experiment.schema import load_experiment
+from tests import needs
 from tests.experiment.helpers import MINI, snapshot, write_schema
 
-distributed = pytest.importorskip("dask.distributed")
+distributed = needs.module("dask.distributed")
 
 
 def test_dask_cluster_and_local_pool_store_identical_results(tmp_path: Path) -> None:

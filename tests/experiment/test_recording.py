@@ -276,10 +276,7 @@ def test_recording_does_not_change_the_mission(
 
 def test_ssd_recording_carries_rssi_and_line_of_sight(s1_resources: Any, tmp_path: Path) -> None:
     fields = {**LF_FIELDS, "threshold": "ssd", "max_time": 60}
-    try:
-        config = _config(**fields)
-    except InputError:
-        pytest.skip("the SSD threshold is not available yet")
+    config = _config(**fields)
     path = tmp_path / "ssd.mcap"
     rec = Recording(path, run_and_record(config, s1_resources, path))
     plain = run_mission(config, s1_resources)

@@ -106,7 +106,6 @@ def test_a_changed_definition_or_seed_is_refused(tmp_path: Path) -> None:
 
 
 def test_recording_directory_names_one_file_per_run(tmp_path: Path) -> None:
-    pytest.importorskip("mrcomm.experiment.recording")
     exp = load_experiment(write_schema(tmp_path, MINI.replace("max_time: 30", "max_time: 5")))
     db, rec = tmp_path / "r.duckdb", tmp_path / "rec"
     rec.mkdir()

@@ -210,8 +210,6 @@ def test_invalid_combination_is_named(tmp_path: Path) -> None:
     try:
         load_experiment(write_schema(tmp_path, text))
     except InputError as err:
-        if "unknown threshold" in err.message:
-            pytest.skip("SSD threshold not available yet")
         assert "combination {network: wlan, spl: 0, behaviour: nb, threshold: ssd}" in err.message
         assert "exclude" in err.message and err.field == "factors"
     else:

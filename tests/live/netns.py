@@ -7,6 +7,7 @@ import os
 import pytest
 
 from mrcomm.live.netns import IFACE, Netns, netns_missing, run_tool
+from tests import needs
 
 __all__ = ["IFACE", "Netns", "run_tool", "skip_unless_possible"]
 
@@ -16,6 +17,6 @@ def skip_unless_possible() -> None:
     ``MRCOMM_SKIP_NETNS=1`` asks for a quicker run."""
     if os.environ.get("MRCOMM_SKIP_NETNS") == "1":
         pytest.skip("MRCOMM_SKIP_NETNS=1: real-network tests skipped on request")
-    missing = netns_missing()
+    missing = needs.missing_commands("ip", "nft") or netns_missing()
     if missing is not None:
         pytest.skip(missing)

@@ -10,11 +10,12 @@ from pathlib import Path
 
 import pytest
 
+from tests import needs
 from tests.conftest import ROOT
 
 pytestmark = pytest.mark.slow
-pytest.importorskip("nicegui", reason="the console extra (nicegui) is not installed")
-pytest.importorskip("selenium.webdriver", reason="selenium not installed")
+needs.module("nicegui", extra="console")
+needs.module("selenium.webdriver")
 
 from selenium.webdriver.common.by import By  # noqa: E402
 from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402

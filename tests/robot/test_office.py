@@ -16,8 +16,6 @@ from tests.robot.robot_maps import make_base, run
 OFFICE = Path(__file__).resolve().parents[2] / "data" / "maps" / "office.yaml"
 P = RobotParams()
 
-pytestmark = pytest.mark.skipif(not OFFICE.exists(), reason="office map not generated yet")
-
 
 @pytest.fixture(scope="module")
 def office() -> tuple[object, GridPlanner]:

@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
+from mrcomm import fileio
 from mrcomm.errors import InputError
 from mrcomm.run.resources import checked_scenario
-from mrcomm.world.generate import make
 from mrcomm.world.generate.make import Request, make_scenario, parse_size
 from mrcomm.world.generate.maps import KINDS
 from mrcomm.world.generate.place import START_MODES, START_SPACING
@@ -110,7 +110,7 @@ def test_an_unwritable_output_is_refused_before_drawing(
     def no_drawing(*_: object) -> None:
         raise AssertionError("drew a plan for an output it cannot write")
 
-    monkeypatch.setattr(make.tempfile, "mkdtemp", refuse)
+    monkeypatch.setattr(fileio.tempfile, "mkdtemp", refuse)  # the staging directory
     monkeypatch.setitem(KINDS, "grid", (no_drawing, 8.0))
     request = Request("grid", 15, 12, 2, 2, "scattered", "virtual", 1, "g")
     with pytest.raises(InputError, match="--out: cannot write there: Permission denied"):

@@ -46,7 +46,7 @@ COMMANDS: dict[str, Command] = {
         _CLI + "sweep_cmd", "export", "Export every results table to CSV or Parquet files"
     ),
     "scenario": Command(
-        _CLI + "scenario_cmd", "scenario_app", "Scenarios of any size: make, tasks, show"
+        _CLI + "scenario_cmd", "scenario_app", "Scenarios: make, tasks, show; bundled: list, copy"
     ),
     "live": Command(_CLI + "live_cmd", "live", "Run one mission live over Zenoh"),
     "world": Command(

@@ -169,9 +169,10 @@ def plot(
     loaded = load_profile(profile)
     grid, point = None, None
     if scenario is not None:
+        from mrcomm.bundled import resolve
         from mrcomm.world.scenario import load_scenario
 
-        world = load_scenario(scenario)
+        world = load_scenario(resolve(scenario, "scenario"))
         grid = world.grid
         point = (
             _point(source)

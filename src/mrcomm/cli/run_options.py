@@ -25,7 +25,13 @@ import yaml
 
 from mrcomm.errors import InputError, did_you_mean
 
-ScenarioArg = Annotated[Path, typer.Argument(help="Scenario YAML (e.g. data/scenarios/s1.yaml).")]
+ScenarioArg = Annotated[
+    Path,
+    typer.Argument(
+        help="Scenario YAML, or a bundled scenario's name: s1, s2, s3, s4, campus1000 "
+        "(`mrcomm scenario list`)."
+    ),
+]
 NetworkOpt = Annotated[
     str, typer.Option(help="Network model (see `mrcomm variants`): wlan, ah, ...")
 ]
@@ -43,7 +49,8 @@ RssiTraceOpt = Annotated[
     Path | None,
     typer.Option(
         help="ESD: recorded RSSI trace CSV (time,from,to,rssi) replayed by the robots' "
-        "pulses; same as --set threshold.trace=PATH."
+        "pulses, or a bundled trace's name (s1_synthetic_esd); same as "
+        "--set threshold.trace=PATH."
     ),
 ]
 SignalModelOpt = Annotated[
@@ -191,9 +198,13 @@ def run_config(
     signal_model: Path | None = None,
 ) -> Any:
     """The validated RunConfig of a command line (``--set`` wins over the shortcuts)."""
+    from mrcomm.bundled import resolve
     from mrcomm.run.config import make_config
 
     params = parse_assignments(sets)
+    scenario = resolve(scenario, "scenario")
+    if rssi_trace is not None:
+        rssi_trace = resolve(rssi_trace, "trace")
     shortcuts = {"rssi_trace": rssi_trace, "signal_model": signal_model}
     given = {k: v for k, v in shortcuts.items() if v is not None}
     try:

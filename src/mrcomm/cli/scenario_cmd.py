@@ -9,7 +9,10 @@
   a list of locations (CSV ``x,y`` or YAML ``[{x, y}, ...]``), in the order the
   assigner's round robin hands them out (with ``--robots``, it prints who gets what);
 * ``mrcomm scenario show SCENARIO|DIR [--plot FIG]`` — what a scenario holds, and a
-  picture of its map with the starts and tasks.
+  picture of its map with the starts and tasks;
+* ``mrcomm scenario list`` — the bundled scenarios, experiments and RSSI traces, which
+  commands take by name (``mrcomm run s1``, ``mrcomm sweep demo``);
+* ``mrcomm scenario copy NAME DIR`` — a bundled scenario's files, to edit.
 """
 
 from __future__ import annotations
@@ -25,7 +28,9 @@ from mrcomm.errors import InputError
 from mrcomm.output_paths import FIGURE_SUFFIXES, check_output_file
 
 scenario_app = typer.Typer(
-    help="Scenarios of any size: make, tasks, show.", no_args_is_help=True, rich_markup_mode=None
+    help="Scenarios of any size: make, tasks, show; the bundled ones: list, copy.",
+    no_args_is_help=True,
+    rich_markup_mode=None,
 )
 
 
@@ -121,10 +126,49 @@ def _read_locations(path: Path) -> list[tuple[float, float]]:
     return points
 
 
+@scenario_app.command("list")
+def list_cmd() -> None:
+    """The bundled scenarios, experiments and RSSI traces (commands take their names)."""
+    from mrcomm.bundled import bundled, data_root
+    from mrcomm.world.yamlfile import read_yaml
+
+    typer.echo(f"bundled data: {data_root()}")
+    for kind in ("scenario", "experiment", "trace"):
+        typer.echo(f"{kind}s:")
+        for name, path in bundled(kind).items():
+            about = ""
+            if path.suffix == ".yaml":
+                raw = read_yaml(path)
+                about = str(raw.get("description", "")) if isinstance(raw, dict) else ""
+            typer.echo(f"  {name:<20} {about}".rstrip())
+
+
+@scenario_app.command()
+def copy(
+    name: Annotated[
+        Path, typer.Argument(help="A bundled scenario (s1, s2, ...) or a scenario file.")
+    ],
+    directory: Annotated[Path, typer.Argument(help="Where to copy it (absent or empty).")],
+) -> None:
+    """Copy a scenario's files (scenario, tasks, map) into DIR, to edit them."""
+    from mrcomm.world.scenario_copy import copy_scenario
+
+    source = _scenario_file(name)
+    if not source.is_file():
+        raise InputError("no such scenario file or bundled scenario (see `mrcomm scenario list`)",
+                         file=name)  # fmt: skip
+    copied = copy_scenario(source, directory)
+    typer.echo(f"scenario {copied} (from {source})")
+
+
 @scenario_app.command()
 def show(
     scenario: Annotated[
-        Path, typer.Argument(help="Scenario YAML, or the directory scenario make wrote.")
+        Path,
+        typer.Argument(
+            help="Scenario YAML, the directory scenario make wrote, or a bundled scenario's "
+            "name (s1, s2, ...)."
+        ),
     ],
     plot: Annotated[
         Path | None, typer.Option(help="Write the map with starts and tasks (PNG/SVG/PDF).")
@@ -159,8 +203,12 @@ def show(
 
 
 def _scenario_file(path: Path) -> Path:
-    """``path`` itself, or the scenario file in the directory ``scenario make`` wrote:
-    ``DIR/DIR.yaml`` or its only YAML that is neither a map nor a task file."""
+    """``path`` itself, a bundled scenario by name, or the scenario file in the
+    directory ``scenario make`` wrote: ``DIR/DIR.yaml`` or its only YAML that is
+    neither a map nor a task file."""
+    from mrcomm.bundled import resolve
+
+    path = resolve(path, "scenario")
     if not path.is_dir():
         return path
     named = path / f"{path.name}.yaml"

@@ -45,7 +45,11 @@ JOBS_PER_CPU = 4
 
 def sweep(
     schema: Annotated[
-        Path, typer.Argument(help="Experiment schema YAML (e.g. data/experiments/ah.yaml).")
+        Path,
+        typer.Argument(
+            help="Experiment schema YAML, or a bundled experiment's name: demo, ah, wlan, "
+            "baseline, ... (`mrcomm scenario list`)."
+        ),
     ],
     # 100,000 below is mrcomm.experiment.schema.MAX_RUNS (not imported: --help stays
     # light; tests/cli/test_sweep_cli.py keeps the two equal).
@@ -82,6 +86,8 @@ def sweep(
     runs (configurations x repetitions, --reps included), counted before anything is
     built; split a larger study into several experiments in one database."""
     # Imported here: DuckDB and pandas are not needed by the other commands.
+    # --reps goes in with the schema: the run count is checked before anything is built.
+    from mrcomm.bundled import resolve
     from mrcomm.experiment.runner import (
         SweepReport,
         dask_executor,
@@ -91,7 +97,7 @@ def sweep(
     )
     from mrcomm.experiment.schema import load_experiment
 
-    # --reps goes in with the schema: the run count is checked before anything is built.
+    schema = resolve(schema, "experiment")
     experiment = load_experiment(schema, parse_assignments(sets), repetitions=reps)
     if jobs is not None and jobs < 1:
         raise InputError(f"must be at least 1, got {jobs}", field="--jobs")

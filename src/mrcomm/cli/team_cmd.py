@@ -72,9 +72,11 @@ def init(
 
     names = _members(members)
     if scenario is not None:
+        from mrcomm.bundled import resolve
         from mrcomm.world.scenario import load_scenario
 
-        names += [m for m in live_members(load_scenario(scenario)) if m not in names]
+        source = load_scenario(resolve(scenario, "scenario"))
+        names += [m for m in live_members(source) if m not in names]
     if not names:
         raise InputError("give --members or --scenario", field="--members")
     if WORLD_ID not in names:

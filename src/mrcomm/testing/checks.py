@@ -12,16 +12,15 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from mrcomm.bundled import data_root
 from mrcomm.specs import VariantSpec, parameter_names
 
-ROOT = Path(__file__).resolve().parents[3]
-S1 = ROOT / "data" / "scenarios" / "s1.yaml"
-S1_TRACE = ROOT / "data" / "traces" / "s1_synthetic_esd.csv"
+S1 = data_root() / "scenarios" / "s1.yaml"
+S1_TRACE = data_root() / "traces" / "s1_synthetic_esd.csv"
 #: Modules agent-side code must never import: simulators and transports.
 FORBIDDEN_IN_AGENTS = (
     "zenoh",

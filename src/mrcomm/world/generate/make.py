@@ -14,10 +14,7 @@ reachable — so the output exists whole and valid, or not at all::
 from __future__ import annotations
 
 import math
-import os
 import re
-import shutil
-import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,7 +24,7 @@ import numpy as np
 import yaml
 
 from mrcomm.errors import InputError
-from mrcomm.fileio import atomic_write_text
+from mrcomm.fileio import atomic_write_text, staged_directory
 from mrcomm.world.generate.maps import KINDS
 from mrcomm.world.generate.place import (
     START_MODES,
@@ -165,41 +162,12 @@ def make_scenario(
     the loader: every start and task reachable on the map; callers that know the
     robots pass a check of their planning grid too)."""
     check_request(request)
-    if out.exists() and (not out.is_dir() or any(out.iterdir())):
-        raise InputError("exists and is not an empty directory", file=out, field="--out")
-    parent = out.resolve().parent
-    if not parent.is_dir():
-        raise InputError("its parent directory does not exist", file=out, field="--out")
-    # The staging directory is made first: an unwritable --out fails now, not after
-    # seconds of drawing.
-    try:
-        staging = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=parent))
-        os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes it private; make it usual
-    except OSError as err:
-        raise InputError(f"cannot write there: {err.strerror}", file=out, field="--out") from None
-    try:
+    with staged_directory(out, "--out") as staging:
         # Drawn and written in a helper so the grid it held is freed before the loader
         # reads the map again (a 300 m campus holds ~1 GB while it is drawn).
         _generate(request, staging)
         check(staging / f"{request.name}.yaml")  # reachability: on the map, and as asked
-        try:
-            if out.exists():
-                out.rmdir()
-            staging.rename(out)
-        except OSError as err:
-            raise InputError(
-                f"cannot move the scenario into place: {err.strerror}", file=out, field="--out"
-            ) from None
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
     return out / f"{request.name}.yaml"
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def _generate(request: Request, directory: Path) -> None:
