@@ -19,6 +19,7 @@ from mrcomm.cli.db_option import (
     stored_json,
 )
 from mrcomm.cli.display import fmt
+from mrcomm.cli.progress import MissionProgress, ProgressLine
 from mrcomm.cli.run_options import warn_ignored_settings, with_run_options
 from mrcomm.fileio import atomic_write
 from mrcomm.metrics.units import unit_of
@@ -38,6 +39,9 @@ if TYPE_CHECKING:
 def run(
     run: RunConfig,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    quiet: Annotated[
+        bool, typer.Option("--quiet", help="No progress line (there is none when piped).")
+    ] = False,
     plot: Annotated[Path | None, typer.Option(help="Write a map/trajectory figure (PNG/SVG).")] = (
         None
     ),
@@ -105,19 +109,25 @@ def run(
         plan = load_operator_plan(operator, resources.scenario, reassignable=reassignable)
     if console:
         result = _run_with_console(config, resources, plan, speed, port, record is not None)
-    elif record is not None or foxglove or speed is not None:
-        from mrcomm.experiment.recording import run_and_record
-
-        def serving(port: int) -> None:
-            typer.echo(f"Foxglove: open ws://localhost:{port} in the Foxglove app", err=True)
-
-        serve = ("127.0.0.1", foxglove_port) if foxglove else None
-        result = run_and_record(
-            config, resources, record, serve=serve, speed=speed, on_serving=serving,
-            operator=plan,
-        )  # fmt: skip
     else:
-        result = run_mission(config, resources, plan)
+        enabled = not (as_json or quiet)
+        status = "loading the scenario, planning"
+        with ProgressLine("mission", config.max_time, enabled=enabled, status=status) as line:
+            progress = MissionProgress(line) if line.enabled else None
+            if record is not None or foxglove or speed is not None:
+                from mrcomm.experiment.recording import run_and_record
+
+                def serving(port: int) -> None:
+                    typer.echo(f"Foxglove: open ws://localhost:{port} in the Foxglove app",
+                               err=True)  # fmt: skip
+
+                serve = ("127.0.0.1", foxglove_port) if foxglove else None
+                result = run_and_record(
+                    config, resources, record, serve=serve, speed=speed, on_serving=serving,
+                    operator=plan, progress=progress,
+                )  # fmt: skip
+            else:
+                result = run_mission(config, resources, plan, progress)
     if plot is not None:
         from mrcomm.analysis.mission_plot import save_mission_plot
 

@@ -466,6 +466,7 @@ def run_and_record(
     speed: float | None = None,
     on_serving: Callable[[int], None] | None = None,
     operator: OperatorPlan | None = None,
+    progress: Callable[[Mission], None] | None = None,
 ) -> MissionResult:
     """Simulate one mission, recording it to the MCAP file ``path``; return its results
     (identical to :func:`~mrcomm.sim.mission.run_mission` except for wall time).
@@ -473,7 +474,8 @@ def run_and_record(
     ``serve=(host, port)`` also streams the recording live to a Foxglove WebSocket
     server (``on_serving(port)`` is called once it listens; ``path`` may then be None:
     no file); ``speed`` paces the mission at that many times real time (None: as fast
-    as possible); ``operator``: an operator in the loop (:mod:`mrcomm.run.operator_plan`)."""
+    as possible); ``operator``: an operator in the loop (:mod:`mrcomm.run.operator_plan`);
+    ``progress``: as for :meth:`Mission.run`."""
     if path is not None:
         path = Path(path).expanduser()
         if not path.parent.is_dir():
@@ -495,6 +497,8 @@ def run_and_record(
             start = time.perf_counter()
             while not mission.done:
                 recorder.step()
+                if progress is not None:
+                    progress(mission)
                 if speed is not None:  # pace: mission time runs at speed x wall time
                     ahead = mission.now / speed - (time.perf_counter() - start)
                     if ahead > 0:

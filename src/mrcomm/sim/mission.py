@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.agents.commands import OPERATOR_ID
@@ -107,10 +108,14 @@ class Mission:
     def done(self) -> bool:
         return self.finished or self.now >= self.config.max_time - 1e-9
 
-    def run(self) -> MissionResult:
+    def run(self, progress: Callable[[Mission], None] | None = None) -> MissionResult:
+        """Step to the end; ``progress(self)`` after every step when given (it only
+        reads: a mission's result is the same with or without it)."""
         start = time.perf_counter()
         while not self.done:
             self.step()
+            if progress is not None:
+                progress(self)
         self._wall = time.perf_counter() - start
         return self.result()
 
@@ -218,6 +223,8 @@ def run_mission(
     config: RunConfig,
     resources: ScenarioResources | None = None,
     operator: OperatorPlan | None = None,
+    progress: Callable[[Mission], None] | None = None,
 ) -> MissionResult:
-    """Simulate one mission to its end and return its results."""
-    return Mission(config, resources, operator).run()
+    """Simulate one mission to its end and return its results (``progress``: see
+    :meth:`Mission.run`)."""
+    return Mission(config, resources, operator).run(progress)
