@@ -73,3 +73,22 @@ def test_the_line_changes_no_result(s1_resources: object) -> None:
     plain = run_mission(config, s1_resources)
     assert len(seen) > 100
     assert result.summary()["mission"] == plain.summary()["mission"]
+
+
+def test_check_report_and_scenario_make_show_progress(tmp_path: Path) -> None:
+    shown, _ = _on_terminal(tmp_path, "check", "behaviour.nb", "--only", "api", "--only",
+                            "determinism")  # fmt: skip
+    assert re.search(r"check .*\d/2 done · behaviour\.nb: (api|determinism)", shown), shown
+    shown, _ = _on_terminal(tmp_path, "scenario", "make", "--out", str(tmp_path / "g"), "--map",
+                            "grid", "--size", "20x15", "--robots", "3", "--tasks", "3")  # fmt: skip
+    # A small map is drawn faster than the line redraws (10 times a second): either stage.
+    assert re.search(r"scenario make .*(drawing the grid map|checking that every start)", shown)
+    db = tmp_path / "r.duckdb"
+    for spl in ("0", "50"):
+        subprocess.run([sys.executable, "-m", "mrcomm", "run", "s1", "--network", "ah", "--spl",
+                        spl, "--db", str(db), "--max-time", "60"], cwd=ROOT, check=True,
+                       capture_output=True, timeout=300)  # fmt: skip
+    shown, stdout = _on_terminal(tmp_path, "report", "--db", str(db), "--out",
+                                 str(tmp_path / "rep"), "--no-svg")  # fmt: skip
+    assert re.search(r"report .*\d+ figures drawn, \d+ encoded", shown), shown
+    assert "report.html" in stdout

@@ -13,6 +13,7 @@ from __future__ import annotations
 import io
 import multiprocessing
 import os
+from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass
 from types import TracebackType
@@ -70,8 +71,14 @@ class Encoder:
     :class:`Encoded` bytes. Workers are started with ``spawn`` (a fork would copy the
     caller's threads, e.g. DuckDB's, in an undefined state)."""
 
-    def __init__(self, vector: bool, jobs: int) -> None:
+    def __init__(
+        self, vector: bool, jobs: int, progress: Callable[[str], None] | None = None
+    ) -> None:
         self.vector = vector
+        #: Told "N figures drawn, M encoded" as they are (a progress line).
+        self.progress = progress
+        self.drawn = 0
+        self.encoded = 0
         self._pool = (
             ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn"))
             if jobs > 1
@@ -79,11 +86,23 @@ class Encoder:
         )
 
     def submit(self, fig: Figure) -> Future[Encoded]:
+        self.drawn += 1
         if self._pool is not None:
-            return self._pool.submit(encode, fig, self.vector)
-        done: Future[Encoded] = Future()
-        done.set_result(encode(fig, self.vector))
-        return done
+            future = self._pool.submit(encode, fig, self.vector)
+        else:
+            future = Future()
+            future.set_result(encode(fig, self.vector))
+        self._tell()
+        future.add_done_callback(self._encoded)
+        return future
+
+    def _encoded(self, _: Future[Encoded]) -> None:
+        self.encoded += 1
+        self._tell()
+
+    def _tell(self) -> None:
+        if self.progress is not None:
+            self.progress(f"{self.drawn} figures drawn, {self.encoded} encoded")
 
     def __enter__(self) -> Encoder:
         return self

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import base64
 import json
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Any
@@ -135,10 +135,12 @@ def build_figures(
     timelines: Sequence[str],
     svg: bool = True,
     jobs: int = 1,
+    progress: Callable[[str], None] | None = None,
 ) -> dict[str, list[ReportFigure]]:
     """Every figure of the report, by section: PNG, and SVG and PDF when ``svg``, encoded
-    in ``jobs`` processes while the next figures are drawn."""
-    with Encoder(svg, jobs) as encoder:
+    in ``jobs`` processes while the next figures are drawn (``progress``: told how many
+    are drawn and encoded)."""
+    with Encoder(svg, jobs, progress) as encoder:
         pending = _draw_figures(data, metrics, timelines, encoder)
         return {section: [p.result() for p in items] for section, items in pending.items()}
 

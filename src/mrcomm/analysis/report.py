@@ -504,14 +504,17 @@ def build_report(
     alpha: float = st.ALPHA,
     correction: Correction = "holm",
     jobs: int = 1,
+    progress: Callable[[str], None] | None = None,
 ) -> Report:
     """Compute tables and figures of ``data`` (a ``load_results`` Results) and write the
     report into ``out_dir`` (created if missing): report.html, figures/, tables/.
-    ``jobs`` processes encode the figures."""
+    ``jobs`` processes encode the figures; ``progress`` is told what is being done."""
+    tell = progress or (lambda _: None)
     started = time.perf_counter()
     runs = frame_of(data, "runs")
     check_runs(runs, db_path)
     chosen = metrics_with_data(runs, metrics)
+    tell(f"statistics of {len(chosen)} metrics")
     tables = study_tables(
         runs,
         chosen,
@@ -520,7 +523,9 @@ def build_report(
         rssi=frame_of(data, "rssi"),
         trajectories=frame_of(data, "trajectories"),
     )
-    figures = build_figures(data, chosen, pick_timeline_runs(runs, timeline_runs), svg, jobs)
+    timelines = pick_timeline_runs(runs, timeline_runs)
+    figures = build_figures(data, chosen, timelines, svg, jobs, progress)
+    tell(f"writing {out_dir}")
     status = runs["status"].value_counts().to_dict() if "status" in runs else {}
     meta = _meta(data)
     # The runs' own experiment when they have one (meta names only the latest sweep).

@@ -23,10 +23,14 @@ def check(
     only: Annotated[
         list[str] | None, typer.Option("--only", help="Run only this check (repeatable).")
     ] = None,
+    quiet: Annotated[
+        bool, typer.Option("--quiet", help="No progress line (there is none when piped).")
+    ] = False,
 ) -> None:
     """Check that a variant keeps the contract every variant must keep: API,
     determinism, no deadlock, same decisions on both buses, layering. Exit status 1
     when a check fails."""
+    from mrcomm.cli.progress import ProgressLine
     from mrcomm.specs import KINDS, REGISTRY, VariantSpec
     from mrcomm.testing import CHECKS, check_variant
 
@@ -58,11 +62,21 @@ def check(
     for column in ("variant", "check", "result", "s", "detail"):
         table.add_column(column, overflow="fold")
     failed = 0
-    for spec in specs:
-        for result in check_variant(spec, only):
-            failed += not result.passed
-            verdict = "[green]pass[/]" if result.passed else "[red]FAIL[/]"
-            table.add_row(spec.key, result.check, verdict, f"{result.seconds:.1f}", result.detail)
+    total = len(specs) * len([c for c in CHECKS if not only or c in only])
+    started: list[str] = []
+    with ProgressLine("check", total, enabled=not quiet) as line:
+        for spec in specs:
+
+            def starting(check: str, key: str = spec.key) -> None:
+                done = len(started)
+                started.append(check)
+                line.update(done, f"{done}/{total} done · {key}: {check}")
+
+            for result in check_variant(spec, only, starting):
+                failed += not result.passed
+                verdict = "[green]pass[/]" if result.passed else "[red]FAIL[/]"
+                seconds = f"{result.seconds:.1f}"
+                table.add_row(spec.key, result.check, verdict, seconds, result.detail)
     console.print(table)
     console.print(f"{failed} check(s) failed" if failed else "every check passed")
     raise typer.Exit(1 if failed else 0)

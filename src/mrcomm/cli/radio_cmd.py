@@ -319,31 +319,36 @@ def fit_cmd(
         raise InputError(f"must be -30 to 36 dBm, got {tx_power:g}", field="--tx-power")
     if name is not None and not name.strip():
         raise InputError("must not be empty", field="--name")
-    base_profile = load_profile(base) if base is not None else None
-    grid = load_map(map_path) if map_path is not None else None
-    notes: list[str] = []
-    if kind == "csv":
-        assert grid is not None
-        readings = read_csv_readings(source, grid, map_path)
-        what = f"{source.name} ({len(readings)} readings)"
-    else:
-        found = read_database_readings(source, config=config, grid=grid)
-        readings = found.readings
-        if base_profile is None and len(found.profiles) == 1:
-            try:
-                base_profile = load_profile(found.profiles[0])
-            except InputError as err:
-                notes.append(f"the runs' profile cannot be read here ({err.one_line()})")
-        elif base_profile is None and len(found.profiles) > 1:
-            notes.append(f"the runs simulated several profiles ({', '.join(found.profiles)}): "
-                         "fitted together; choose one with --config")  # fmt: skip
-        kind_of = "simulated" if found.modes == ("sim",) else "/".join(found.modes)
-        what = (f"{source.name}: {len(readings)} readings of {len(found.runs)} {kind_of} "
-                f"run(s) of {', '.join(found.labels)}")  # fmt: skip
-    if base_profile is None:
-        base_profile = load_profile(DEFAULT_PROFILE)
-    readings = dataclasses.replace(readings, notes=(*readings.notes, *notes))
-    fitted = fit_profile(readings, base_profile, tx_power_dbm=tx_power, seed=seed)
+    from mrcomm.cli.progress import ProgressLine
+
+    status = "reading the readings, counting walls on the map"
+    with ProgressLine("radio fit", None, enabled=not as_json, status=status) as line:
+        base_profile = load_profile(base) if base is not None else None
+        grid = load_map(map_path) if map_path is not None else None
+        notes: list[str] = []
+        if kind == "csv":
+            assert grid is not None
+            readings = read_csv_readings(source, grid, map_path)
+            what = f"{source.name} ({len(readings)} readings)"
+        else:
+            found = read_database_readings(source, config=config, grid=grid)
+            readings = found.readings
+            if base_profile is None and len(found.profiles) == 1:
+                try:
+                    base_profile = load_profile(found.profiles[0])
+                except InputError as err:
+                    notes.append(f"the runs' profile cannot be read here ({err.one_line()})")
+            elif base_profile is None and len(found.profiles) > 1:
+                notes.append(f"the runs simulated several profiles ({', '.join(found.profiles)}): "
+                             "fitted together; choose one with --config")  # fmt: skip
+            kind_of = "simulated" if found.modes == ("sim",) else "/".join(found.modes)
+            what = (f"{source.name}: {len(readings)} readings of {len(found.runs)} {kind_of} "
+                    f"run(s) of {', '.join(found.labels)}")  # fmt: skip
+        if base_profile is None:
+            base_profile = load_profile(DEFAULT_PROFILE)
+        readings = dataclasses.replace(readings, notes=(*readings.notes, *notes))
+        line.update(None, f"fitting to {len(readings)} readings")
+        fitted = fit_profile(readings, base_profile, tx_power_dbm=tx_power, seed=seed)
     profile = _fitted_profile(
         fitted,
         name or out.stem,

@@ -47,6 +47,9 @@ def report(
         int | None,
         typer.Option(help="Processes that encode the figures (default: one per CPU)."),
     ] = None,
+    quiet: Annotated[
+        bool, typer.Option("--quiet", help="No progress line (there is none when piped).")
+    ] = False,
 ) -> None:
     """Write report.html, figures/*.png|svg|pdf and tables/*.csv into OUT."""
     # Imported here: matplotlib, scipy and DuckDB are not needed by the other commands.
@@ -54,6 +57,7 @@ def report(
     from mrcomm.analysis import stats as st
     from mrcomm.analysis.encoding import available_cpus
     from mrcomm.analysis.inference import check_correction
+    from mrcomm.cli.progress import ProgressLine
 
     if jobs is not None and jobs < 1:
         raise InputError(f"must be at least 1, got {jobs}", field="--jobs")
@@ -62,18 +66,20 @@ def report(
     check_output_dir(out, "--out")
     method = check_correction(correction)
     st.resolve_metrics(metric)  # unknown metric: fail before loading anything
-    data = rp.load_study(db, experiment, mode)  # checks --mode before loading
-    result = rp.build_report(
-        data,
-        out,
-        db_path=db,
-        metrics=metric,
-        timeline_runs=timeline,
-        svg=svg,
-        alpha=alpha,
-        correction=method,
-        jobs=jobs or available_cpus(),
-    )
+    with ProgressLine("report", None, enabled=not quiet, status="loading the results") as line:
+        data = rp.load_study(db, experiment, mode)  # checks --mode before loading
+        result = rp.build_report(
+            data,
+            out,
+            db_path=db,
+            metrics=metric,
+            timeline_runs=timeline,
+            svg=svg,
+            alpha=alpha,
+            correction=method,
+            jobs=jobs or available_cpus(),
+            progress=lambda status: line.update(None, status),
+        )
     typer.echo(
         f"report: {result.html} ({len(result.figures)} figures, {len(result.tables)} tables, "
         f"{result.seconds:.1f} s)"

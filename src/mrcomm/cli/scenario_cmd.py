@@ -52,6 +52,9 @@ def make(
     name: Annotated[
         str | None, typer.Option(help="Scenario name and file stem (default: DIR's name).")
     ] = None,
+    quiet: Annotated[
+        bool, typer.Option("--quiet", help="No progress line (there is none when piped).")
+    ] = False,
 ) -> None:
     """Generate a map, a scenario and a task file."""
     from mrcomm.run.resources import checked_scenario
@@ -61,7 +64,10 @@ def make(
     request = Request(
         map_kind, width, height, robots, tasks, start, assigner, seed, name or out.name
     )
-    path = make_scenario(request, out, checked_scenario)
+    from mrcomm.cli.progress import ProgressLine
+
+    with ProgressLine("scenario make", None, enabled=not quiet) as line:
+        path = make_scenario(request, out, checked_scenario, lambda s: line.update(None, s))
     typer.echo(f"scenario {path} ({robots} robots, {tasks} tasks, {map_kind} {size} m)")
 
 

@@ -270,20 +270,28 @@ CHECKS: dict[str, Callable[[VariantSpec], str]] = {
 }
 
 
-def check_variant(spec: VariantSpec, only: list[str] | None = None) -> list[CheckResult]:
+def check_variant(
+    spec: VariantSpec,
+    only: list[str] | None = None,
+    starting: Callable[[str], None] | None = None,
+) -> list[CheckResult]:
     """Run the checks (all, or ``only`` these) on ``spec``; a check that fails does not
-    stop the others."""
+    stop the others. ``starting(name)`` is called as each check starts (progress)."""
     from mrcomm.specs import REGISTRY
 
     with REGISTRY.registered(spec):
-        return _run_checks(spec, only)
+        return _run_checks(spec, only, starting)
 
 
-def _run_checks(spec: VariantSpec, only: list[str] | None) -> list[CheckResult]:
+def _run_checks(
+    spec: VariantSpec, only: list[str] | None, starting: Callable[[str], None] | None
+) -> list[CheckResult]:
     results = []
     for name, check in CHECKS.items():
         if only and name not in only:
             continue
+        if starting is not None:
+            starting(name)
         start = time.perf_counter()
         try:
             detail, passed = check(spec), True

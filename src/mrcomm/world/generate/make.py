@@ -155,17 +155,24 @@ def assigner_spec(text: str, robots: int, base: tuple[float, float] | None) -> d
 
 
 def make_scenario(
-    request: Request, out: Path, check: Callable[[Path], object] = load_scenario
+    request: Request,
+    out: Path,
+    check: Callable[[Path], object] = load_scenario,
+    progress: Callable[[str], None] | None = None,
 ) -> Path:
     """Generate and write the scenario into ``out`` (absent or empty); returns the
     scenario file's path. ``check`` loads it before it is moved into place (by default
     the loader: every start and task reachable on the map; callers that know the
-    robots pass a check of their planning grid too)."""
+    robots pass a check of their planning grid too). ``progress`` is told each stage."""
     check_request(request)
+    tell = progress or (lambda _: None)
     with staged_directory(out, "--out") as staging:
         # Drawn and written in a helper so the grid it held is freed before the loader
         # reads the map again (a 300 m campus holds ~1 GB while it is drawn).
+        tell(f"drawing the {request.kind} map, placing {request.robots} starts and "
+             f"{request.tasks} tasks")  # fmt: skip
         _generate(request, staging)
+        tell("checking that every start and task can be reached")
         check(staging / f"{request.name}.yaml")  # reachability: on the map, and as asked
     return out / f"{request.name}.yaml"
 
