@@ -74,6 +74,16 @@ def test_robots_move_and_a_clicked_task_is_reassigned(browser: Any) -> None:
         click(browser, "#pick-robot_3")
         click(browser, "#cmd-reassign")
         wait.until(lambda d: "reassign" in d.find_element(By.ID, "commands").text)
+        # The mission ends; the page stays up with its final state and the result.
+        status = lambda d: d.find_element(By.ID, "status").text  # noqa: E731
+        WebDriverWait(browser, 240, poll_frequency=0.5).until(
+            lambda d: "mission ended" in status(d)
+        )
+        assert proc.poll() is None
+        open_page(browser, url, proc)  # a new page after the end: the server still answers
+        wait.until(lambda d: "mission ended: successful · 7/7 tasks" in status(d))
+        assert attr(browser, "#robot-robot_3", "cx")  # the final state on the map
+        click(browser, "#quit")
         result = _result(proc)
     finally:
         proc.kill()
@@ -89,7 +99,9 @@ def test_robots_sent_back_for_lost_statuses_end_the_mission_successful(browser: 
     # NB sends each status once: at SPL 50 some are lost. The console keeps the mission
     # open once the robots are done; the operator sends a robot back for every task
     # shown done but not received, until every status has arrived.
-    proc, url = _console("--network", "wlan", "--spl", "50", "--seed", "3", "--speed", "20")
+    proc, url = _console(
+        "--network", "wlan", "--spl", "50", "--seed", "3", "--speed", "20", "--exit-on-end"
+    )  # fmt: skip
     try:
         open_page(browser, url, proc)
         wait = WebDriverWait(browser, 120, poll_frequency=0.2,

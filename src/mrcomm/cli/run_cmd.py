@@ -85,6 +85,14 @@ def run(
     port: Annotated[int, typer.Option(min=1, max=65535, help="Port of the --console page.")] = (
         8080
     ),
+    exit_on_end: Annotated[
+        bool,
+        typer.Option(
+            "--exit-on-end",
+            help="With --console: stop serving the page when the mission ends (for scripts; "
+            "by default it stays up with the final state until Ctrl-C or its quit button).",
+        ),
+    ] = False,
     db: DbOpt = None,
     experiment: ExperimentOpt = None,
     keep_duplicate: KeepDuplicateOpt = False,
@@ -108,7 +116,9 @@ def run(
         reassignable = config.spec("behaviour").accepts_reassignment
         plan = load_operator_plan(operator, resources.scenario, reassignable=reassignable)
     if console:
-        result = _run_with_console(config, resources, plan, speed, port, record is not None)
+        result = _run_with_console(
+            config, resources, plan, speed, port, record is not None, exit_on_end
+        )
     else:
         enabled = not (as_json or quiet)
         status = "loading the scenario, planning"
@@ -149,8 +159,10 @@ def _run_with_console(
     speed: float | None,
     port: int,
     recording: bool,
+    exit_on_end: bool,
 ) -> MissionResult:
-    """The run paced under the operator console (its own page; see mrcomm.console)."""
+    """The run paced under the operator console (its own page; see mrcomm.console).
+    The page stays up once the mission ends, unless ``exit_on_end``."""
     from mrcomm.errors import InputError
 
     if recording:
@@ -165,7 +177,13 @@ def _run_with_console(
     session = ConsoleSession(config, resources, plan, speed if speed is not None else 1.0)
     guard = ConsoleGuard(port)
     typer.echo(f"console: {guard.url}", err=True)
-    serve(session, guard, session.run)
+
+    def ended(result: MissionResult) -> None:
+        verdict = "successful" if result.mission["successful"] else "failed"
+        typer.echo(f"console: mission ended ({verdict}); the page shows its final state "
+                   "until Ctrl-C or its quit button", err=True)  # fmt: skip
+
+    serve(session, guard, session.run, stay_up=None if exit_on_end else ended)
     if session.result is None:
         raise InputError("the console stopped before the mission ended", field="--console")
     return session.result

@@ -30,9 +30,10 @@ REFRESH = 0.25  # s between page updates
 T = TypeVar("T")
 
 
-def build(session: ConsoleSession | LiveConsole) -> None:
+def build(session: ConsoleSession | LiveConsole, *, quit_button: bool = False) -> None:
     """Register the console page for ``session`` (a simulated mission's, with ground
-    truth and a pace to set; or a live operator's, with neither)."""
+    truth and a pace to set; or a live operator's, with neither). ``quit_button``: once
+    the mission has ended, a button stops the server (the page stays up until then)."""
     grid = session.grid
     pixels = Pixels(grid)
     source = "data:image/png;base64," + base64.b64encode(map_png(grid)).decode("ascii")
@@ -56,6 +57,8 @@ def build(session: ConsoleSession | LiveConsole) -> None:
             truth = ui.switch("ground truth", value=session.has_truth).props('id="truth"')
             truth.set_visibility(session.has_truth)
             status = ui.label("").props('id="status"')
+            leave = ui.button("quit", on_click=app.shutdown).props('id="quit" dense')
+            leave.set_visibility(False)
         with ui.row().classes("w-full no-wrap"):
             image = ui.interactive_image(source, content="", events=["click"],
                                          sanitize=False).classes("w-3/4")  # fmt: skip
@@ -118,7 +121,9 @@ def build(session: ConsoleSession | LiveConsole) -> None:
             clock.text = f"t = {view.now:7.1f} s"
             if view.ended:
                 verdict = "successful" if view.successful else "failed"
-                status.text = f"mission ended: {verdict}"
+                status.text = f"mission ended: {verdict}" + (
+                    f" · {view.result}" if view.result else "")  # fmt: skip
+                leave.set_visibility(quit_button)
             else:
                 heard = sum(t.heard for t in view.tasks)
                 waiting = " · robots done: send them back for lost statuses, or end" if (
@@ -147,19 +152,25 @@ def serve(
     work: Callable[[], T],
     *,
     linger: float = 2.0,
+    stay_up: Callable[[T], None] | None = None,
 ) -> T | None:
     """Serve the console page on ``guard.port`` (localhost, behind the guard: its URL
     with the secret opens it) while ``work`` — what steps the mission: a session's run,
-    a live operator process's loop — runs in its own thread; stop the server ``linger``
-    s after it ends. Its return value (None if it raised)."""
-    build(console)
+    a live operator process's loop — runs in its own thread. When it ends, the server
+    stops ``linger`` s later; with ``stay_up``, it is called with the return value and
+    the page stays up, showing the final state, until Ctrl-C or the page's quit button.
+    Returns ``work``'s value (None if it raised)."""
+    build(console, quit_button=stay_up is not None)
     done: list[T] = []
 
     def run() -> None:
         try:
             done.append(work())
         finally:
-            threading.Timer(linger, app.shutdown).start()
+            if stay_up is None or not done:
+                threading.Timer(linger, app.shutdown).start()
+        if stay_up is not None:
+            stay_up(done[0])
 
     app.on_startup(lambda: threading.Thread(target=run, daemon=True).start())
     _run_server(guard, "MRComm console")

@@ -15,6 +15,7 @@ import math
 import threading
 import time
 from dataclasses import replace
+from typing import Any
 
 from mrcomm.console.desk import OperatorDesk
 from mrcomm.console.view import ConsoleView, snapshot
@@ -136,5 +137,19 @@ class ConsoleSession:
         view = snapshot(self.mission, self.operator, self.events)
         successful = self.result.mission["successful"] if self.result is not None else None
         self.view = replace(
-            view, ended=ended, successful=successful, notes=tuple(list(self.desk.notes)[-5:])
+            view,
+            ended=ended,
+            successful=successful,
+            notes=tuple(list(self.desk.notes)[-5:]),
+            result=result_line(self.result.mission) if self.result is not None else "",
         )
+
+
+def result_line(mission: dict[str, Any]) -> str:
+    """A mission's result in one line, for the page once it has ended."""
+    done, total = mission["tasks_completed"], mission["tasks_total"]
+    parts = [f"{done}/{total} tasks"]
+    if mission.get("execution_phase_time") is not None:
+        parts.append(f"execution phase {mission['execution_phase_time']:.1f} s")
+    parts.append(f"{mission['near_collisions']} near collisions")
+    return " · ".join(parts)

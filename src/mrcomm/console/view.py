@@ -71,6 +71,8 @@ class ConsoleView:
     commands: tuple[dict[str, Any], ...]
     ended: bool = False
     successful: bool | None = None
+    #: Once ended: the result in one line (tasks, execution time, near collisions).
+    result: str = ""
     notes: tuple[str, ...] = field(default=())
 
 
