@@ -102,10 +102,20 @@ def variants(
         if needs:
             console.print("  " + "; ".join(needs), markup=False)
         if row["parameters"]:
-            table = Table(show_header=True, box=None, padding=(0, 2))
-            for column in ("parameter", "default", "unit", "meaning"):
-                table.add_column(column)
-            for p in row["parameters"]:
-                table.add_row(p["key"], json.dumps(p["default"]), p["unit"] or "", p["description"])
-            console.print(table)
+            console.print(_parameter_table(row["parameters"]))
         console.print()
+
+
+def _parameter_table(params: list[dict[str, Any]]) -> Table:
+    """The parameters, their names and defaults never cut (users type them): on a
+    narrow terminal the meaning column wraps instead."""
+    table = Table(show_header=True, box=None, padding=(0, 1))
+    keys = [p["key"] for p in params]
+    defaults = [json.dumps(p["default"]) for p in params]
+    table.add_column("parameter", no_wrap=True, min_width=max(map(len, keys)))
+    table.add_column("default", no_wrap=True, min_width=max(map(len, defaults)))
+    table.add_column("unit", no_wrap=True)
+    table.add_column("meaning", overflow="fold", ratio=1, min_width=12)
+    for p, default in zip(params, defaults, strict=True):
+        table.add_row(p["key"], default, p["unit"] or "", p["description"])
+    return table
