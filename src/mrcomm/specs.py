@@ -20,6 +20,7 @@ may use it without import circles.
 
 from __future__ import annotations
 
+import difflib
 import importlib
 import sys
 from collections.abc import Iterable, Iterator, Mapping
@@ -108,6 +109,10 @@ class VariantSpec:
     modes: frozenset[str] = frozenset({"sim", "live"})
     #: Where the variant came from: the distribution that registered it.
     origin: str = "mrcomm"
+    #: Other names users give it ("adhoc" for ah): a mistyped name close to one of them
+    #: is answered with this variant's name. Never accepted in its place (a run records
+    #: one name per variant).
+    aliases: tuple[str, ...] = ()
 
     @property
     def key(self) -> str:
@@ -166,9 +171,29 @@ def validate_params(
         else:
             got = first.get("input")
             message = first["msg"].removeprefix("Value error, ")
-            if not isinstance(got, Mapping):
+            if not isinstance(got, Mapping) and repr(got) not in message:
                 message += f", got {got!r}"
         raise InputError(message, file=where, field=field) from None
+
+
+def suggest(name: str, specs: Iterable[VariantSpec]) -> str:
+    """`` (did you mean 'x'?)`` for a mistyped variant name: by edit distance among the
+    variants' names and their aliases (an alias answers with its variant's name)."""
+    by_word: dict[str, str] = {}
+    for spec in specs:
+        by_word[spec.name] = spec.name
+        for alias in spec.aliases:
+            by_word.setdefault(_plain(alias), spec.name)
+    exact = by_word.get(_plain(name))
+    if exact is not None and exact != name:
+        return f" (did you mean '{exact}'?)"
+    close = difflib.get_close_matches(_plain(name), list(by_word), n=1, cutoff=0.6)
+    return f" (did you mean '{by_word[close[0]]}'?)" if close else ""
+
+
+def _plain(word: str) -> str:
+    """A name as compared for suggestions: lower case, without - _ and spaces."""
+    return "".join(c for c in word.lower() if c not in "-_ ")
 
 
 def _resolve(target: Any, key: str) -> Any:
@@ -242,7 +267,7 @@ class SpecRegistry:
             if broken is not None:
                 raise InputError(broken, field=kind) from None
             raise InputError(
-                f"unknown {kind} {name!r}{did_you_mean(name, entries)}; "
+                f"unknown {kind} {name!r}{suggest(name, entries.values())}; "
                 f"choose from {', '.join(sorted(entries))}",
                 field=kind,
             ) from None

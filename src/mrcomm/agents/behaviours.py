@@ -35,6 +35,7 @@ NB_SPEC = VariantSpec(
     "(plain publish); it ignores link quality",
     topics=("pose", "task_status"),
     uses_threshold=False,
+    aliases=("baseline", "no-behaviour"),
 )
 LF_SPEC = VariantSpec(
     kind="behaviour",
@@ -43,6 +44,7 @@ LF_SPEC = VariantSpec(
     params="mrcomm.agents.lf_machine:LfParams",
     summary="LF, leader-follower: robots whose link warns elect a leader by utility; "
     "followers keep within the threshold; statuses go with AON",
+    aliases=("leader-follower", "leaderfollower"),
     topics=("pose", "task_status", "utility", "role", "aon"),
     robot_metrics="mrcomm.metrics.compute:lf_metrics",
     metrics=(

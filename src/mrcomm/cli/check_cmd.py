@@ -31,7 +31,7 @@ def check(
     determinism, no deadlock, same decisions on both buses, layering. Exit status 1
     when a check fails."""
     from mrcomm.cli.progress import ProgressLine
-    from mrcomm.specs import KINDS, REGISTRY, VariantSpec
+    from mrcomm.specs import KINDS, REGISTRY, VariantSpec, suggest
     from mrcomm.testing import CHECKS, check_variant
 
     for name in only or []:
@@ -55,7 +55,8 @@ def check(
             if len(found) != 1:
                 keys = [s.key for s in REGISTRY.all()]
                 why = "is ambiguous: give KIND.NAME" if found else "is not a variant"
-                raise InputError(f"{variant!r} {why}{did_you_mean(variant, keys)}", field="VARIANT")
+                raise InputError(f"{variant!r} {why}{suggest(variant, REGISTRY.all())}; variants: "
+                                 f"{', '.join(keys)}", field="VARIANT")  # fmt: skip
             specs = found
     console = Console()
     table = Table(title="Conformance")

@@ -47,10 +47,10 @@ def curves(profile_name: str, message_bytes: int) -> dict[str, Any]:
     from mrcomm.net.radio.model import delivery_ratio, mean_power_dbm, reach_m
     from mrcomm.net.radio.profile import load_profile, profile_path
 
-    profile = load_profile(profile_name)
+    profile = load_profile(profile_name, "PROFILE")
     return {
         "profile": profile.model_dump(),
-        "file": str(profile_path(profile_name)),
+        "file": str(profile_path(profile_name, "PROFILE")),
         "message_bytes": message_bytes,
         "reach_m": round(reach_m(profile), 1),
         "distance_m": list(DISTANCES),
@@ -166,7 +166,7 @@ def plot(
     check_output_file(out, "--out", FIGURE_SUFFIXES)  # before any work
     if not 1 <= message_bytes <= 65_000:
         raise InputError(f"must be 1 to 65000, got {message_bytes}", field="--bytes")
-    loaded = load_profile(profile)
+    loaded = load_profile(profile, "PROFILE")
     grid, point = None, None
     if scenario is not None:
         from mrcomm.bundled import resolve
@@ -323,7 +323,7 @@ def fit_cmd(
 
     status = "reading the readings, counting walls on the map"
     with ProgressLine("radio fit", None, enabled=not as_json, status=status) as line:
-        base_profile = load_profile(base) if base is not None else None
+        base_profile = load_profile(base, "--base") if base is not None else None
         grid = load_map(map_path) if map_path is not None else None
         notes: list[str] = []
         if kind == "csv":

@@ -150,6 +150,7 @@ WLAN_SPEC = VariantSpec(
     entry=Wlan,
     params=NoParams,
     summary="infrastructure WLAN: complete, uniform coverage; distance never cuts a link",
+    aliases=("wifi", "infrastructure", "access-point"),
 )
 AH_SPEC = VariantSpec(
     kind="network",
@@ -157,4 +158,5 @@ AH_SPEC = VariantSpec(
     entry=AdHoc,
     params=AdHocParams,
     summary="ad-hoc, peer to peer: nothing is delivered beyond range_m",
+    aliases=("adhoc", "ad-hoc", "manet", "mesh", "peer-to-peer"),
 )

@@ -138,11 +138,21 @@ def read_yaml(path: str | Path, *, field: str | None = None) -> Any:
             limit = MAX_YAML_BYTES // (1024 * 1024)
             raise InputError(f"larger than {limit} MB: not an input file", file=path, field=field)
         text = path.read_text(encoding="utf-8")
+        if "\x00" in text:  # valid UTF-8 but no text file
+            at = text.index("\x00")
+            raise InputError(f"binary data at byte {at}, not YAML text (expected a UTF-8 YAML "
+                             "file)", file=path, field=field)  # fmt: skip
     except FileNotFoundError:
         raise InputError("file not found", file=path, field=field) from None
     except IsADirectoryError:
         raise InputError("is a directory, expected a YAML file", file=path, field=field) from None
-    except (OSError, UnicodeDecodeError) as err:
+    except UnicodeDecodeError as err:
+        raise InputError(
+            f"binary data at byte {err.start}, not YAML text (expected a UTF-8 YAML file)",
+            file=path,
+            field=field,
+        ) from None
+    except OSError as err:
         raise InputError(f"cannot read file ({err})", file=path, field=field) from None
     loader: Any = None
     try:

@@ -86,8 +86,9 @@ def bundled_profiles() -> list[str]:
     return sorted(p.name.rsplit(".", 1)[0] for p in folder.iterdir() if p.name.endswith(".yaml"))
 
 
-def profile_path(name_or_path: str | Path) -> Path:
-    """The file of a bundled profile (by name) or of a profile given as a path."""
+def profile_path(name_or_path: str | Path, field: str = "network.profile") -> Path:
+    """The file of a bundled profile (by name) or of a profile given as a path;
+    ``field``: what the user gave it as (an option, an argument), named in errors."""
     text = str(name_or_path)
     if text in bundled_profiles():
         return Path(str(resources.files(__package__) / "profiles" / f"{text}.yaml"))
@@ -97,15 +98,16 @@ def profile_path(name_or_path: str | Path) -> Path:
         raise InputError(
             f"unknown radio profile '{text}'{hint} (bundled: {', '.join(bundled_profiles())}; "
             "or a .yaml file)",
-            field="network.profile",
+            field=field,
         )
     return path
 
 
-def load_profile(name_or_path: str | Path) -> RadioProfile:
-    """Read and check a profile; anything wrong is a one-line :class:`InputError`."""
-    path = profile_path(name_or_path)
-    data = read_yaml(path, field="network.profile")
+def load_profile(name_or_path: str | Path, field: str = "network.profile") -> RadioProfile:
+    """Read and check a profile; anything wrong is a one-line :class:`InputError`
+    (``field``: see :func:`profile_path`)."""
+    path = profile_path(name_or_path, field)
+    data = read_yaml(path, field=field)
     if not isinstance(data, dict):
         raise InputError("a radio profile must be a mapping of keys to values", file=path)
     data.setdefault("name", path.stem)
