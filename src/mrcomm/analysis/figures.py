@@ -121,7 +121,11 @@ def _hide_unused(axes: np.ndarray, used: int) -> None:
 
 
 def _spl_axis(ax: Axes, levels: Sequence[float]) -> None:
+    """SPL levels as categories: tick i at x = i, what belongs to it within ±0.4 of
+    it, and the axis a unit per level wide (with two levels, autoscaling squeezed the
+    range to the markers and drew them far from their tick)."""
     ax.set_xticks(range(len(levels)), [f"{s:g}" for s in levels])
+    ax.set_xlim(-0.5, len(levels) - 0.5)
     ax.set_xlabel("SPL (%)")
     ax.grid(axis="y", alpha=0.3)
 
@@ -244,6 +248,13 @@ def box_plots(
             for patch in parts["boxes"]:
                 patch.set_facecolor(behaviour_colour(beh))
                 patch.set_alpha(0.75)
+            # A box without spread (every run the same) is only its median line: draw
+            # that line in the behaviour's colour, thick, so whose it is shows.
+            for sample, median in zip(samples, parts["medians"], strict=True):
+                if np.ptp(sample) == 0:
+                    median.set_color(behaviour_colour(beh))
+                    median.set_linewidth(4)
+                    median.set_gid("median-flat")
     return drawn
 
 
@@ -315,8 +326,8 @@ def separation_figure(runs: pd.DataFrame) -> Figure:
     return _per_panel(
         runs,
         draw,
-        "Minimum ▼ and maximum ▲ separation (mean ± SD)",
-        "separation from the closest ▼ / furthest ▲ team mate (m)",
+        "Separation from the closest ▼ and the furthest ▲ team mate (mean ± SD)",
+        "separation (m)",
         extra_handles=refs,
     )
 

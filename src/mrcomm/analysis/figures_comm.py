@@ -8,7 +8,7 @@ and returns a matplotlib Figure (or a DataFrame for tables).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 
 import numpy as np
 import pandas as pd
@@ -27,6 +27,7 @@ from mrcomm.analysis.figures import (
     panel_title,
     spl_levels,
 )
+from mrcomm.analysis.mission_map import draw_mission_map
 from mrcomm.analysis.stats import GROUP, usable_runs
 from mrcomm.net.delivery import COUNT_KEYS, DROP_CAUSES, RADIO_COUNT_KEYS
 
@@ -217,44 +218,21 @@ def trajectory_figure(
     extent: tuple[float, float, float, float],
     tasks: Sequence[tuple[str, float, float]],
     title: str,
+    failed: Collection[str] = (),
 ) -> Figure:
-    """Every robot's path in one run on the map, start (○) and end (■) marked, tasks (★)."""
+    """Every robot's path in one run on the map, start (○) and end (■) marked, tasks (★,
+    crimson when ``failed``), as ``mrcomm run --plot`` draws it."""
     xmin, xmax, ymin, ymax = extent
     width = 10.0
     height = max(3.5, width * (ymax - ymin) / (xmax - xmin) + 0.8)
     fig = Figure(figsize=(width, height), layout="constrained")
     ax = fig.subplots()
-    ax.imshow(
-        np.where(occupied, 0.2, 1.0),
-        cmap="gray",
-        vmin=0,
-        vmax=1,
-        origin="lower",
-        extent=extent,
-        interpolation="nearest",
-    )
     sub = trajectories[trajectories["run_id"] == run_id]
-    colours = matplotlib_colours()
-    for i, (robot, track) in enumerate(sub.groupby("robot", sort=True)):
-        track = track.sort_values("t")
-        colour = colours[i % len(colours)]
-        ax.plot(track["x"], track["y"], "-", color=colour, lw=1.3, label=str(robot))
-        ax.plot(track["x"].iloc[0], track["y"].iloc[0], "o", color=colour, mec="black", ms=6)
-        ax.plot(track["x"].iloc[-1], track["y"].iloc[-1], "s", color=colour, mec="black", ms=5)
-    for task_id, x, y in tasks:
-        ax.plot(x, y, "*", color="darkgreen", ms=11, mec="black")
-        ax.annotate(task_id, (x, y), xytext=(4, 4), textcoords="offset points", fontsize=8)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.set_aspect("equal")
+    tracks = {
+        str(robot): track.sort_values("t")[["x", "y"]].to_numpy(dtype=float)
+        for robot, track in sub.groupby("robot", sort=True)
+    }
+    draw_mission_map(ax, occupied, extent, tracks, tasks, failed=failed,
+                     task_labels=len(tasks) <= 100)  # fmt: skip
     ax.set_title(title)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     return fig
-
-
-def matplotlib_colours() -> list[str]:
-    from matplotlib import colormaps
-    from matplotlib.colors import to_hex
-
-    cmap = colormaps["tab10"]
-    return [to_hex(cmap(i)) for i in range(10)]

@@ -300,6 +300,7 @@ def _communication_figures(
             )
         )
     link_states, trajectories = frame_of(data, "link_states"), frame_of(data, "trajectories")
+    failed_tasks = frame_of(data, "failed_tasks")
     info = runs.set_index("run_id")
     scenarios = _scenarios(frame_of(data, "configs"))
     for run_id in timelines:
@@ -329,13 +330,19 @@ def _communication_figures(
         if robots and scenario is not None:
             grid = scenario.grid
             tasks = [(t.task_id, t.x, t.y) for t in scenario.tasks]
+            failed = (
+                set(failed_tasks.loc[failed_tasks["run_id"] == run_id, "task_id"].astype(str))
+                if not failed_tasks.empty
+                else set()
+            )
             out["trajectories"].append(
                 _figure(
                     f"trajectory_{run_id}",
                     f"Trajectories of {run_id}",
-                    "Every robot's path (sampled each second): start ○, end ■, tasks ★.",
+                    "Every robot's path (sampled each second): start ○, end ■, tasks ★ "
+                    "(crimson: its status never reached the assigner).",
                     figures_comm.trajectory_figure(
-                        trajectories, run_id, grid.occupied, grid.extent, tasks, title
+                        trajectories, run_id, grid.occupied, grid.extent, tasks, title, failed
                     ),
                     encoder,
                 )

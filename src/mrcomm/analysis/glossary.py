@@ -19,7 +19,8 @@ _CHECKOUT = Path(mrcomm.__file__).resolve().parents[2] / "docs" / "GLOSSARY.md"
 
 @dataclass
 class GlossarySection:
-    title: str
+    #: The heading, with Markdown's inline code and emphasis as HTML.
+    title: Markup
     columns: list[str] = field(default_factory=list)
     rows: list[list[Markup]] = field(default_factory=list)
 
@@ -55,7 +56,7 @@ def glossary_sections(path: Path | None = None) -> list[GlossarySection]:
     sections: list[GlossarySection] = []
     for line in path.read_text(encoding="utf-8").splitlines():
         if line.startswith("## "):
-            sections.append(GlossarySection(line[3:].strip()))
+            sections.append(GlossarySection(_inline(line[3:].strip())))
         elif line.startswith("|") and sections:
             section = sections[-1]
             cells = _cells(line)
@@ -72,7 +73,7 @@ def behaviour_metrics(sections: list[GlossarySection]) -> GlossarySection:
     from mrcomm.specs import REGISTRY
 
     named = {str(row[0]) for s in sections for row in s.rows if row}
-    section = GlossarySection("Metrics added by behaviours")
+    section = GlossarySection(Markup("Metrics added by behaviours"))
     section.columns = ["metric", "unit", "meaning"]
     for spec in REGISTRY.all():
         for metric in spec.team_metrics:
