@@ -2,10 +2,11 @@
 no result.
 
 ``python -m tests.golden.golden --write`` records them (do it before a restructuring
-starts, on the code as it was); ``tests/golden/test_golden.py`` runs the same cases and
-compares. Each case keeps the full ``run --json`` summary (minus wall time, and minus the
-configuration echo, whose shape may grow) and a digest of what the summary does not show:
-the timelines, the trajectories and the RSSI series.
+starts, on the code as it was; a re-record of changed results needs ``--why``, logged in
+``rerecords.json``: see :mod:`tests.golden.rerecord`); ``tests/golden/test_golden.py``
+runs the same cases and compares. Each case keeps the full ``run --json`` summary (minus
+wall time, and minus the configuration echo, whose shape may grow) and a digest of what
+the summary does not show: the timelines, the trajectories and the RSSI series.
 """
 
 from __future__ import annotations
@@ -118,9 +119,12 @@ def write_or_compare(results: dict[str, Any], path: Path, doc: str | None) -> No
     ``path``; without it they are compared with what it holds."""
     parser = argparse.ArgumentParser(description=doc)
     parser.add_argument("--write", action="store_true", help="record the reference outputs")
-    if parser.parse_args().write:
-        path.write_text(json.dumps(results, indent=1, sort_keys=True) + "\n")
-        print(f"wrote {len(results)} cases to {path}")
+    parser.add_argument("--why", help="the behaviour change a re-record is for (logged)")
+    args = parser.parse_args()
+    if args.write:
+        from .rerecord import write_logged
+
+        write_logged(results, path, args.why)
     else:
         golden = json.loads(path.read_text())
         bad = [k for k, v in results.items() if golden.get(k) != v]
