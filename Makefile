@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 ROS_VENV := $(VENV)-ros2
 ROS_STAMP := $(ROS_VENV)/.attempted
 
-.PHONY: demo test lint bench ns3-validation system-deps clean ros2
+.PHONY: demo test lint bench ns3-validation system-deps clean ros2 docs-tables
 
 $(STAMP): pyproject.toml examples/mrcomm-repeat/pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -73,6 +73,13 @@ test: system-deps
 	  MPLBACKEND=Agg MRCOMM_ROS2_ENV=1 $(ROS_VENV)/bin/pytest -q tests/ros2; \
 	else echo "ROS 2 tests skipped: $$(cat $(ROS_VENV)/.skipped)"; \
 	  if [ "$$MRCOMM_REQUIRE_ALL" = 1 ]; then echo "MRCOMM_REQUIRE_ALL=1: failing"; exit 1; fi; fi
+
+# Every results table of the docs (RESULTS, SCENARIOS, BENCHMARKS' speed summary),
+# written from its experiment between the page's "generated" markers, with the commit
+# the runs were made on (scripts/docs_tables.py). The sweeps are kept in results/docs
+# (resumable; delete one to rerun it on new code). About an hour on 2 cores.
+docs-tables: $(STAMP)
+	$(BIN)/python scripts/docs_tables.py
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks scripts examples
