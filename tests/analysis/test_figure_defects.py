@@ -123,3 +123,27 @@ def test_glossary_headings_have_no_markdown() -> None:
     titles = [str(s.title) for s in glossary_sections()]
     assert titles and not any("`" in t for t in titles)
     assert any("<code>behaviour.utility</code>" in t for t in titles)
+
+
+def test_success_labels_do_not_overlap_with_five_behaviours() -> None:
+    # The behaviours study's shape: 5 behaviours x 4 SPL levels x 10 runs ("10/10").
+    base = synthetic_runs().iloc[0].to_dict()
+    runs = pd.DataFrame([
+        {**base, "run_id": f"{net}-{th}-{b}-{spl}-{k}", "network": net, "threshold": th,
+         "behaviour": b, "spl": spl, "successful": True}
+        for net in ("wlan", "ah") for th in ("slt", "ssd")  # four panels side by side
+        for b in ("nb", "lf", "lf-wait", "rps", "serried")
+        for spl in (0.0, 25.0, 50.0, 75.0)
+        for k in range(10)
+    ])  # fmt: skip
+    fig = F.success_figure(runs)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    ax = fig.axes[0]
+    boxes = [t.get_window_extent(renderer) for t in ax.texts if t.get_gid() == "success-label"]
+    assert len(boxes) == 5 * 4  # behaviours x SPL levels
+    for i, a in enumerate(boxes):
+        for b in boxes[i + 1 :]:
+            assert not a.overlaps(b), (a, b)
+        assert a.y1 <= ax.get_window_extent(renderer).y1  # inside the axes

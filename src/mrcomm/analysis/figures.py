@@ -263,6 +263,8 @@ def success_figure(runs: pd.DataFrame) -> Figure:
 
     def draw(ax: Axes, frame: pd.DataFrame, levels: list[float], behs: list[str]) -> None:
         offsets, width = _bar_offsets(len(behs))
+        # More than two bars to a level: the k/n labels stand upright, or they overlap.
+        upright = len(behs) > 2
         for off, beh in zip(offsets, behs, strict=True):
             for i, spl in enumerate(levels):
                 ok = frame.loc[(frame["behaviour"] == beh) & (frame["spl"] == spl), "successful"]
@@ -277,9 +279,12 @@ def success_figure(runs: pd.DataFrame) -> Figure:
                     xytext=(0, 2),
                     textcoords="offset points",
                     ha="center",
+                    va="bottom",
+                    rotation=90 if upright else 0,
                     fontsize=7,
+                    gid="success-label",
                 )
-        ax.set_ylim(0, 112)
+        ax.set_ylim(0, 130 if upright else 112)
 
     return _per_panel(runs, draw, "Successful missions", "successful missions (%)")
 
