@@ -17,6 +17,7 @@ import mrcomm
 from mrcomm.analysis import figures_report as fr
 from mrcomm.analysis import report as rp
 from mrcomm.analysis import stats as st
+from mrcomm.analysis import table_format as tf
 from mrcomm.analysis.study import TABLE_NAMES
 from mrcomm.errors import InputError
 
@@ -121,14 +122,14 @@ def test_rssi_runs_pair_ssd_with_esd() -> None:
 
 def test_display_and_latex_formatting(study: Any) -> None:
     table = st.comparison_table(study.runs, ["execution_phase_time"])
-    shown = rp.display_frame("comparisons", table)
+    shown = tf.display_frame("comparisons", table)
     assert list(shown["configuration"]) == ["AH+SLT+LF", "AH+SLT+NB"]
     assert all(re.fullmatch(r"-?\d+\.\d{2}", z) for z in shown["Z"])
     assert all(
         re.fullmatch(r"-?\d\.\d{2} \[-?\d\.\d{2}, -?\d\.\d{2}\]", r) for r in shown.iloc[:, 13]
     )
     assert set(shown["decision"]) <= {"H_A supported", "H0 not rejected"}
-    latex = rp.to_latex("comparisons", table)
+    latex = tf.to_latex("comparisons", table)
     assert r"\begin{tabular}" in latex and r"$\pm$" in latex and "±" not in latex
     assert r"$r=Z/\sqrt{n}$" in latex and "execution\\_phase\\_time" in latex
     # booktabs, a caption, and numbers right-aligned: metric/config/H_A left, m and n right.

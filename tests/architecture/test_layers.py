@@ -22,6 +22,7 @@ RANKS = {
     "output_paths": 0,
     "seeding": 0,
     "specs": 0,
+    "bundled": 0,  # where the bundled data is, and its names
     "ports": 2,  # the agents' ports speak in messages and poses
     "world": 1,
     "messaging": 2,
@@ -38,6 +39,7 @@ RANKS = {
     "testing": 6,
     "console": 6,  # the operator console: a paced simulation and its web page
     "cli": 7,
+    "__main__": 7,  # python -m mrcomm: the CLI
 }
 
 

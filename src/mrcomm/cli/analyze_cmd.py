@@ -50,6 +50,7 @@ def analyze(
     # Imported here: scipy, pandas and DuckDB are not needed by the other commands.
     from mrcomm.analysis import report as rp
     from mrcomm.analysis import stats as st
+    from mrcomm.analysis import table_format as tf
     from mrcomm.analysis.figures_report import metrics_with_data
     from mrcomm.analysis.inference import check_correction
     from mrcomm.analysis.study import study_tables
@@ -85,18 +86,18 @@ def analyze(
             typer.echo(f"# {name}")
             typer.echo(frame.to_csv(index=False), nl=False)
         elif fmt == "latex":
-            typer.echo(rp.to_latex(name, frame), nl=False)
+            typer.echo(tf.to_latex(name, frame), nl=False)
         else:
             assert console is not None
             if name == "comparisons":
-                _print_comparisons(console, frame, rp, st, method, alpha)
+                _print_comparisons(console, frame, tf, st, method, alpha)
             elif name == "rssi":
-                _print_rssi(console, frame, rp)
+                _print_rssi(console, frame, tf)
             elif name in ("between", "pairwise"):
-                _print_between(console, name, frame, rp, st)
+                _print_between(console, name, frame, tf, st)
             else:
-                shown = rp.display_frame(name, frame)
-                console.print(_rich_table(rp.TABLE_TITLES[name], shown))
+                shown = tf.display_frame(name, frame)
+                console.print(_rich_table(tf.TABLE_TITLES[name], shown))
         if i < len(names) - 1 and fmt != "table":
             typer.echo("")
 
@@ -116,19 +117,19 @@ def _tables(names: list[str] | None) -> list[str]:
 
 
 def _print_comparisons(
-    console: Console, frame: Any, rp: Any, st: Any, method: str, alpha: float
+    console: Console, frame: Any, tf: Any, st: Any, method: str, alpha: float
 ) -> None:
     """The comparisons, one table per metric (the terminal's width is the limit)."""
-    console.print(f"[bold]{rp.TABLE_TITLES['comparisons']}[/]")
+    console.print(f"[bold]{tf.TABLE_TITLES['comparisons']}[/]")
     for metric, rows in frame.groupby("metric", sort=False):
         info = st.metric_info(str(metric))
         title = f"{info.label} ({info.unit})"
-        console.print(_rich_table(title, rp.display_frame("comparisons", rows, compact=True)))
+        console.print(_rich_table(title, tf.display_frame("comparisons", rows, compact=True)))
     if frame.empty:
         console.print("no comparisons")
     console.print(
         f"p corr.: p corrected across all {len(frame)} comparisons "
-        f"({rp.CORRECTION_NAMES[method]}); † the design cannot reach α = {alpha:g}. "
+        f"({tf.CORRECTION_NAMES[method]}); † the design cannot reach α = {alpha:g}. "
         "All columns (U, Z, raw p, means, the original r = Z/√n): --format csv or latex.",
         style="dim",
     )
@@ -136,30 +137,30 @@ def _print_comparisons(
         console.print(f"warning: {warning}", style="yellow", markup=False)
 
 
-def _print_between(console: Console, name: str, frame: Any, rp: Any, st: Any) -> None:
+def _print_between(console: Console, name: str, frame: Any, tf: Any, st: Any) -> None:
     """A between-behaviour table, one per metric; nothing when the study has one
     behaviour."""
     if frame.empty:
         return
-    console.print(f"[bold]{rp.TABLE_TITLES[name]}[/]")
+    console.print(f"[bold]{tf.TABLE_TITLES[name]}[/]")
     for metric, rows in frame.groupby("metric", sort=False):
         info = st.metric_info(str(metric))
-        shown = rp.display_frame(name, rows, compact=True)
+        shown = tf.display_frame(name, rows, compact=True)
         console.print(_rich_table(f"{info.label} ({info.unit})", shown))
 
 
-def _print_rssi(console: Console, frame: Any, rp: Any) -> None:
+def _print_rssi(console: Console, frame: Any, tf: Any) -> None:
     """SSD vs ESD, one table per pair of thresholds compared."""
     from mrcomm.analysis.rssi_compare import compared_pairs
 
     if frame.empty:
-        console.print(f"[bold]{rp.TABLE_TITLES['rssi']}[/]")
+        console.print(f"[bold]{tf.TABLE_TITLES['rssi']}[/]")
         console.print("no two configurations differing only in their threshold recorded RSSI")
         return
     groups = frame.groupby(["threshold_a", "threshold_b"], sort=False)
     for pair, (_, rows) in zip(compared_pairs(frame), groups, strict=True):
-        title = f"{rp.TABLE_TITLES['rssi']}: {pair}"
-        console.print(_rich_table(title, rp.display_frame("rssi", rows, compact=True)))
+        title = f"{tf.TABLE_TITLES['rssi']}: {pair}"
+        console.print(_rich_table(title, tf.display_frame("rssi", rows, compact=True)))
     console.print(
         "shift: Hodges–Lehmann median of the per-run differences (first − second), dBm; "
         "at D m (a-b m): the readings taken while the two robots were a-b m apart, moved "
