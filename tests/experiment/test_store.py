@@ -217,3 +217,16 @@ def test_sigkill_in_the_middle_of_a_write_leaves_whole_runs(tmp_path: Path) -> N
     con.close()
     plan = plan_sweep(exp, db)
     assert [s.run_id for s in plan.todo] == [s.run_id for s in runs[2:]]
+
+
+def test_no_progress_bar_on_any_connection(tmp_path: Path) -> None:
+    """DuckDB draws a progress bar on stdout for queries over 2 s: into the CSV or JSON
+    a command prints. Every connection of the store turns it off."""
+    from mrcomm.experiment import store
+
+    con = store._connect(tmp_path / "x.duckdb", read_only=False)
+    try:
+        (value,) = con.execute("SELECT current_setting('enable_progress_bar')").fetchone()
+    finally:
+        con.close()
+    assert value is False

@@ -62,7 +62,11 @@ class DatabaseInfo:
 
 def _connect(path: Path, *, read_only: bool) -> duckdb.DuckDBPyConnection:
     try:
-        return duckdb.connect(str(path), read_only=read_only)
+        # No progress bar: DuckDB draws one on stdout for queries over 2 s, into the
+        # CSV or JSON a command prints (and into a notebook's output).
+        con = duckdb.connect(str(path), read_only=read_only)
+        con.execute("SET enable_progress_bar = false")
+        return con
     except duckdb.Error as err:
         # DuckDB says "Could not set lock on file ... Conflicting lock is held" when
         # another process has it open; anything else is a file it cannot read.
