@@ -44,7 +44,7 @@ RUN = ("run", str(S2), "--network", "ah", "--spl", "25", "--max-time", "300")
 def test_run_shows_progress_on_a_terminal(tmp_path: Path) -> None:
     shown, stdout = _on_terminal(tmp_path, *RUN)
     assert re.search(
-        r"mission .*\d+/300 s · tasks \d+/20 · 10 robots · ×\d+ real time · ETA", shown
+        r"mission .*\d+/300 s · tasks heard \d+/20 · 10 robots · ×\d+ real time · ETA", shown
     ), shown
     assert "AH_NB_SPL25 on S2 (seed 1)" in stdout
 

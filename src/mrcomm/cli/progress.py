@@ -58,15 +58,12 @@ class ProgressLine:
         if self.task is not None:
             self.progress.update(self.task, completed=completed, status=status)
 
-    def advance(self, status: str = "") -> None:
-        if self.task is not None:
-            self.progress.update(self.task, advance=1, status=status)
-
 
 class MissionProgress:
-    """A simulated mission's line: simulated clock against the time limit, tasks done,
-    robots, speed (× real time) and an ETA — the sooner of the tasks' pace (time per
-    task so far, for those left) and the time limit. Passed to ``Mission.run``."""
+    """A simulated mission's line: simulated clock against the time limit, tasks whose
+    status the assigner has heard, robots, speed (× real time) and an ETA — the sooner
+    of the tasks' pace (time per task so far, for those left) and the time limit.
+    Passed to ``Mission.run``."""
 
     def __init__(self, line: ProgressLine) -> None:
         self.line = line
@@ -90,7 +87,7 @@ class MissionProgress:
         total = len(mission.resources.scenario.tasks)
         done = len({task for task, _ in mission.assigner.success_received})
         robots = len(mission.resources.scenario.robots)
-        text = f"{now:,.0f}/{limit:,.0f} s · tasks {done}/{total} · {robots} robots"
+        text = f"{now:,.0f}/{limit:,.0f} s · tasks heard {done}/{total} · {robots} robots"
         if wall_s <= 0 or now <= since:
             return text
         rate = (now - since) / wall_s
