@@ -324,6 +324,9 @@ class LinkRecorder:
         self._open_pairs = False  # any pair in warning or out of range
         self._closed: list[tuple[str, str, str, float, float]] = []
         self._next_group = 0.0
+        #: The links of the last group sample and its answer (see _largest_group).
+        self._group_key: bytes | None = None
+        self._group_size = 0
         #: (time, robots in the largest connected group) at :data:`GROUP_PERIOD`.
         self.largest_group: list[tuple[float, int]] = []
 
@@ -347,7 +350,7 @@ class LinkRecorder:
         n = self.robots
         if now >= self._next_group:
             self._next_group += GROUP_PERIOD
-            self.largest_group.append((now, largest_group(state.connected[:n, :n])))
+            self.largest_group.append((now, self._largest_group(state.connected[:n, :n])))
         if state.rssi is None:
             return []
         np.fmin(self.min_rssi, state.rssi, out=self.min_rssi)
@@ -397,6 +400,15 @@ class LinkRecorder:
             if end > since:
                 closed.append((a, b, PAIR_STATES[int(self._pair_state[k])], since, round(end, 6)))
         return sorted(closed, key=lambda row: (row[3], row[0], row[1]))
+
+    def _largest_group(self, connected: BoolArray) -> int:
+        """:func:`largest_group`, searched again only when the links changed since the
+        last sample (they rarely do between two; the graph search of scipy cost an
+        ad-hoc S1 run about 30 % of its time)."""
+        key = connected.tobytes()
+        if key != self._group_key:
+            self._group_key, self._group_size = key, largest_group(connected)
+        return self._group_size
 
     def connectivity(self) -> dict[str, float | None]:
         """The largest connected group as a fraction of the team: its mean over the
