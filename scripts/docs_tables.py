@@ -187,10 +187,8 @@ def scenarios_block(args: argparse.Namespace) -> Generated:
     order = {"s1": 0, "s2": 1, "s3": 2, "s4": 3}
     for name, path in sorted(bundled("scenario").items(), key=lambda kv: order.get(kv[0], 9)):
         sc = load_scenario(path)
-        raw = read_yaml(path)
-        map_file = (path.parent / raw["map"]).resolve()
+        map_file, tasks_file = sc.map_path, sc.tasks_path
         image = map_file.parent / str(read_yaml(map_file)["image"])
-        tasks_file = path.parent / raw["tasks"]
         xmin, xmax, ymin, ymax = sc.grid.extent
         where = {"robot": f"{sc.assigner.host}", "base_station": "base station"}
         sizes = [path.stat().st_size, tasks_file.stat().st_size,

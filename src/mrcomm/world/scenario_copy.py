@@ -18,10 +18,7 @@ def copy_scenario(source: Path, out: Path) -> Path:
     """Copy the scenario file ``source`` and what it names into ``out`` (absent or
     empty); returns the copied scenario file."""
     scenario = load_scenario(source)  # a broken source fails here, before any copy
-    raw = read_yaml(source)
-    assert isinstance(raw, dict)  # the loader checked it
-    map_file = source.parent / str(raw["map"])
-    tasks_file = source.parent / str(raw["tasks"])
+    map_file, tasks_file = scenario.map_path, scenario.tasks_path
     image_name = str(read_yaml(map_file)["image"])
     image_file = map_file.parent / image_name
     with staged_directory(out, "DIR") as staging:
