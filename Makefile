@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 ROS_VENV := $(VENV)-ros2
 ROS_STAMP := $(ROS_VENV)/.attempted
 
-.PHONY: demo test lint bench ns3-validation system-deps clean ros2 docs-tables
+.PHONY: demo test lint bench ns3-validation system-deps clean ros2 docs-tables reproduce
 
 $(STAMP): pyproject.toml examples/mrcomm-repeat/pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -80,6 +80,11 @@ test: system-deps
 # (resumable; delete one to rerun it on new code). About an hour on 2 cores.
 docs-tables: $(STAMP)
 	$(BIN)/python scripts/docs_tables.py
+
+# The reproduction of the original study (docs/REPRODUCTION.md): 2 x 720 runs, about
+# 8 minutes on 2 cores; resumable (the sweeps are kept in results/docs/).
+reproduce: $(STAMP)
+	$(BIN)/python scripts/docs_tables.py --only reproduction-summary --only reproduction-table
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks scripts examples

@@ -220,6 +220,9 @@ class LinkSensor(Protocol):
     ESD measured RSSI). Evaluated from the robot's own pose and the mate's last known
     position, as the original did."""
 
+    #: Whether the sensor judges from positions (SLT, SSD), not measurements (ESD).
+    positional: bool
+
     def warning(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> bool:
         """True when the link to ``peer`` has crossed the warning threshold."""
         ...

@@ -171,3 +171,37 @@ def test_a_knot_of_three_frees_each_robot_for_a_while() -> None:
     assert before["robot_3"] < 1.0  # stopped again at once, for the other mate
     after = _static_knot(knot_pauses=params.knot_pauses)
     assert min(after.values()) >= 2 * params.resume_grace
+
+
+def _mate(x: float, stamp: float) -> MateState:
+    """robot_2 coming head-on at ``x`` m ahead, from a pose sent at ``stamp``."""
+    return MateState("robot_2", x, 0.0, math.pi, 0.3, 9.0, stamp)
+
+
+def test_on_receipt_a_pose_is_judged_once_when_it_arrives() -> None:
+    """The original robots checked a mate in their pose callback (thesis line 798): a
+    pose judged when it came is not judged again, so a mate whose later poses are lost
+    never stops the robot on an old one. Every step (the default) it does."""
+    every_step = Avoidance("robot_1", ExecutorParams(), RANK)
+    on_receipt = Avoidance("robot_1", ExecutorParams(judge_poses="on_receipt"), RANK)
+    assert on_receipt.on_receipt and not every_step.on_receipt
+    far = _mate(3.0, stamp=0.0)  # heard 3 m ahead: no conflict
+    for avoidance in (every_step, on_receipt):
+        assert avoidance.detect(HERE, [far], 0.0, lambda: 1.0) is None
+    # The robot drives 2.4 m on; nothing new is heard, so the old pose is 0.6 m ahead.
+    closer = Pose(2.4, 0.0, 0.0)
+    assert every_step.detect(closer, [far], 5.0, lambda: 1.0) is not None
+    assert on_receipt.detect(closer, [far], 5.0, lambda: 1.0) is None
+    # A new pose of the mate in the danger zone is judged as it arrives.
+    assert on_receipt.detect(closer, [_mate(3.0, stamp=4.9)], 5.0, lambda: 1.0) is not None
+
+
+def test_on_receipt_a_pose_that_came_during_the_grace_is_not_judged_after_it() -> None:
+    params = ExecutorParams(judge_poses="on_receipt")
+    avoidance = Avoidance("robot_1", params, RANK)
+    mate = _mate(0.8, stamp=0.0)
+    assert avoidance.detect(HERE, [mate], 0.0, lambda: 1.0) is not None
+    assert avoidance.may_resume(lambda: HERE, {"robot_2": mate}, 1.0, 0.0)
+    during = _mate(0.8, stamp=1.5)  # heard within the 3 s grace
+    assert avoidance.detect(HERE, [during], 1.6, lambda: 1.0) is None
+    assert avoidance.detect(HERE, [during], 10.0, lambda: 1.0) is None  # grace over: no news

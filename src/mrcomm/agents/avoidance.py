@@ -23,6 +23,13 @@ The rules, beyond right of way (collision.py):
   (the same message: nothing newer heard from the mate since) cannot stop it again:
   a mate last heard long ago, then out of range, would otherwise stop the robot every
   time the grace runs out while it passes the place where the mate was.
+* **When a pose is judged** (``judge_poses``). By default every step, from each
+  mate's last received pose: a mate whose poses are lost is still avoided where it was
+  last heard. With ``on_receipt`` each pose is judged once, at the first step after it
+  arrived, whatever the robot is doing then (paused, in a grace): the original robots
+  checked a mate "whenever a task execution agent receives a team member's updated
+  position" (their pose callback), so a lost pose is no check at all and fewer near
+  collisions are judged as loss grows, as the original reports.
 """
 
 from __future__ import annotations
@@ -61,8 +68,15 @@ class Avoidance:
         #: mate -> the stamp of the pose the robot last moved on from.
         self._passed: dict[str, float] = {}
         self._last_resume = -float("inf")
+        #: judge_poses "on_receipt": mate -> the stamp of the last pose judged.
+        self._judged: dict[str, float] | None = {} if params.judge_poses == "on_receipt" else None
         #: Pauses in a row, whoever the mate, each soon after moving on (1: the first).
         self.pauses_in_row = 0
+
+    @property
+    def on_receipt(self) -> bool:
+        """Whether each mate's pose is judged once, when it arrives (give every mate)."""
+        return self._judged is not None
 
     @property
     def reach(self) -> float:
@@ -87,7 +101,12 @@ class Avoidance:
         reach = self.reach
         short = -reach
         x, y = pose.x, pose.y
+        judged = self._judged
         for mate in mates:
+            if judged is not None:
+                if judged.get(mate.robot) == mate.stamp:
+                    continue  # judged when it arrived: no news since
+                judged[mate.robot] = mate.stamp
             if not (short <= mate.x - x <= reach and short <= mate.y - y <= reach):
                 continue
             if self._grace_until.get(mate.robot, -1.0) > now:

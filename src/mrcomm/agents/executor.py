@@ -15,6 +15,7 @@ Communication-aware behaviours subclass this executor (LF encloses NB).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from mrcomm.agents import agenda
@@ -282,8 +283,14 @@ class TaskExecutor(ExecutorRuntime):
         queue = self.queue  # (near no passage: one lookup, for every robot every step)
         if queue is not None and queue.near(pose.x, pose.y) and self._queued(pose):
             return
-        # Only the mates near enough to be in conflict (detect tests it).
-        near = self._mates_near(pose, self.avoidance.reach)
+        near: Iterable[Mate]
+        if self.avoidance.on_receipt:
+            # Every mate, near or far: a pose judged when it arrived is not judged again
+            # when the robot comes near where it was (detect marks each one judged).
+            near = self.known_mates().values()
+        else:
+            # Only the mates near enough to be in conflict (detect tests it).
+            near = self._mates_near(pose, self.avoidance.reach)
         conflict = self.avoidance.detect(pose, near, self._now, self._goal_distance)
         if conflict is None:
             return

@@ -5,6 +5,8 @@ retries, making way and arriving before a goal a mate holds. Each is settable wi
 
 from __future__ import annotations
 
+from typing import Literal
+
 from pydantic import BaseModel, ConfigDict, Field
 
 from mrcomm.agents.collision import CollisionParams
@@ -18,6 +20,13 @@ class ExecutorParams(BaseModel):
     pose_period: float = parameter(0.2, "time between pose messages (5 Hz)", "s", gt=0)
     collision: CollisionParams = Field(
         default_factory=CollisionParams, description="near-collision detection"
+    )
+    judge_poses: Literal["every_step", "on_receipt"] = parameter(
+        "every_step",
+        "when a mate's pose is judged for a near collision and for the link threshold "
+        "(SLT, SSD): every step, from the last pose received (every_step), or once, when "
+        "it arrives (on_receipt: the original robots, which checked a pose in the "
+        "callback that received it and applied thresholds to received messages)",
     )
     collision_pause: float = parameter(
         1.0, "both robots of a near collision pause at least this long", "s", ge=0

@@ -341,7 +341,7 @@ class LeaderFollowerExecutor(TaskExecutor):
         """Whether this robot's link to ``mate`` (at x, y) is in warning: the direct
         link, or with ``chain_hops`` > 1 the best chain through the mates' last known
         positions (:mod:`mrcomm.agents.link_chain`)."""
-        if not self.link_sensor.warning(mate, pose, x, y, self._now):
+        if not self.mate_link_warns(mate, pose, x, y):
             return False
         if self.lf.chain_hops <= 1:
             return True
@@ -475,7 +475,7 @@ class LeaderFollowerExecutor(TaskExecutor):
             return
         pose = self.base.pose
         distance = math.hypot(target[0] - pose.x, target[1] - pose.y)
-        far = self.link_sensor.warning(self.leader or "", pose, target[0], target[1], self._now)
+        far = self.mate_link_warns(self.leader or "", pose, target[0], target[1])
         near = distance <= self.lf.follow_distance or self._awaits(leader, pose, distance)
         if near and not far:
             self.base.cancel()
@@ -518,7 +518,7 @@ class LeaderFollowerExecutor(TaskExecutor):
             if self.in_way_of(mate, pose):
                 self.step_aside(mate)
                 return
-        far = self.link_sensor.warning(self.leader or "", pose, target[0], target[1], self._now)
+        far = self.mate_link_warns(self.leader or "", pose, target[0], target[1])
         distance = math.hypot(target[0] - pose.x, target[1] - pose.y)
         waits = self._awaits(self.mates.get(self.leader or ""), pose, distance)
         if far or (distance > self.lf.refollow_distance and not waits):

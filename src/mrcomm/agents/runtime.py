@@ -81,6 +81,10 @@ class ExecutorRuntime:
         self.timeline = context.timeline
         self.params = params
         self.link_sensor: LinkSensor = context.link_sensor
+        #: judge_poses "on_receipt": mate -> (when its pose arrived, its link verdict).
+        self._link_verdicts: dict[str, tuple[float, bool]] | None = (
+            {} if params.judge_poses == "on_receipt" else None
+        )
         self.incarnation = context.incarnation
         self._rank = context.tie_break_rank
         self.robot_id = bus.owner
@@ -196,6 +200,25 @@ class ExecutorRuntime:
         """Hook run every step before the state handler (LF monitors links here)."""
 
     # -- state handlers --------------------------------------------------------------
+    def mate_link_warns(self, mate: str, pose: Pose, x: float, y: float) -> bool:
+        """Whether the link to ``mate``, at (x, y), is in warning for this robot at
+        ``pose``. With ``judge_poses`` "on_receipt" a threshold judged from positions
+        (SLT, SSD) is judged once per pose of the mate, at the first question after it
+        arrived, and that verdict holds until the next pose arrives (the original applied
+        thresholds to received messages); a measured signal (ESD) is read as it comes."""
+        sensor = self.link_sensor
+        verdicts = self._link_verdicts
+        if verdicts is None or not sensor.positional:
+            return sensor.warning(mate, pose, x, y, self._now)
+        heard = self.team_view.heard.get(mate)
+        cached = verdicts.get(mate)
+        if cached is not None and heard is not None and cached[0] == heard:
+            return cached[1]
+        verdict = sensor.warning(mate, pose, x, y, self._now)
+        if heard is not None:
+            verdicts[mate] = (heard, verdict)
+        return verdict
+
     def known_mates(self) -> Mapping[str, Mate]:
         """The mates as collision avoidance and making way see them now: fresh enough,
         and moved on for their age (:meth:`TeamView.known`)."""

@@ -159,7 +159,7 @@ class SerriedExecutor(TaskExecutor):
             known = self.mates.get(mate)
             if known is None or self.team_view.age(mate, self._now) > self.serried.lost_timeout:
                 continue
-            if self.link_sensor.warning(mate, pose, known.x, known.y, self._now):
+            if self.mate_link_warns(mate, pose, known.x, known.y):
                 return True
         return False
 
@@ -211,7 +211,7 @@ class SerriedExecutor(TaskExecutor):
         # Close is not enough when its own link to the leader warns (a wall between
         # them, with a signal-strength threshold): it keeps closing in, or the leader
         # would hold for it for ever.
-        if close and not self.link_sensor.warning(leader, pose, known.x, known.y, self._now):
+        if close and not self.mate_link_warns(leader, pose, known.x, known.y):
             if self.base.status is NavStatus.ACTIVE:
                 self.base.cancel()
             return

@@ -17,6 +17,8 @@ if TYPE_CHECKING:
 class NoSensor:
     """No threshold: never warns."""
 
+    positional = True
+
     def warning(self, peer: str, own: Pose, peer_x: float, peer_y: float, now: float) -> bool:
         return False
 
@@ -29,6 +31,8 @@ class NoSensor:
 
 class DistanceSensor:
     """SLT: distance stands in for signal strength."""
+
+    positional = True
 
     def __init__(self, warning_m: float) -> None:
         self.warning_m = warning_m
@@ -46,6 +50,8 @@ class DistanceSensor:
 class ModelSensor:
     """SSD: RSSI predicted by the signal model for the distance, with the line-of-sight
     or obstructed model chosen by ray casting on the robot's own map."""
+
+    positional = True
 
     def __init__(self, grid: OccupancyGrid, table: RssiTable, warning_dbm: float) -> None:
         self.grid = grid
@@ -77,6 +83,8 @@ class MeasuredSensor:
     """ESD: the latest RSSI per peer measured by the robot's pulse process (live) or
     replayed from a recorded trace (simulation). Unknown peers and stale readings never
     warn."""
+
+    positional = False
 
     def __init__(self, warning_dbm: float, stale_after: float = STALE_AFTER_S) -> None:
         self.warning_dbm = warning_dbm
