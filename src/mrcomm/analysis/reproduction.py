@@ -56,12 +56,12 @@ CLAIM_RULES = {
     "(but the exceptions) succeed; direction when at most half do",
     "some_failed_tasks": "reproduced when at least half the runs lose a status; direction "
     "when at least one does",
-    "ratio_about": f"reproduced when the ratio of the means is within ±{ABOUT:.0%} of the "
+    "ratio_about": f"reproduced when the ratio of the means is within ±{ABOUT * 100:.0f} % of the "
     "stated one; direction when it is on the same side of 1",
     "ratio_above": "reproduced when the ratio of the means is above the stated one; "
     "direction when it is above 1",
     "mean_between": "reproduced when the mean (over the configurations named) is in the "
-    f"stated range; direction when within ±{ABOUT:.0%} of it",
+    f"stated range; direction when within ±{ABOUT * 100:.0f} % of it",
 }
 
 

@@ -73,7 +73,7 @@ def comparison_table(studies: Mapping[str, pd.DataFrame]) -> str:
     head = "| # | table (lines) | comparison | original | " + " | ".join(
         f"{name} | verdict" for name in names
     )
-    lines = [head + " | why (section) | note |", "|---" * (5 + 2 * len(names)) + "|"]
+    lines = [head + " | why (section) | note |", "|---" * (6 + 2 * len(names)) + "|"]
     for i, row in enumerate(first.itertuples()):
         cells = [str(i + 1), f"{row.table} ({row.lines})", _cell(row.what), _cell(row.theirs)]
         worst = REPRODUCED
@@ -149,14 +149,15 @@ def success_figure(runs: Mapping[str, pd.DataFrame], original: Mapping[str, Any]
     for ax, key in zip(np.atleast_1d(axes), keys.itertuples(index=False), strict=True):
         where = dict(zip(("network", "threshold", "behaviour"), key, strict=True))
         for j, (name, study) in enumerate(runs.items()):
-            share = [100 * select(study, {**where, "spl": s})["successful"].mean() for s in spls]
-            ax.bar(
-                np.arange(len(spls)) + (j - (len(runs) - 1) / 2) * width,
-                share,
-                width,
-                label=name,
-                color=("#7570b3", "#66a61e")[j % 2],
-            )
+            counts = [select(study, {**where, "spl": s})["successful"] for s in spls]
+            share = [100 * c.mean() for c in counts]
+            x = np.arange(len(spls)) + (j - (len(runs) - 1) / 2) * width
+            ax.bar(x, share, width, label=name, color=("#7570b3", "#66a61e")[j % 2])
+            for xi, yi, c in zip(x, share, counts, strict=True):
+                # The count on every bar: a bar of 0 % is otherwise not there to see.
+                ax.text(xi, yi + 2, f"{int(c.sum())}/{len(c)}", rotation=90, ha="center",
+                        va="bottom", fontsize=6, zorder=4,
+                        bbox={"facecolor": "white", "edgecolor": "none", "pad": 0.3})  # fmt: skip
         theirs = stated.get(tuple(key)) or (
             {float(s): 100.0 for s in spls} if where["behaviour"] == "lf" else None
         )
@@ -174,7 +175,8 @@ def success_figure(runs: Mapping[str, pd.DataFrame], original: Mapping[str, Any]
         ax.set_xlabel("SPL %")
         ax.set_title(" ".join(v.upper() for v in key), fontsize=9)
     np.atleast_1d(axes)[0].set_ylabel("successful missions %")
-    np.atleast_1d(axes)[0].set_ylim(0, 105)
+    np.atleast_1d(axes)[0].set_ylim(0, 125)
+    np.atleast_1d(axes)[0].set_yticks(range(0, 101, 20))
     handles, labels = np.atleast_1d(axes)[0].get_legend_handles_labels()
     for ax in np.atleast_1d(axes):
         h, lab = ax.get_legend_handles_labels()
