@@ -670,3 +670,19 @@ def test_in_groups_an_idle_robot_joins_no_round() -> None:
         h.step()
         assert bool(h.bus.published(TOPIC_UTILITY)) is joins_round  # answered, or not
         assert (h.agent.state == "na_idle") is not joins_round
+
+
+def test_with_a_hold_distance_the_leader_holds_beyond_it_not_at_the_warning() -> None:
+    """The original's Algorithm 5 read literally: the leader waits while a follower is
+    beyond the communication limit (8 m), where the warning (4 m) starts role rounds."""
+    for behind, holds in ((5.0, False), (9.0, True)):
+        h = Harness(
+            LeaderFollowerExecutor,
+            link_sensor=DistanceSensor(4.0),
+            params=LfParams(hold_distance=8.0),
+        )
+        lead(h)
+        message = pose_of("robot_2", -behind, 0.0, 0.0, role=L.ROLE_FOLLOWER, leader="robot_1")
+        h.hear(msgspec.structs.replace(message, stamp=h.now))
+        state = h.step(times=2)
+        assert (state == "leader_holding") is holds, (behind, state)

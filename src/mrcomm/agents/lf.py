@@ -333,9 +333,17 @@ class LeaderFollowerExecutor(TaskExecutor):
             if not self._follows_me(mate):
                 continue
             x, y = self._predicted_follower(known, pose)
-            if self._link_warns(mate, pose, x, y):
+            if self._too_far(mate, pose, x, y):
                 return True
         return False
+
+    def _too_far(self, mate: str, pose: Pose, x: float, y: float) -> bool:
+        """Whether a follower at (x, y) makes the leader hold: beyond ``hold_distance``
+        when it is set, else when its link is in warning."""
+        limit = self.lf.hold_distance
+        if limit is None:
+            return self._link_warns(mate, pose, x, y)
+        return math.hypot(x - pose.x, y - pose.y) > limit
 
     def _link_warns(self, mate: str, pose: Pose, x: float, y: float) -> bool:
         """Whether this robot's link to ``mate`` (at x, y) is in warning: the direct

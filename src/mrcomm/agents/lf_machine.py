@@ -167,6 +167,15 @@ class LfParams(ExecutorParams):
         "s",
         ge=0,
     )
+    hold_distance: float | None = parameter(
+        None,
+        "a leader holds while a follower is further than this from it, judged from the "
+        "follower's last pose (None: while the follower's link is in warning); the original "
+        "robots' leader held beyond the communication limit, 8 m (thesis Algorithm 5, "
+        "lines 1541, 1606), while the warning threshold started role assignment",
+        "m",
+        gt=0,
+    )
     chain_hops: int = parameter(
         1,
         "the trigger and a leader's hold judge a mate's link over the best chain of at "

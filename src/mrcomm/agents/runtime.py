@@ -81,8 +81,9 @@ class ExecutorRuntime:
         self.timeline = context.timeline
         self.params = params
         self.link_sensor: LinkSensor = context.link_sensor
-        #: judge_poses "on_receipt": mate -> (when its pose arrived, its link verdict).
-        self._link_verdicts: dict[str, tuple[float, bool]] | None = (
+        #: judge_poses "on_receipt": (question, mate) -> (when the mate's pose arrived,
+        #: the answer from it); see judged_on_receipt.
+        self._verdicts: dict[tuple[str, str], tuple[float, bool]] | None = (
             {} if params.judge_poses == "on_receipt" else None
         )
         self.incarnation = context.incarnation
@@ -202,21 +203,32 @@ class ExecutorRuntime:
     # -- state handlers --------------------------------------------------------------
     def mate_link_warns(self, mate: str, pose: Pose, x: float, y: float) -> bool:
         """Whether the link to ``mate``, at (x, y), is in warning for this robot at
-        ``pose``. With ``judge_poses`` "on_receipt" a threshold judged from positions
-        (SLT, SSD) is judged once per pose of the mate, at the first question after it
-        arrived, and that verdict holds until the next pose arrives (the original applied
-        thresholds to received messages); a measured signal (ESD) is read as it comes."""
+        ``pose``; with ``judge_poses`` "on_receipt" as :meth:`judged_on_receipt` says, for a
+        threshold judged from positions (SLT, SSD). A measured signal (ESD) is read as it
+        comes."""
         sensor = self.link_sensor
-        verdicts = self._link_verdicts
-        if verdicts is None or not sensor.positional:
+        if self._verdicts is None or not sensor.positional:  # (no closure per question)
             return sensor.warning(mate, pose, x, y, self._now)
+        return self.judged_on_receipt(
+            "link", mate, lambda: sensor.warning(mate, pose, x, y, self._now)
+        )
+
+    def judged_on_receipt(self, question: str, mate: str, judge: Callable[[], bool]) -> bool:
+        """``judge()``: a question about ``mate`` answered from its last pose. With
+        ``judge_poses`` "every_step" it is answered anew each time; with "on_receipt" once
+        per pose of the mate, at the first time it is asked after the pose arrived, and
+        that answer holds until the next pose arrives (the original applied its
+        thresholds to received messages: thesis lines 1201, 1531)."""
+        verdicts = self._verdicts
+        if verdicts is None:
+            return judge()
         heard = self.team_view.heard.get(mate)
-        cached = verdicts.get(mate)
+        cached = verdicts.get((question, mate))
         if cached is not None and heard is not None and cached[0] == heard:
             return cached[1]
-        verdict = sensor.warning(mate, pose, x, y, self._now)
+        verdict = judge()
         if heard is not None:
-            verdicts[mate] = (heard, verdict)
+            verdicts[question, mate] = (heard, verdict)
         return verdict
 
     def known_mates(self) -> Mapping[str, Mate]:
