@@ -686,3 +686,28 @@ def test_with_a_hold_distance_the_leader_holds_beyond_it_not_at_the_warning() ->
         h.hear(msgspec.structs.replace(message, stamp=h.now))
         state = h.step(times=2)
         assert (state == "leader_holding") is holds, (behind, state)
+
+
+def test_a_measured_link_that_warns_beside_the_leader_does_not_hold_it() -> None:
+    """ESD: the two directions of a measured link differ, so a follower waiting beside
+    its leader (within refollow_distance) may measure no warning while the leader's own
+    reading of it warns; such a follower does not hold the leader (both would wait for
+    ever). Further away the warning holds it as before."""
+    from mrcomm.net.link_sensors import MeasuredSensor
+
+    sensor = MeasuredSensor(warning_dbm=-60.0)
+    h = Harness(LeaderFollowerExecutor, link_sensor=sensor)
+
+    def read(level: float) -> None:
+        sensor.update("robot_2", level, h.now)
+        sensor.update("robot_3", -40.0, h.now)
+
+    read(-70.0)  # robot_2 warns from the start: the NA trigger opens a round
+    lead(h)
+    for behind, holds in ((1.5, False), (3.0, True)):
+        read(-70.0)
+        message = pose_of("robot_2", h.base.pose.x - behind, 0.0, 0.0, role=L.ROLE_FOLLOWER,
+                          leader="robot_1")  # fmt: skip
+        h.hear(msgspec.structs.replace(message, stamp=h.now))
+        state = h.step(times=3)
+        assert (state == "leader_holding") is holds, (behind, state)

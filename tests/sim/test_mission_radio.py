@@ -17,6 +17,7 @@ from mrcomm.net.radio.profile import profile_path
 from mrcomm.run.config import make_config
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.sim.mission import Mission, run_mission
+from mrcomm.testing.checks import S1_TRACE
 from tests.golden.golden import SCENARIO, comparable
 
 pytestmark = pytest.mark.slow
@@ -107,12 +108,53 @@ def test_esd_on_the_radio_records_the_measured_signal(s1_resources: ScenarioReso
     assert min(values) < max(values) - 10  # the signal changes as the robots move
 
 
-def test_esd_default_is_warned_about() -> None:
-    advice = _config(behaviour="lf", threshold="esd").ignored_settings()
+def test_the_original_robots_esd_level_on_the_radio_is_warned_about() -> None:
+    """The default follows the radio (next test); the original robots' -41 dBm given
+    by hand, which this radio passes 2.3 m from a peer, gets the advice."""
+    assert _config(behaviour="lf", threshold="esd").ignored_settings() == []
+    original = _config(behaviour="lf", threshold="esd", params={"threshold": {"warning_dbm": -41}})
+    advice = original.ignored_settings()
     assert len(advice) == 1 and "ESD warns below -41 dBm" in advice[0]
     tuned = _config(behaviour="lf", threshold="esd", params={"threshold": {"warning_dbm": -70}})
     assert tuned.ignored_settings() == []
     assert _config(behaviour="lf", threshold="ssd").ignored_settings() == []
+
+
+def test_esd_by_default_warns_where_the_original_robots_did() -> None:
+    """-41 dBm was the original robots' reading of a peer about 4 m away in line of
+    sight (their Table 6.2: 3.5-4.2 m): the default is the radio's power there, and
+    -41 dBm with a replayed trace of such cards."""
+    from mrcomm.net.radio.model import mean_power_dbm
+    from mrcomm.net.radio.profile import load_profile
+    from mrcomm.run.wiring import threshold_params
+
+    expected = round(float(mean_power_dbm(load_profile("office-2.4ghz"), [4.0], [0])[0]))
+    assert threshold_params(_config(behaviour="lf", threshold="esd")).warning_dbm == expected
+    assert expected == -48
+    outdoor = _config(behaviour="lf", threshold="esd", params={"network": {"profile": "outdoor"}})
+    outdoor_expected = round(float(mean_power_dbm(load_profile("outdoor"), [4.0], [0])[0]))
+    assert threshold_params(outdoor).warning_dbm == outdoor_expected
+    given = _config(behaviour="lf", threshold="esd", params={"threshold": {"warning_dbm": -60}})
+    assert threshold_params(given).warning_dbm == -60
+    traced = make_config(
+        None, scenario=SCENARIO, network="ah", threshold="esd", behaviour="lf",
+        params={"threshold": {"trace": str(S1_TRACE)}},
+    )  # fmt: skip
+    assert threshold_params(traced).warning_dbm == -41
+
+
+def test_lf_on_the_radio_with_esd_succeeds_where_nb_loses_statuses(
+    s1_resources: ScenarioResources,
+) -> None:
+    """With the defaults: the LF team completes and reports every task on seeds 1-5 (it
+    held for ever before: its level was the original cards' -41 dBm, and a follower
+    waiting beside its leader could still warn in one direction of the link); NB loses
+    a status on each."""
+    for seed in range(1, 6):
+        lf = run_mission(_config(behaviour="lf", threshold="esd", seed=seed), s1_resources)
+        assert lf.mission["successful"] and not lf.mission["timed_out"], seed
+        nb = run_mission(_config(behaviour="nb", threshold="esd", seed=seed), s1_resources)
+        assert not nb.mission["successful"] and nb.mission["failed_tasks"], seed
 
 
 #: Digests of three radio runs. Recorded before the review's restructuring (shared

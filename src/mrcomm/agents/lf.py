@@ -339,11 +339,21 @@ class LeaderFollowerExecutor(TaskExecutor):
 
     def _too_far(self, mate: str, pose: Pose, x: float, y: float) -> bool:
         """Whether a follower at (x, y) makes the leader hold: beyond ``hold_distance``
-        when it is set, else when its link is in warning."""
+        when it is set, else when its link is in warning (a measured one only beyond
+        where a waiting follower stays)."""
         limit = self.lf.hold_distance
-        if limit is None:
-            return self._link_warns(mate, pose, x, y)
-        return math.hypot(x - pose.x, y - pose.y) > limit
+        distance = math.hypot(x - pose.x, y - pose.y)
+        if limit is not None:
+            return distance > limit
+        # A measured signal (ESD) differs between the two directions of a link: a
+        # follower as close as it comes (a waiting follower drives again only beyond
+        # refollow_distance) that measures no warning waits, while the leader's own
+        # reading of it may warn there (shadowing, a wall, the weaker direction), and
+        # the two would wait for each other for ever. A signal judged from positions is
+        # the same both ways: such a follower sees the warning too and comes closer.
+        if distance <= self.lf.refollow_distance and not self.link_sensor.positional:
+            return False
+        return self._link_warns(mate, pose, x, y)
 
     def _link_warns(self, mate: str, pose: Pose, x: float, y: float) -> bool:
         """Whether this robot's link to ``mate`` (at x, y) is in warning: the direct

@@ -366,21 +366,32 @@ def warning_levels(runs: pd.DataFrame, configs: pd.DataFrame) -> dict[str, float
     ``warning_dbm`` parameter, or the threshold's default (runs of thresholds without
     one are left out)."""
     from mrcomm.errors import InputError
+    from mrcomm.net.signal_thresholds import EsdParams, esd_warning_dbm
     from mrcomm.specs import get_spec
 
     options = config_options(configs)
     levels: dict[str, float] = {}
     for run in runs[["run_id", "config_id", "threshold"]].to_dict("records"):
-        given = options.get(str(run["config_id"]), {}).get("params", {}).get("threshold", {})
+        stored = options.get(str(run["config_id"]), {})
+        given = stored.get("params", {}).get("threshold", {})
         if "warning_dbm" in given:
             levels[str(run["run_id"])] = float(given["warning_dbm"])
             continue
         try:
-            field = get_spec("threshold", str(run["threshold"])).params_model().model_fields
+            spec = get_spec("threshold", str(run["threshold"]))
+            params = spec.make_params(given)
+            if isinstance(params, EsdParams):  # its default follows the network
+                network = str(stored.get("network", "wlan"))
+                network_params = get_spec("network", network).make_params(
+                    stored.get("params", {}).get("network", {})
+                )
+                levels[str(run["run_id"])] = esd_warning_dbm(params, network, network_params)
+                continue
         except InputError:
-            continue  # a threshold of a plugin not installed here
-        if "warning_dbm" in field:
-            levels[str(run["run_id"])] = float(field["warning_dbm"].default)
+            continue  # a variant of a plugin not installed here
+        level = getattr(params, "warning_dbm", None)
+        if level is not None:
+            levels[str(run["run_id"])] = float(level)
     return levels
 
 

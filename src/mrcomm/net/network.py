@@ -58,6 +58,13 @@ class NetworkModel:
         return cls(params)
 
     @classmethod
+    def measured_power_dbm(cls, params: Any, distance_m: float) -> float | None:
+        """The power (dBm) a robot's card would measure of a peer ``distance_m`` away in
+        line of sight on this network, for a pulse threshold (ESD) that measures it;
+        None when the network has no signal to measure."""
+        return None
+
+    @classmethod
     def advice(cls, config: Any) -> list[str]:
         """Warnings about a run configuration with this model (one line each)."""
         return []

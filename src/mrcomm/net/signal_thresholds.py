@@ -8,8 +8,11 @@ registry of :mod:`mrcomm.net.thresholds`.
 * ESD — effective signal degradation: the RSSI each robot measured of each peer (its
   pulse process on a real robot; in simulation a recorded trace replayed, or — with the
   ``radio`` network model — the modelled received power of each link, rounded to the
-  card's 1 dBm); warning below -41 dBm by default. A pair without a reading yet never
-  warns.
+  card's 1 dBm). Its warning level by default means what the original robots' did:
+  -41 dBm, their cards' reading where a peer was about 4 m away in line of sight
+  (Table 6.2 of the original study: 3.5-4.2 m), when a trace of such cards is replayed;
+  on the radio, the power the radio's profile gives 4 m away in line of sight
+  (:func:`esd_warning_dbm`). A pair without a reading yet never warns.
 """
 
 from __future__ import annotations
@@ -94,13 +97,22 @@ class ModelThreshold(Threshold):
         return {"threshold": self.name, "warning_dbm": self.warning_dbm}
 
 
+#: The original robots' ESD warning level (their Wi-Fi cards' reading, dBm) ...
+ORIGINAL_ESD_WARNING_DBM = -41.0
+#: ... and how far from a peer in line of sight it fell (m; Table 6.2: 3.5-4.2 m, the
+#: distance of SLT's warning too).
+ESD_WARNING_DISTANCE_M = 4.0
+
+
 class EsdParams(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
-    warning_dbm: float = Field(
-        -41.0,
+    warning_dbm: float | None = Field(
+        None,
         allow_inf_nan=False,
-        description="a link warns below this measured RSSI",
+        description="a link warns below this measured RSSI (none: what the original's "
+        "-41 dBm meant, a peer about 4 m away in line of sight: -41 dBm replaying a trace, "
+        "on the radio the power its profile gives at 4 m)",
         json_schema_extra={"unit": "dBm"},
     )
     trace: Path | None = Field(
@@ -109,6 +121,26 @@ class EsdParams(BaseModel):
         "needed in simulation unless the network model is radio (then the pulses measure "
         "the radio)",
     )
+
+
+def esd_warning_dbm(params: EsdParams, network: str, network_params: BaseModel) -> float:
+    """ESD's warning level on ``network``: the one given, else what the original robots'
+    -41 dBm meant, a peer :data:`ESD_WARNING_DISTANCE_M` away in line of sight: -41 dBm
+    for a replayed trace (cards like theirs), or the power at that distance of the
+    network the pulses measure (the radio's profile)."""
+    if params.warning_dbm is not None:
+        return params.warning_dbm
+    if params.trace is None:
+        from mrcomm.specs import get_spec
+
+        measured = (
+            get_spec("network", network)
+            .load()
+            .measured_power_dbm(network_params, ESD_WARNING_DISTANCE_M)
+        )
+        if measured is not None:
+            return float(round(measured))
+    return ORIGINAL_ESD_WARNING_DBM
 
 
 class MeasuredThreshold(Threshold):
@@ -121,12 +153,12 @@ class MeasuredThreshold(Threshold):
     def build(cls, params: BaseModel, resources: SignalResources, ids: Sequence[str]) -> Threshold:
         assert isinstance(params, EsdParams)
         trace = resources.rssi_trace(params.trace) if params.trace is not None else None
-        return cls(trace, ids, params.warning_dbm)
+        return cls(trace, ids, _resolved(params))
 
     @classmethod
     def sensor(cls, params: BaseModel, resources: SignalResources) -> LinkSensor:
         assert isinstance(params, EsdParams)
-        return MeasuredSensor(params.warning_dbm)
+        return MeasuredSensor(_resolved(params))
 
     def __init__(
         self, trace: RssiTrace | None, ids: Sequence[str], warning_dbm: float = -41.0
@@ -150,6 +182,16 @@ class MeasuredThreshold(Threshold):
 
     def describe(self) -> dict[str, Any]:
         return {"threshold": self.name, "warning_dbm": self.warning_dbm}
+
+
+def _resolved(params: EsdParams) -> float:
+    """The warning level: given, or the original's for a replayed trace; on a measured
+    network the run's wiring resolves it first (``run.wiring.threshold_params``)."""
+    if params.warning_dbm is not None:
+        return params.warning_dbm
+    if params.trace is not None:
+        return ORIGINAL_ESD_WARNING_DBM
+    raise ValueError("ESD's warning level on a measured network is resolved by the wiring")
 
 
 SSD_SPEC = VariantSpec(

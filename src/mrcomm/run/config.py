@@ -37,6 +37,10 @@ LEGACY_OPTIONS: dict[str, tuple[Kind, str, str]] = {
     "signal_model": ("threshold", "ssd", "model"),
     "rssi_trace": ("threshold", "esd", "trace"),
 }
+#: What earlier versions wrote into every run's options for a legacy option whose
+#: parameter's default has changed since (ESD's warning level follows the network now):
+#: on a run of another variant that value is still "unset".
+LEGACY_DEFAULTS: dict[str, Any] = {"esd_warning": -41.0}
 
 
 class RunConfig(BaseModel):
@@ -218,7 +222,7 @@ def fold_legacy_options(values: Mapping[str, Any], source: str | Path | None) ->
             params.setdefault(kind, {}).setdefault(parameter, value)
             continue
         default = get_spec(kind, variant).params_model().model_fields[parameter].default
-        if value is not None and value != default:
+        if value is not None and value != default and value != LEGACY_DEFAULTS.get(option):
             raise InputError(
                 f"applies to {kind} {variant!r} only (this run's {kind} is {chosen!r})",
                 file=source,

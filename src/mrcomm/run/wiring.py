@@ -9,6 +9,8 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+from pydantic import BaseModel
+
 from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.agents.commands import OPERATOR_ID
 from mrcomm.net.link_sensors import MeasuredSensor
@@ -18,6 +20,7 @@ from mrcomm.net.radio.channel import fading_gain_db
 from mrcomm.net.radio.links import RadioLinks
 from mrcomm.net.relay import RelayOptions, relay_options
 from mrcomm.net.signal.trace import RssiTrace
+from mrcomm.net.signal_thresholds import EsdParams, esd_warning_dbm
 from mrcomm.net.thresholds import Threshold
 from mrcomm.ports import LinkSensor
 from mrcomm.robot.base import SimBase
@@ -35,12 +38,23 @@ def build_network(config: RunConfig, resources: ScenarioResources | None = None)
     return cls.build(config.variant_params("network"), resources, config.seed)
 
 
+def threshold_params(config: RunConfig) -> BaseModel:
+    """The threshold's parameters with what depends on the network resolved: ESD's
+    warning level, by default what the original's -41 dBm meant on the network its
+    pulses measure (:func:`~mrcomm.net.signal_thresholds.esd_warning_dbm`)."""
+    params = config.variant_params("threshold")
+    if isinstance(params, EsdParams) and params.warning_dbm is None:
+        level = esd_warning_dbm(params, config.network, config.variant_params("network"))
+        return params.model_copy(update={"warning_dbm": level})
+    return params
+
+
 def build_threshold(
     config: RunConfig, resources: ScenarioResources, ids: Sequence[str]
 ) -> Threshold:
     """The network-side threshold of the nodes ``ids``, from its spec and parameters."""
     cls: type[Threshold] = config.spec("threshold").load()
-    return cls.build(config.variant_params("threshold"), resources, ids)
+    return cls.build(threshold_params(config), resources, ids)
 
 
 def build_relay_options(config: RunConfig) -> RelayOptions:
@@ -51,7 +65,7 @@ def build_relay_options(config: RunConfig) -> RelayOptions:
 def build_link_sensor(config: RunConfig, resources: ScenarioResources) -> LinkSensor:
     """The link sensor a robot's agent judges its links with (one per robot)."""
     cls: type[Threshold] = config.spec("threshold").load()
-    return cls.sensor(config.variant_params("threshold"), resources)
+    return cls.sensor(threshold_params(config), resources)
 
 
 def pulse_trace_path(config: RunConfig) -> Path | None:

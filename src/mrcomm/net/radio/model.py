@@ -134,6 +134,12 @@ class RadioNetwork(NetworkModel):
         return cls(params, extent=resources.scenario.grid.extent, seed=seed)
 
     @classmethod
+    def measured_power_dbm(cls, params: Any, distance_m: float) -> float | None:
+        """The profile's mean received power ``distance_m`` away in line of sight."""
+        assert isinstance(params, RadioParams), type(params)
+        return float(mean_power_dbm(load_profile(params.profile), [distance_m], [0])[0])
+
+    @classmethod
     def advice(cls, config: Any) -> list[str]:
         """A pulse threshold (ESD) measures this radio: a warning level the radio passes
         within a few metres (the original robots' -41 dBm) would keep an LF team
