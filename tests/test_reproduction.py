@@ -127,7 +127,7 @@ def test_a_small_reproduction_rewrites_the_report(tmp_path: Path) -> None:
                       "--results", str(tmp_path / "results")])  # fmt: skip
     written = page.read_text()
     summary = _block(written, "reproduction-summary")
-    assert "1440 runs (3 repetitions)" in summary and "stale" not in written
+    assert "144 runs (3 repetitions)" in summary and "stale" not in written
     assert summary.count("| 105 |") == 2  # both studies, every comparison
     table = _block(written, "reproduction-table")
     numbered = [line for line in table.splitlines() if re.match(r"\| \d+ \|", line)]
