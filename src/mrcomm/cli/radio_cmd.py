@@ -32,7 +32,7 @@ from mrcomm.errors import InputError
 from mrcomm.output_paths import FIGURE_SUFFIXES, check_output_file
 
 radio_app = typer.Typer(
-    help="Radio profiles of the radio network model: list, show, plot, fit.",
+    help="Radio profiles of the radio network model: list, show, plot, fit, validate.",
     no_args_is_help=True,
     rich_markup_mode=None,
 )
@@ -370,3 +370,7 @@ def fit_cmd(
         typer.echo(json.dumps({**data, "out": str(out), "profile": profile.model_dump()}, indent=2))
     else:
         _print_fit(data, out)
+
+
+# `mrcomm radio validate` lives in its own module; importing it registers it here.
+from mrcomm.cli import radio_validate_cmd  # noqa: E402, F401

@@ -3,8 +3,10 @@ fit``) or SSD's signal models (``mrcomm signal fit``):
 
 * **a readings CSV** — columns ``x_tx, y_tx, x_rx, y_rx, rssi`` (m in the map frame,
   dBm; ``#`` lines are comments, extra columns are ignored), with the map the walls are
-  counted on (``--map MAP.yaml``, a ROS map_server map). One group: every reading
-  shares one shadowing field (one building).
+  counted on (``--map MAP.yaml``, a ROS map_server map), or a ``walls`` column that
+  gives them (a measured dataset with line-of-sight labels and no floor plan: 0 in line
+  of sight, 1 obstructed). One group: every reading shares one shadowing field (one
+  building).
 * **a results database** (``mrcomm run|sweep|live|collect --db``) — the RSSI its
   runs recorded at 2 Hz (table ``rssi``: t, src = the robot that measured, dst = the
   peer it measured) joined with both robots' positions at that time (table
@@ -122,15 +124,30 @@ class WallCounter:
 # -- CSV -------------------------------------------------------------------------------
 
 
-def read_csv_readings(path: Path, grid: OccupancyGrid, map_path: Path | None = None) -> Readings:
-    """Readings from a CSV ``x_tx, y_tx, x_rx, y_rx, rssi`` on ``grid``; any problem is
-    a one-line error naming the file, line and column."""
+def read_csv_readings(
+    path: Path, grid: OccupancyGrid | None, map_path: Path | None = None
+) -> Readings:
+    """Readings from a CSV ``x_tx, y_tx, x_rx, y_rx, rssi``, the walls counted on
+    ``grid`` or given by the CSV's ``walls`` column (then ``grid`` may be None); any
+    problem is a one-line error naming the file, line and column."""
     table = read_csv(path, CSV_COLUMNS)
+    given = "walls" in table.columns
+    if grid is None and not given:
+        raise InputError("needs a walls column, or a map to count the walls on (--map)",
+                         file=path, field="walls")  # fmt: skip
     n = len(table.rows)
     values = np.empty((n, 5))
+    counted = np.zeros(n, dtype=np.int64)
     for k, (lineno, row) in enumerate(table.rows):
         for c, column in enumerate(CSV_COLUMNS):
             values[k, c] = table.number(lineno, row, column)
+        if given:
+            walls = table.number(lineno, row, "walls")
+            if walls < 0 or walls != int(walls):
+                raise table.error(lineno, "walls", f"{walls:g} is not a whole number >= 0")
+            counted[k] = int(walls)
+        if grid is None:
+            continue
         for end, (x, y) in (("x_tx", values[k, 0:2]), ("x_rx", values[k, 2:4])):
             if not grid.in_bounds(float(x), float(y)):
                 raise table.error(
@@ -141,9 +158,14 @@ def read_csv_readings(path: Path, grid: OccupancyGrid, map_path: Path | None = N
                     + " (check the frame of the positions)",
                 )
     tx, rx = values[:, 0:2], values[:, 2:4]
-    walls = WallCounter(grid).many(tx, rx)
-    notes = [f"{n} readings from {path.name}; walls counted on "
-             + (str(map_path) if map_path is not None else "the map")]  # fmt: skip
+    if given:
+        walls = counted
+        where = "walls as the CSV gives them"
+    else:
+        assert grid is not None
+        walls = WallCounter(grid).many(tx, rx)
+        where = "walls counted on " + (str(map_path) if map_path is not None else "the map")
+    notes = [f"{n} readings from {path.name}; {where}"]
     return Readings.of(tx, rx, values[:, 4], walls, source=str(path), notes=notes)
 
 

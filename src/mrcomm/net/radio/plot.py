@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -106,4 +107,40 @@ def plot_profile(
         ax.set_ylabel("y (m)")
         ax.set_aspect("equal")
     fig.suptitle(f"Radio profile {profile.name}")
+    atomic_write(out, lambda tmp: fig.savefig(tmp, format=fmt, dpi=300))
+
+
+def validation_figure(result: Any, name: str, out: str | Path, fmt: str) -> None:
+    """Predicted against measured mean power of a validation's held-out readings
+    (:mod:`mrcomm.net.radio.validate`), one panel a model, line of sight and obstructed
+    marked apart, each panel titled with its RMSE; written atomically as ``fmt``."""
+    from matplotlib.figure import Figure
+
+    from mrcomm.net.radio.validate import MODELS
+
+    fig = Figure(figsize=(4.2 * len(MODELS), 4.2), layout="constrained")
+    axes: Sequence = fig.subplots(1, len(MODELS), squeeze=True, sharex=True, sharey=True)
+    measured, walls = result.measured, result.walls
+    values = np.concatenate([measured, *result.predicted.values()])
+    low = float(np.floor(values.min() / 5) * 5) - 2.0
+    high = float(np.ceil(values.max() / 5) * 5) + 2.0
+    for ax, model in zip(axes, MODELS, strict=True):
+        predicted = result.predicted[model]
+        ax.plot([low, high], [low, high], color="0.5", lw=0.8)
+        for obstructed, colour, label in ((False, WALL_COLOURS[0], "line of sight"),
+                                          (True, WALL_COLOURS[1], "obstructed")):  # fmt: skip
+            mask = (walls > 0) == obstructed
+            if mask.any():
+                ax.scatter(measured[mask], predicted[mask], s=10, color=colour, alpha=0.7,
+                           label=f"{label} ({int(mask.sum())})", edgecolor="none")  # fmt: skip
+        rmse = result.row(model, "all").rmse_db
+        ax.set_title(f"{model}: RMSE {rmse:.1f} dB")
+        ax.set_xlabel("measured mean power (dBm)")
+        ax.set_xlim(low, high)
+        ax.set_ylim(low, high)
+        ax.set_aspect("equal")
+        ax.grid(True, lw=0.4, alpha=0.5)
+        ax.legend(fontsize=7, loc="upper left")
+    axes[0].set_ylabel("predicted mean power (dBm)")
+    fig.suptitle(f"{name}: held-out readings")
     atomic_write(out, lambda tmp: fig.savefig(tmp, format=fmt, dpi=300))
