@@ -139,3 +139,37 @@ def test_a_small_reproduction_rewrites_the_report(tmp_path: Path) -> None:
     for name in ("reproduction-summary", "reproduction-table"):
         rest = rest.replace(_block(written, name), f"stale {name}")
     assert rest == stale
+
+
+@pytest.mark.slow
+def test_followers_driving_to_the_leaders_pose_keep_the_hold_time_flat_under_loss(
+    s1_resources: object,
+) -> None:
+    """The original robots' profile's second mechanism (Algorithm 5: the follower goes to
+    the leader's last pose): with it the leader's hold time on WLAN · SLT does not grow
+    from SPL 0 to SPL 75 and LF's near collisions fall (Tables 5.5 and 5.6); with
+    MRComm's followers, which stop 1.2 m short, the hold time doubles (6 seeds)."""
+    from mrcomm.run.config import make_config
+    from mrcomm.sim.mission import run_mission
+    from tests.golden.golden import SCENARIO
+
+    def means(follow: dict[str, float], spl: float) -> tuple[float, float]:
+        params = {"behaviour": {"judge_poses": "on_receipt", **follow}}
+        runs = [
+            run_mission(make_config(None, scenario=SCENARIO, network="wlan", threshold="slt",
+                                    behaviour="lf", spl=spl, seed=seed, params=params),
+                        s1_resources).mission  # type: ignore[arg-type]
+            for seed in range(1, 7)
+        ]  # fmt: skip
+        hold = sum(r["leader_disconnect_time"] for r in runs) / len(runs)
+        collisions = sum(r["near_collisions"] for r in runs) / len(runs)
+        return hold, collisions
+
+    to_the_pose = {"follow_distance": 0.65}
+    hold_0, collisions_0 = means(to_the_pose, 0.0)
+    hold_75, collisions_75 = means(to_the_pose, 75.0)
+    assert hold_75 < 1.3 * hold_0
+    assert collisions_75 < collisions_0
+    short_0, _ = means({}, 0.0)
+    short_75, _ = means({}, 75.0)
+    assert short_75 > 1.6 * short_0
