@@ -37,12 +37,19 @@ COLOURS = {REPRODUCED: "#1b9e77", DIRECTION: "#e6ab02", NOT_REPRODUCED: "#d95f02
 MARK = {REPRODUCED: "✔ reproduced", DIRECTION: "➚ direction", NOT_REPRODUCED: "✘ not reproduced"}
 
 
+#: The LF metrics the followers' mechanism explains (docs/REPRODUCTION.md).
+FOLLOWERS_METRICS = ("leader_disconnect_time", "idle_time", "total_distance")
+
+
 def mechanism(row: pd.Series) -> str:
     """The section of docs/REPRODUCTION.md that explains a difference in ``row``."""
     if row["metric"] == "near_collisions":
         return "near-collisions"
-    if " LF " in row["what"] or row["what"].startswith("LF"):
-        return "the-lf-team-under-loss"
+    lf = " LF " in row["what"] or row["what"].startswith("LF")
+    if lf and row["table"] != "text" and row["metric"] in FOLLOWERS_METRICS:
+        return "followers-drive-to-the-leaders-pose"
+    if lf:
+        return "what-is-left"
     if row["table"] in ("4.9", "5.7", "5.8", "5.10") or row["what"].startswith("NB"):
         return "small-effects"
     return ""
