@@ -14,6 +14,7 @@ import pytest
 
 from mrcomm.agents.lf import LeaderFollowerExecutor
 from mrcomm.agents.lf_machine import LF_STATES, LF_TRANSITIONS, LfParams
+from mrcomm.agents.lf_route import predicted_follower
 from mrcomm.messaging.aon import AonEndpoint
 from mrcomm.messaging.messages import (
     TOPIC_AON,
@@ -419,10 +420,16 @@ def test_the_prediction_stops_at_the_follow_distance_and_not_for_a_stopped_follo
     h.agent.set_time(sent + 60.0)  # long enough to have driven far past the leader
     pose = h.base.pose
     moving = h.agent.mates["robot_2"]
-    x, y = h.agent._predicted_follower(moving, pose)
-    assert math.hypot(x - pose.x, y - pose.y) == pytest.approx(h.agent.lf.follow_distance)
+    lf = h.agent.lf
+
+    def predicted(known: object) -> tuple[float, float]:
+        age = 60.0  # what the leader's hold judges the follower with (agents/lf_hold.py)
+        return predicted_follower(known, pose, age, lf.hold_prediction, lf.follow_distance)  # type: ignore[arg-type]
+
+    x, y = predicted(moving)
+    assert math.hypot(x - pose.x, y - pose.y) == pytest.approx(lf.follow_distance)
     stopped = msgspec.structs.replace(moving, v=0.0)
-    assert h.agent._predicted_follower(stopped, pose) == (moving.x, moving.y)
+    assert predicted(stopped) == (moving.x, moving.y)
 
 
 def test_a_leader_whose_task_is_reassigned_dissolves_its_group() -> None:

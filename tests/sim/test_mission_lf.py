@@ -159,10 +159,10 @@ def test_a_leader_waits_for_its_own_followers_only(s1_resources) -> None:  # typ
         leader._on_poses((message,))
 
     heard("follower", leader.robot_id)
-    assert leader._judge_followers()  # my follower is out: hold
+    assert leader.hold._judge(leader)  # my follower is out: hold
     heard("leader", "")
-    assert not leader._judge_followers()  # another leader: never wait for it
+    assert not leader.hold._judge(leader)  # another leader: never wait for it
     heard("follower", leader.team[1])
-    assert not leader._judge_followers()  # follows someone else
+    assert not leader.hold._judge(leader)  # follows someone else
     heard("na", "")
-    assert not leader._judge_followers()  # left the roles: its own monitor decides
+    assert not leader.hold._judge(leader)  # left the roles: its own monitor decides

@@ -53,6 +53,7 @@ from mrcomm.agents.collision import Mate
 from mrcomm.agents.executor import TaskExecutor
 from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.agents.lf_groups import joins, nearest_leader, round_leaders
+from mrcomm.agents.lf_hold import LeaderHold
 from mrcomm.agents.lf_machine import (
     ACTIVITY_OF_FULL_STATE,
     LF_STATES,
@@ -60,7 +61,7 @@ from mrcomm.agents.lf_machine import (
     ROLE_OF_TOP_STATE,
     LfParams,
 )
-from mrcomm.agents.lf_route import direct_hop, leader_coming, predicted_follower
+from mrcomm.agents.lf_route import direct_hop, leader_coming
 from mrcomm.agents.link_chain import chain_links
 from mrcomm.agents.role_round import RoleRound
 from mrcomm.agents.utility import robot_inputs, utility_function
@@ -101,11 +102,9 @@ class LeaderFollowerExecutor(TaskExecutor):
         self._follow_target: tuple[float, float] | None = None
         self._next_refresh = 0.0
         self._next_monitor = 0.0
-        self._next_followers_check = 0.0
         self._top_state = "na"
         self._state_since_role = 0.0
-        self._followers_were_out = False
-        self._out_since: float | None = None  # since when a follower has been in warning
+        self.hold = LeaderHold()
         self._no_hold_until = 0.0  # hold_timeout: no new hold before this time
         super().__init__(context, params)
         self.role_round = RoleRound(self.robot_id)
@@ -307,53 +306,8 @@ class LeaderFollowerExecutor(TaskExecutor):
         self.base.navigate_to(self.goal.x, self.goal.y)
 
     def _followers_out(self) -> bool:
-        # Followers' poses arrive at the pose rate: judge them at that rate too.
-        if self._now < self._next_followers_check:
-            return self._followers_were_out
-        self._next_followers_check = self._now + self.params.pose_period
-        out = self._judge_followers()
-        if not out:
-            self._out_since = None
-        elif self._out_since is None:
-            self._out_since = self._now
-        # hold_grace: a follower may stay in warning this long before the leader holds,
-        # so the group uses its connection area up to the communication limit.
-        grace = self.lf.hold_grace
-        self._followers_were_out = out and (
-            grace <= 0 or self._now - (self._out_since or self._now) >= grace
-        )
-        return self._followers_were_out
-
-    def _judge_followers(self) -> bool:
-        pose = self.base.pose
-        for mate in self.team:
-            known = self.mates.get(mate)
-            if known is None or self.team_view.age(mate, self._now) > self.lf.lost_timeout:
-                continue
-            if not self._follows_me(mate):
-                continue
-            x, y = self._predicted_follower(known, pose)
-            if self._too_far(mate, pose, x, y):
-                return True
-        return False
-
-    def _too_far(self, mate: str, pose: Pose, x: float, y: float) -> bool:
-        """Whether a follower at (x, y) makes the leader hold: beyond ``hold_distance``
-        when it is set, else when its link is in warning (a measured one only beyond
-        where a waiting follower stays)."""
-        limit = self.lf.hold_distance
-        distance = math.hypot(x - pose.x, y - pose.y)
-        if limit is not None:
-            return distance > limit
-        # A measured signal (ESD) differs between the two directions of a link: a
-        # follower as close as it comes (a waiting follower drives again only beyond
-        # refollow_distance) that measures no warning waits, while the leader's own
-        # reading of it may warn there (shadowing, a wall, the weaker direction), and
-        # the two would wait for each other for ever. A signal judged from positions is
-        # the same both ways: such a follower sees the warning too and comes closer.
-        if distance <= self.lf.refollow_distance and not self.link_sensor.positional:
-            return False
-        return self._link_warns(mate, pose, x, y)
+        """Whether a follower holds this leader now (:mod:`mrcomm.agents.lf_hold`)."""
+        return self.hold.followers_out(self)
 
     def _link_warns(self, mate: str, pose: Pose, x: float, y: float) -> bool:
         """Whether this robot's link to ``mate`` (at x, y) is in warning: the direct
@@ -369,12 +323,6 @@ class LeaderFollowerExecutor(TaskExecutor):
             chain_links(self.link_sensor, pose, mate, positions, self.lf.chain_hops, self._now)
             is None
         )
-
-    def _predicted_follower(self, known: Mate, pose: Pose) -> tuple[float, float]:
-        """Where a follower should be now (:func:`mrcomm.agents.lf_route.predicted_follower`)."""
-        age = max(0.0, self._now - known.stamp)
-        lf = self.lf
-        return predicted_follower(known, pose, age, lf.hold_prediction, lf.follow_distance)
 
     def _follows_me(self, mate: str) -> bool:
         """Whether this leader waits for ``mate``: its latest pose says it follows this

@@ -68,7 +68,7 @@ COMMANDS: dict[str, Command] = {
     "radio": Command(
         _CLI + "radio_cmd",
         "radio_app",
-        "Radio profiles of the radio network model: list, show, plot, fit, validate",
+        "Radio model profiles: list, show, plot, fit, validate",
     ),
     "fsm": Command(_CLI + "fsm_cmd", "fsm", "Write a behaviour's state machine as a diagram"),
     "variants": Command(

@@ -13,6 +13,9 @@
   ``x_tx,y_tx,x_rx,y_rx,rssi`` with the map, or a results database whose ESD runs
   measured the radio; print the fit against the base profile and write the base
   profile with the fitted values (see docs/RADIO.md, "Calibrating a profile").
+* ``mrcomm radio validate DATASET [--plot FIG] [--out PROFILE.yaml] [--json]`` — fit on
+  a dataset's training readings and report the error on its held-out ones
+  (:mod:`mrcomm.cli.radio_validate_cmd`).
 
 The fit lives here, not under ``mrcomm signal fit``: it writes a radio profile (what
 ``list``/``show``/``plot`` read and ``--set network.profile=`` takes), and shares no
@@ -32,7 +35,7 @@ from mrcomm.errors import InputError
 from mrcomm.output_paths import FIGURE_SUFFIXES, check_output_file
 
 radio_app = typer.Typer(
-    help="Radio profiles of the radio network model: list, show, plot, fit, validate.",
+    help="Radio model profiles: list, show, plot, fit, validate.",
     no_args_is_help=True,
     rich_markup_mode=None,
 )
@@ -372,5 +375,7 @@ def fit_cmd(
         _print_fit(data, out)
 
 
-# `mrcomm radio validate` lives in its own module; importing it registers it here.
-from mrcomm.cli import radio_validate_cmd  # noqa: E402, F401
+# `mrcomm radio validate` lives in its own module (which knows nothing of this one).
+from mrcomm.cli.radio_validate_cmd import validate_cmd  # noqa: E402
+
+radio_app.command("validate")(validate_cmd)

@@ -18,7 +18,6 @@ from typing import Annotated, Any
 
 import typer
 
-from mrcomm.cli.radio_cmd import radio_app
 from mrcomm.errors import InputError
 from mrcomm.output_paths import FIGURE_SUFFIXES, check_output_file
 
@@ -82,7 +81,6 @@ def _summary(result: Any, dataset: Path) -> dict[str, Any]:
     }
 
 
-@radio_app.command("validate")
 def validate_cmd(
     dataset: Annotated[
         str,
