@@ -28,3 +28,17 @@ def test_without_rendezvous_nb_loses_the_statuses_rps_brings_home() -> None:
     nb = make_config(scenario="data/scenarios/s1.yaml", network="ah", threshold="slt",
                      behaviour="nb", seed=1)  # fmt: skip
     assert run_mission(nb).mission["failed_tasks"] == ["1", "6"]
+
+
+def test_on_s2_a_robot_that_finished_early_passes_its_statuses_to_later_arrivals() -> None:
+    """S2 (10 robots, the assigner on robot_1): robot_7 finishes first, gathers alone and
+    idles at the meeting point before robot_1 comes. It used to keep its two statuses (7
+    and 17 failed on every seed); an idle robot now gives every mate that arrives its
+    statuses, and every task reaches the assigner."""
+    for seed in range(1, 5):
+        config = make_config(
+            scenario="data/scenarios/s2/s2.yaml", network="ah", threshold="slt",
+            behaviour="rps", spl=0.0, seed=seed,
+        )  # fmt: skip
+        mission = run_mission(config).mission
+        assert mission["successful"] and mission["failed_tasks"] == [], seed

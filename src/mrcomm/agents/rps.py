@@ -17,7 +17,11 @@ has been heard within ``gather_radius`` of the point in the last second, or
 ``gather_timeout`` has passed, and it has published its statuses ``min_reshares``
 times (without acknowledgements, repetition is what gets them through loss: at SPL 50
 six copies all fail 1.6 % of the time). Then it disperses again. A robot that
-finished its agenda stays at the point, so later arrivals find it there.
+finished its agenda stays at the point, so later arrivals find it there: each mate that
+comes within the gather radius gets its statuses ``min_reshares`` times, every
+``reshare_period`` (a mate that leaves and comes back gets them again). Without that, a
+robot that finished early and met nobody took its statuses with it: the task assigner,
+hosted on a robot that came later, never heard them.
 
 The meeting point, by ``meeting``:
 
@@ -123,6 +127,8 @@ class RendezvousExecutor(TaskExecutor):
         self._final_done = False
         self._next_reshare = 0.0
         self._reshares = 0
+        #: Idle at the point: how often each mate now there has been given the statuses.
+        self._shared_with: dict[str, int] = {}
         super().__init__(context, params)
 
     @property
@@ -223,18 +229,35 @@ class RendezvousExecutor(TaskExecutor):
             self._left_point = self._now
             self._select_next()
 
-    def _team_here(self) -> bool:
-        """Every mate heard within the last second and within the gather radius of the
-        meeting point."""
+    def _step_idle(self) -> None:
+        super()._step_idle()
+        if self.leaf() != "idle" or not self._final_done or self._now < self._next_reshare:
+            return
+        here = set(self._mates_at_point())
+        # A mate that left forgets it was told: when it comes back it is told again.
+        self._shared_with = {m: n for m, n in self._shared_with.items() if m in here}
+        if any(self._shared_with.get(m, 0) < self.rps.min_reshares for m in here):
+            self._reshare()
+            for mate in here:
+                self._shared_with[mate] = self._shared_with.get(mate, 0) + 1
+        self._next_reshare = self._now + self.rps.reshare_period
+
+    def _mates_at_point(self) -> list[str]:
+        """The mates heard within the last second within the gather radius of the point."""
         point = self.meeting_point()
         radius = self.rps.gather_radius
+        found = []
         for mate in self.team:
             known = self.mates.get(mate)
             if known is None or self.team_view.age(mate, self._now) > 1.0:
-                return False
-            if math.hypot(known.x - point[0], known.y - point[1]) > radius:
-                return False
-        return True
+                continue
+            if math.hypot(known.x - point[0], known.y - point[1]) <= radius:
+                found.append(mate)
+        return found
+
+    def _team_here(self) -> bool:
+        """Every mate heard within the last second within the gather radius."""
+        return len(self._mates_at_point()) == len(self.team)
 
     def _reshare(self) -> None:
         """Publish every completion this robot knows of again (the assigner counts a
