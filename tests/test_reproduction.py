@@ -11,10 +11,8 @@
 
 from __future__ import annotations
 
-import importlib.util
 import math
 import re
-import sys
 from pathlib import Path
 
 import pandas as pd
@@ -33,6 +31,7 @@ from mrcomm.analysis.reproduction import (
 )
 from mrcomm.analysis.stats import all_metrics
 from tests.conftest import ROOT
+from tests.test_docs_tables import _block, docs_tables
 
 
 def test_the_original_file_holds_every_table_of_its_simulation_chapters() -> None:
@@ -96,20 +95,6 @@ def test_success_counts_are_judged_by_fishers_test() -> None:
     assert close.loc[1, "ours"] == "4/30" and close.loc[1, "verdict"] == REPRODUCED
     far = compare(_runs(25), only)
     assert far.loc[1, "verdict"] == DIRECTION  # fewer than at SPL 0, but far more than 6
-
-
-SPEC = importlib.util.spec_from_file_location("docs_tables", ROOT / "scripts" / "docs_tables.py")
-assert SPEC is not None and SPEC.loader is not None
-docs_tables = importlib.util.module_from_spec(SPEC)
-sys.modules.setdefault("docs_tables", docs_tables)
-SPEC.loader.exec_module(docs_tables)
-
-
-def _block(text: str, name: str) -> str:
-    found = re.search(rf"<!-- generated: {name} -->\n(.*?)\n<!-- end generated: {name} -->",
-                      text, re.DOTALL)  # fmt: skip
-    assert found, name
-    return found.group(1)
 
 
 @pytest.mark.slow

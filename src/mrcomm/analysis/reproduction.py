@@ -187,40 +187,28 @@ def mann_whitney_rows(runs: pd.DataFrame, original: dict[str, Any]) -> list[Row]
                 f"{item['network'].upper()} {item['behaviour'].upper()} "
                 f"{item['threshold'].upper()}: SPL0 vs SPL{item['spl']}"
             )
-            if len(x) < 2 or len(y) < 2:
-                rows.append(
-                    Row(
-                        table["table"],
-                        table["lines"],
-                        f"{metric} · {label}",
-                        _mw_text(theirs),
-                        "too few runs",
-                        NOT_REPRODUCED,
-                        note,
-                        metric,
-                        theirs["r"],
-                    )
-                )
-                continue
-            u = u_statistic(x, y)
-            ours = {
-                "U": u,
-                "p": thesis_p(u, len(x), len(y), alternative),
-                "r": thesis_r(u, len(x), len(y)),
-            }
-            verdict = mann_whitney_verdict(ours, theirs, min(len(x), len(y), n0))
+            ours = None
+            if len(x) >= 2 and len(y) >= 2:
+                u = u_statistic(x, y)
+                ours = {
+                    "U": u,
+                    "p": thesis_p(u, len(x), len(y), alternative),
+                    "r": thesis_r(u, len(x), len(y)),
+                }
             rows.append(
                 Row(
                     table["table"],
                     table["lines"],
                     f"{metric} · {label}",
                     _mw_text(theirs),
-                    _mw_text(ours),
-                    verdict,
+                    "too few runs" if ours is None else _mw_text(ours),
+                    NOT_REPRODUCED
+                    if ours is None
+                    else mann_whitney_verdict(ours, theirs, min(len(x), len(y), n0)),
                     note,
                     metric,
                     theirs["r"],
-                    ours["r"],
+                    math.nan if ours is None else ours["r"],
                 )
             )
     return rows

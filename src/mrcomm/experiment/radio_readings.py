@@ -142,10 +142,10 @@ def read_csv_readings(
         for c, column in enumerate(CSV_COLUMNS):
             values[k, c] = table.number(lineno, row, column)
         if given:
-            walls = table.number(lineno, row, "walls")
-            if walls < 0 or walls != int(walls):
-                raise table.error(lineno, "walls", f"{walls:g} is not a whole number >= 0")
-            counted[k] = int(walls)
+            cell = table.number(lineno, row, "walls")
+            if cell < 0 or cell != int(cell):
+                raise table.error(lineno, "walls", f"{cell:g} is not a whole number >= 0")
+            counted[k] = int(cell)
         if grid is None:
             continue
         for end, (x, y) in (("x_tx", values[k, 0:2]), ("x_rx", values[k, 2:4])):
