@@ -9,7 +9,10 @@ For one message reaching one receiver:
 3. range: the link from the sender must be connected (the network model's decision);
 4. radio packet error: lost with the link's packet error rate for the message's size,
    one uniform draw from the receiver's stream (``radio`` only; every topic that is not
-   exempt, since the radio does not know topics);
+   exempt, since the radio does not know topics); on the shared channel the same draw
+   decides a collision: lost to the other frames on the air when it falls between the
+   packet error alone and the packet error at the SINR (1 for a receiver that was
+   transmitting or receiving another frame);
 5. simulated packet loss (SPL X %): on lossy topics the receiver drops X % of the
    messages, one uniform draw per message from its own seeded stream.
 
@@ -32,32 +35,46 @@ DROPPED_LOSS = "dropped_loss"
 DROPPED_RANGE = "dropped_range"
 DROPPED_RADIO = "dropped_radio"
 DROPPED_QUEUE = "dropped_queue"
+DROPPED_COLLISION = "dropped_collision"
 
 #: What can become of one message at one receiver.
-OUTCOMES = (RECEIVED, DROPPED_LOSS, DROPPED_RANGE, DROPPED_RADIO, DROPPED_QUEUE)
+OUTCOMES = (
+    RECEIVED, DROPPED_LOSS, DROPPED_RANGE, DROPPED_RADIO, DROPPED_QUEUE, DROPPED_COLLISION
+)  # fmt: skip
 #: The causes of a lost message, as reports name them.
 DROP_CAUSES = {
     DROPPED_LOSS: "lost (SPL)",
     DROPPED_RANGE: "out of range",
     DROPPED_RADIO: "packet error (radio)",
     DROPPED_QUEUE: "queue overflow (radio)",
+    DROPPED_COLLISION: "collision (shared channel)",
 }
-#: The message counts of one agent on one topic.
-COUNT_KEYS = ("sent", *OUTCOMES)
+#: The message counts of one agent on one topic (the shared channel's last).
+COUNT_KEYS = ("sent", RECEIVED, DROPPED_LOSS, DROPPED_RANGE, DROPPED_RADIO, DROPPED_QUEUE)
 #: The counts only a radio produces (results of other network models leave them out).
 RADIO_COUNT_KEYS = (DROPPED_RADIO, DROPPED_QUEUE)
 #: The radio's delay statistics of the received messages.
 DELAY_KEYS = ("delay_mean_s", "delay_max_s")
+#: What only the shared channel counts: messages lost to collisions at the agent, and
+#: the seconds its own messages on the topic took on the air (the channel load).
+SHARED_KEYS = (DROPPED_COLLISION, "airtime_s")
 
 
-def count_keys(radio: bool) -> list[str]:
-    """The count keys a run's results have: the radio's only when it had a radio."""
-    return [key for key in COUNT_KEYS if radio or key not in RADIO_COUNT_KEYS]
+def count_keys(radio: bool, shared: bool = False) -> list[str]:
+    """The count keys a run's results have: the radio's only when it had a radio, the
+    shared channel's collisions only when it had one."""
+    keys = [key for key in COUNT_KEYS if radio or key not in RADIO_COUNT_KEYS]
+    return [*keys, DROPPED_COLLISION] if shared else keys
 
 
 def has_radio_counts(counts: Iterable[Mapping[str, float]]) -> bool:
     """Whether per-topic counts come from a run with a radio (they carry its causes)."""
     return any(key in c for c in counts for key in RADIO_COUNT_KEYS)
+
+
+def has_shared_counts(counts: Iterable[Mapping[str, float]]) -> bool:
+    """Whether per-topic counts come from a run on the shared channel."""
+    return any(DROPPED_COLLISION in c for c in counts)
 
 
 _UNIFORM_BATCH = 1024
@@ -122,6 +139,8 @@ class TopicCounts:
     dropped_range: int = 0
     dropped_radio: int = 0
     dropped_queue: int = 0
+    dropped_collision: int = 0
+    airtime_s: float = 0.0
     delay_total: float = 0.0
     delay_max: float = 0.0
 
@@ -137,6 +156,8 @@ class TopicCounts:
             self.dropped_range += 1
         elif outcome == DROPPED_RADIO:
             self.dropped_radio += 1
+        elif outcome == DROPPED_COLLISION:
+            self.dropped_collision += 1
         else:
             self.dropped_queue += 1
 
@@ -147,10 +168,15 @@ class TopicCounts:
         self.dropped_loss += dropped_loss
         self.dropped_range += dropped_range
 
-    def as_dict(self, radio: bool = False) -> dict[str, int]:
+    def as_dict(self, radio: bool = False, shared: bool = False) -> dict[str, float]:
         """The counts (:data:`COUNT_KEYS`; without a ``radio``, none of
-        :data:`RADIO_COUNT_KEYS`, which are then always 0)."""
-        return {key: getattr(self, key) for key in count_keys(radio)}
+        :data:`RADIO_COUNT_KEYS`, which are then always 0; on the ``shared`` channel
+        also :data:`SHARED_KEYS`)."""
+        out: dict[str, float] = {key: getattr(self, key) for key in count_keys(radio)}
+        if shared:
+            out[DROPPED_COLLISION] = self.dropped_collision
+            out["airtime_s"] = round(self.airtime_s, 6)
+        return out
 
     def delays(self) -> dict[str, float]:
         """Mean and largest radio delay of the received messages, s."""
@@ -179,16 +205,29 @@ class DeliveryPolicy:
         return topic in self.exempt_topics
 
     def decide(
-        self, topic: str, connected: bool, stream: LossStream, packet_error: float = 0.0
+        self,
+        topic: str,
+        connected: bool,
+        stream: LossStream,
+        packet_error: float = 0.0,
+        shared_error: float = 0.0,
     ) -> str:
         """The outcome of one message on ``topic`` reaching one receiver, whose link from
         the sender is ``connected`` and loses this message with probability
-        ``packet_error`` (the radio's); draws from ``stream`` only when a loss applies."""
+        ``packet_error`` (the radio's) alone and ``shared_error`` (at least as large)
+        with the other frames on the shared channel; draws from ``stream`` only when a
+        loss applies."""
         if topic in self.exempt_topics:
             return RECEIVED
         if not connected:
             return DROPPED_RANGE
-        if packet_error > 0.0 and stream.draw() < packet_error:
+        if shared_error > 0.0:
+            draw = stream.draw()
+            if draw < packet_error:
+                return DROPPED_RADIO
+            if draw < shared_error:
+                return DROPPED_COLLISION
+        elif packet_error > 0.0 and stream.draw() < packet_error:
             return DROPPED_RADIO
         if self._loss > 0.0 and topic in self.lossy_topics and stream.draw() < self._loss:
             return DROPPED_LOSS

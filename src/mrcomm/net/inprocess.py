@@ -10,7 +10,10 @@ Zenoh bus applies in live mode.
 With a radio (:class:`~mrcomm.net.radio.channel.RadioChannel`) a message also queues at
 its sender and is delivered at the first step at or after its publication plus its
 delay (wait + airtime; within one step for light traffic), or is lost to the queue, and
-each receiver may lose it to packet error.
+each receiver may lose it to packet error. On the shared channel
+(:mod:`mrcomm.net.radio.medium`) the senders contend for the air: each delivery first
+runs the channel up to ``now`` and delivers the frames that ended, in the order they
+ended, each receiver losing a frame also to collisions.
 
 With relaying on (:mod:`mrcomm.net.relay`), a robot that receives a task status or AON
 message first passes a copy on at the next delivery; copies are counted by the relay,
@@ -44,14 +47,16 @@ from mrcomm.net.delivery import (
     TopicCounts,
 )
 from mrcomm.net.radio.channel import RadioChannel
+from mrcomm.net.radio.medium import Frame
 from mrcomm.net.relay import Relay
 from mrcomm.ports import BatchHandler, Handler, Received, StepBatch
 
 #: A message on its way: sender index, topic, message, due time, radio delay (None:
 #: lost to the sender's queue), bits on the air, links it crossed before this send (0:
-#: an original publication), and whether it is a relayed copy (a robot's own status sent
-#: again from its store is a copy that crossed no link before).
-_Queued = tuple[int, str, Message, float, float | None, int, int, bool]
+#: an original publication), whether it is a relayed copy (a robot's own status sent
+#: again from its store is a copy that crossed no link before), and on the shared
+#: channel its frame (who was blocked, the interference each receiver had).
+_Queued = tuple[int, str, Message, float, float | None, int, int, bool, Frame | None]
 
 #: Observer of every delivery decision: (now, topic, sender, receiver, message, outcome)
 #: with outcome one of :data:`~mrcomm.net.delivery.OUTCOMES`. Used by recordings.
@@ -172,8 +177,9 @@ class InProcessNetwork:
         return [self.ids[i] for i in self._subs.get(topic, {})]
 
     def pending(self) -> int:
-        """Messages waiting for the next delivery."""
-        return len(self._outbox)
+        """Messages waiting for the next delivery (or on the shared channel)."""
+        medium = self.channel.medium if self.channel is not None else None
+        return len(self._outbox) + (medium.pending() if medium is not None else 0)
 
     def deliver(self, now: float) -> None:
         """Deliver everything published since the last call (with a radio: everything
@@ -181,7 +187,10 @@ class InProcessNetwork:
         next call."""
         self._now = now
         outbox, self._outbox = self._outbox, []
-        if self.channel is not None:
+        medium = self.channel.medium if self.channel is not None else None
+        if medium is not None:
+            outbox = [*outbox, *self._ended(medium.advance(now))]
+        elif self.channel is not None:
             due = [m for m in outbox if m[3] <= now + 1e-9]
             self._outbox = [m for m in outbox if m[3] > now + 1e-9]
             outbox = due
@@ -195,7 +204,7 @@ class InProcessNetwork:
         batching = channel is None and observer is None
         position = 0
         while position < len(outbox):
-            sender, topic, message, _, delay, bits, crossed, copy = outbox[position]
+            sender, topic, message, _, delay, bits, crossed, copy, frame = outbox[position]
             position += 1
             receivers = self._subs.get(topic)
             if not receivers:
@@ -220,6 +229,8 @@ class InProcessNetwork:
                     continue
                 if queued_out:
                     outcome = DROPPED_QUEUE
+                elif frame is not None:
+                    outcome = self._decide_shared(topic, frame, receiver, links[receiver])
                 else:
                     per = (
                         channel.packet_error(sender, receiver, bits)
@@ -336,13 +347,47 @@ class InProcessNetwork:
 
     def _enqueue(self, sender: int, topic: str, message: Message, crossed: int, copy: bool) -> None:
         """Put a message (or a relayed copy) on its way from ``sender``."""
-        if self.channel is None:
-            self._outbox.append((sender, topic, message, 0.0, 0.0, 0, crossed, copy))
+        channel = self.channel
+        if channel is None:
+            self._outbox.append((sender, topic, message, 0.0, 0.0, 0, crossed, copy, None))
+        elif channel.medium is not None:
+            channel.medium.submit(
+                sender, self._now, channel.bits(message), (topic, message, crossed, copy)
+            )
         else:
-            bits = self.channel.bits(message)
-            delay = self.channel.transmit(sender, self._now, bits)
+            bits = channel.bits(message)
+            delay = channel.transmit(sender, self._now, bits)
             due = self._now + (delay or 0.0)
-            self._outbox.append((sender, topic, message, due, delay, bits, crossed, copy))
+            self._outbox.append((sender, topic, message, due, delay, bits, crossed, copy, None))
+
+    def _ended(self, frames: list[Frame]) -> list[_Queued]:
+        """The shared channel's finished frames as messages to deliver now (a dropped
+        frame has no delay: lost to its sender's queue); each sent frame's airtime is
+        counted for its sender and topic."""
+        out: list[_Queued] = []
+        for frame in frames:
+            topic, message, crossed, copy = frame.token
+            if frame.dropped:
+                out.append((frame.sender, topic, message, frame.end, None, frame.bits,
+                            crossed, copy, None))  # fmt: skip
+                continue
+            self._count(frame.sender, topic).airtime_s += frame.airtime
+            out.append((frame.sender, topic, message, frame.end, frame.delay, frame.bits,
+                        crossed, copy, frame))  # fmt: skip
+        return out
+
+    def _decide_shared(self, topic: str, frame: Frame, receiver: int, connected: bool) -> str:
+        """One receiver's outcome of a frame of the shared channel."""
+        assert self.channel is not None
+        if not connected or self.policy.exempt(topic):
+            return self.policy.decide(topic, connected, self._streams[receiver])
+        if frame.blocked[receiver]:
+            alone, shared = 0.0, 1.0
+        else:
+            alone, shared = self.channel.shared_errors(
+                frame.sender, receiver, frame.bits, float(frame.interference_mw[receiver])
+            )
+        return self.policy.decide(topic, True, self._streams[receiver], alone, shared)
 
     def _subscribe(self, receiver: int, topic: str, handler: Handler) -> None:
         self._subs.setdefault(topic, {}).setdefault(receiver, []).append(handler)
@@ -366,9 +411,10 @@ class InProcessNetwork:
     def counts_by_agent(self) -> dict[str, dict[str, dict[str, float]]]:
         """agent -> topic -> counts (and, with a radio, the delays of what it received)."""
         out: dict[str, dict[str, dict[str, float]]] = {}
+        radio = self.channel is not None
+        shared = radio and self.channel.medium is not None  # type: ignore[union-attr]
         for (agent, topic), c in sorted(self.counts.items()):
-            radio = self.channel is not None
-            entry: dict[str, float] = dict(c.as_dict(radio))
+            entry: dict[str, float] = dict(c.as_dict(radio, shared))
             if radio:
                 entry.update(c.delays())
             out.setdefault(agent, {})[topic] = entry

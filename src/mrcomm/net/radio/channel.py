@@ -7,7 +7,9 @@ message reaches one receiver given the link's received power, the message's size
   airtime and waits for the messages before it. Its delay is the wait plus its airtime;
   a message that would wait longer than ``max_queue_s`` is dropped (queue overflow).
   One transmission serves every receiver (broadcast, as publish/subscribe over the
-  radio). Contention between senders is not modelled: each has the channel to itself.
+  radio). Contention between senders is not modelled here: each has the channel to
+  itself, unless the run has the shared channel (:mod:`mrcomm.net.radio.medium`,
+  ``medium``), which then takes the frames instead of the queue.
 * **Packet error.** PER = 1 − (1 − BER)^bits at the link's power this step, drawn from
   the receiver's own loss stream (so the radio's draws, like SPL's, are the
   receiver's).
@@ -25,7 +27,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mrcomm.messaging.messages import Message, encode
+from mrcomm.net.radio.medium import SharedMedium
 from mrcomm.net.radio.profile import RadioProfile
+from mrcomm.net.radio.reception import ber as _ber
+from mrcomm.net.radio.reception import per as _per
 
 FloatArray = NDArray[np.float64]
 
@@ -42,15 +47,6 @@ def fading_gain_db(rng: np.random.Generator, k_db: float | None) -> float:
     return 10.0 * math.log10(max(power, 1e-12))
 
 
-def _ber(power_dbm: float, noise_floor_dbm: float) -> float:
-    """BER = erfc(√SNR) of one link (0 for NaN: a node without a position has no
-    radio); the scalar form of :func:`~mrcomm.net.radio.model.bit_error_rate`."""
-    if power_dbm != power_dbm:
-        return 0.0
-    snr = 10.0 ** ((power_dbm - noise_floor_dbm) / 10.0)
-    return min(math.erfc(math.sqrt(snr)), 0.5)
-
-
 class RadioChannel:
     """Queue and packet error of one run's radio (see the module docstring)."""
 
@@ -59,14 +55,20 @@ class RadioChannel:
         profile: RadioProfile,
         ids: Sequence[str],
         fading_rngs: Mapping[str, np.random.Generator] | None = None,
+        medium: SharedMedium | None = None,
     ) -> None:
         self.profile = profile
+        self.medium = medium
         self.ids = tuple(ids)
         self._free_at = [0.0] * len(self.ids)
         self._seconds_per_bit = 1.0 / profile.rate_bps
         self._power: list[list[float]] | None = None
         self._ber: list[list[float]] = []
         self._noise = profile.noise_floor_dbm
+        # The profile's reception rule, or None for the plain QPSK one (the common case,
+        # which then skips the checks).
+        plain = profile.modulation == "qpsk" and profile.preamble_snr_db is None
+        self._rule: RadioProfile | None = None if plain else profile
         self._sight: list[list[bool]] | None = None
         self._fading = (
             [fading_rngs[a] for a in self.ids]
@@ -99,9 +101,11 @@ class RadioChannel:
     def set_links(self, power: FloatArray, sight: NDArray[np.bool_] | None) -> None:
         """The step's received power ``power[s, r]`` (dBm) and line of sight."""
         self._power = power.tolist()
+        if self.medium is not None:
+            self.medium.set_power(power)
         self._sight = sight.tolist() if sight is not None else None
         # A team has a handful of links: plain Python beats numpy's per-call overhead.
-        self._ber = [[_ber(p, self._noise) for p in row] for row in self._power]
+        self._ber = [[_ber(p, self._noise, self._rule) for p in row] for row in self._power]
 
     def packet_error(self, sender: int, receiver: int, bits: int) -> float:
         """Probability that one message of ``bits`` from ``sender`` is lost at
@@ -113,13 +117,35 @@ class RadioChannel:
         in_sight = self._sight is None or self._sight[sender][receiver]
         return self.error_at(receiver, self._power[sender][receiver], in_sight, bits)
 
+    def shared_errors(
+        self, sender: int, receiver: int, bits: int, interference_mw: float
+    ) -> tuple[float, float]:
+        """Probability that a frame of ``bits`` from ``sender`` is lost at ``receiver``
+        this step without and with ``interference_mw`` of other frames on the air (the
+        shared channel), this packet's fast fading drawn once for both."""
+        if self._power is None:
+            return 0.0, 0.0
+        power_dbm = self._power[sender][receiver]
+        if power_dbm != power_dbm:
+            return 0.0, 0.0
+        if self._fading is not None:
+            in_sight = self._sight is None or self._sight[sender][receiver]
+            k_db = self.profile.rician_k_db if in_sight else None
+            power_dbm += fading_gain_db(self._fading[receiver], k_db)
+        alone = _per(_ber(power_dbm, self._noise, self._rule), bits)
+        if interference_mw <= 0.0:
+            return alone, alone
+        noise_mw = 10.0 ** (self._noise / 10.0) + interference_mw
+        shared = _per(_ber(power_dbm, 10.0 * math.log10(noise_mw), self._rule), bits)
+        return alone, max(alone, shared)
+
     def mean_error(self, power_dbm: float, bits: int) -> float:
         """Probability that a packet of ``bits`` is lost over a link of mean power
         ``power_dbm`` without fast fading (NaN: no position, never lost); the kernel's
         drop rate of an emulated link (``live.kernel_links``)."""
         if power_dbm != power_dbm:
             return 0.0
-        return _per(_ber(power_dbm, self._noise), bits)
+        return _per(_ber(power_dbm, self._noise, self._rule), bits)
 
     def error_at(self, receiver: int, power_dbm: float, in_sight: bool, bits: int) -> float:
         """Probability that one message of ``bits`` is lost at ``receiver`` over a link
@@ -131,12 +157,4 @@ class RadioChannel:
         if self._fading is not None:
             k_db = self.profile.rician_k_db if in_sight else None
             power_dbm += fading_gain_db(self._fading[receiver], k_db)
-        return _per(_ber(power_dbm, self._noise), bits)
-
-
-def _per(ber: float, bits: int) -> float:
-    """PER = 1 − (1 − BER)^bits; the scalar form of
-    :func:`~mrcomm.net.radio.model.packet_error_rate`."""
-    if ber <= 0.0:
-        return 0.0
-    return -math.expm1(bits * math.log1p(-ber))
+        return _per(_ber(power_dbm, self._noise, self._rule), bits)

@@ -14,17 +14,18 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, Field
-from scipy.special import erfc
 
 from mrcomm.net.network import NetworkModel
 from mrcomm.net.radio.channel import RadioChannel, fading_gain_db
 from mrcomm.net.radio.links import RadioLinks
+from mrcomm.net.radio.medium import SharedMedium
 from mrcomm.net.radio.profile import DEFAULT_PROFILE, RadioProfile, load_profile, profile_path
+from mrcomm.net.radio.reception import bit_error_rate_at
 from mrcomm.net.radio.shadowing import ShadowingField
 from mrcomm.net.relay import RelayParams
 from mrcomm.net.signal.pathloss import log_distance_range, log_distance_rssi
@@ -53,6 +54,13 @@ class RadioParams(RelayParams):
         min_length=1,
         description="radio profile: a bundled name (mrcomm radio show) or a YAML file",
     )
+    channel: Literal["queue", "shared"] = Field(
+        "queue",
+        description=(
+            "queue: each sender has the air to itself; shared: senders contend for it "
+            "(802.11 CSMA/CA), and frames on the air together interfere (simulation only)"
+        ),
+    )
 
     def input_files(self) -> dict[str, Path]:
         """The profile's file, for the run's provenance."""
@@ -80,9 +88,10 @@ def line_of_sight_distance(profile: RadioProfile, power_dbm: float) -> float:
 
 
 def bit_error_rate(profile: RadioProfile, power_dbm: FloatArray | float) -> FloatArray:
-    """BER = erfc(√SNR) (QPSK), SNR = power − noise floor (linear)."""
-    snr = 10.0 ** ((np.asarray(power_dbm, dtype=np.float64) - profile.noise_floor_dbm) / 10.0)
-    return np.asarray(np.minimum(erfc(np.sqrt(snr)), 0.5))
+    """BER at each received power by the profile's rule (:mod:`~mrcomm.net.radio.reception`):
+    erfc(√SNR) for QPSK, SNR = power − noise floor."""
+    snr_db = np.asarray(power_dbm, dtype=np.float64) - profile.noise_floor_dbm
+    return bit_error_rate_at(profile, snr_db)
 
 
 def packet_error_rate(ber: FloatArray | float, bits: FloatArray | float) -> FloatArray:
@@ -199,7 +208,11 @@ class RadioNetwork(NetworkModel):
 
     def channel(self, ids: Sequence[str]) -> Any:
         rngs = {a: stream(self.seed, "radio", "fading", a) for a in ids}
-        return RadioChannel(self.profile, ids, rngs)
+        medium = None
+        if self.params.channel == "shared":
+            backoff = [stream(self.seed, "radio", "backoff", a) for a in ids]
+            medium = SharedMedium(self.profile, len(ids), backoff)
+        return RadioChannel(self.profile, ids, rngs, medium)
 
     def live_links(self, grid: Any, node_ids: Sequence[str], aliases: Any) -> RadioLinks:
         return RadioLinks(self, grid, node_ids, aliases)
@@ -220,7 +233,7 @@ RADIO_SPEC = VariantSpec(
     params=RadioParams,
     summary=(
         "radio that follows the building: log-distance path loss, walls, correlated "
-        "shadowing, packet error from SNR and size, a sender queue"
+        "shadowing, packet error from SNR and size, a sender queue or a shared channel"
     ),
 )
 

@@ -16,10 +16,15 @@ The model (see :mod:`mrcomm.net.radio.model`):
   per reading (Rician with ``rician_k_db`` in line of sight, Rayleigh when obstructed);
 * below ``sensitivity_dbm`` nothing is received (the link is out of range); above it a
   message of b bits is lost with PER = 1 − (1 − BER)^b, BER = erfc(√SNR) (QPSK, the form
-  of DARPA SubT's virtual comms model), SNR = P − ``noise_floor_dbm``;
+  of DARPA SubT's virtual comms model), SNR = P − ``noise_floor_dbm``; or, with
+  ``modulation: dsss``, BER = ½·exp(−22·SNR) (802.11b's DBPSK spread over 22 MHz, as
+  ns-3 computes it); a frame below ``preamble_snr_db`` (optional) is always lost;
 * each sender transmits its messages one after another at ``rate_bps`` (message bytes +
   ``header_bytes``); a message that would wait longer than ``max_queue_s`` in the
-  sender's queue is dropped.
+  sender's queue is dropped;
+* with the shared channel (``network.channel: shared``) the senders also share the air
+  by 802.11's CSMA/CA, with the MAC timing ``slot_s``, ``sifs_s``, ``cw_min``,
+  ``preamble_s``, ``ack_s`` and ``carrier_sense_dbm`` (optional; 802.11b's by default).
 """
 
 from __future__ import annotations
@@ -75,6 +80,33 @@ class RadioProfile(BaseModel):
         ..., ge=0, le=10_000, description="bytes added to every message (MAC/IP/UDP/transport)"
     )
     max_queue_s: float = _field("longest wait in a sender's queue", "s", gt=0, le=3600)
+    modulation: Literal["qpsk", "dsss"] = Field(
+        "qpsk",
+        description=(
+            "bit errors: qpsk BER = erfc(√SNR); dsss (802.11b at 1 Mbit/s, ns-3's "
+            "DsssErrorRateModel) BER = ½·exp(−22·SNR)"
+        ),
+    )
+    preamble_snr_db: float | None = Field(
+        None, ge=-20, le=40,
+        description="frames below this SNR (SINR on the shared channel) are not detected at all",
+    )  # fmt: skip
+    # The shared channel's MAC (network.channel: shared; see radio/medium.py). The
+    # defaults are 802.11b's (DSSS, long preamble), the PHY of a 1 Mbit/s radio.
+    slot_s: float = Field(20e-6, gt=0, le=0.01, description="backoff slot time (s)")
+    sifs_s: float = Field(10e-6, ge=0, le=0.01, description="short interframe space (s)")
+    cw_min: int = Field(31, ge=0, le=1023, description="contention window: backoff 0..cw_min slots")
+    preamble_s: float = Field(
+        192e-6, ge=0, le=0.01, description="PHY preamble and header of every frame (s)"
+    )
+    ack_s: float = Field(
+        304e-6, ge=0, le=0.01,
+        description="an acknowledgement's airtime, for EIFS = DIFS + SIFS + ack_s (s)",
+    )  # fmt: skip
+    carrier_sense_dbm: float | None = Field(
+        None, ge=-140, le=0,
+        description="power at which a node hears the air busy (default: the sensitivity)",
+    )  # fmt: skip
 
     def describe(self) -> dict[str, float | str]:
         return self.model_dump()
