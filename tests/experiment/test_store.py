@@ -97,6 +97,41 @@ def test_other_schema_versions_are_refused_untouched(tmp_path: Path) -> None:
     assert _fingerprint(db) == before and not Path(f"{db}.wal").exists()
 
 
+def test_a_version_6_database_is_read_as_it_is_and_upgraded_when_written(
+    tmp_path: Path, s1_resources
+) -> None:  # type: ignore[no-untyped-def]
+    """Version 7 only added the shared channel's two message columns: a version 6 file
+    reads (the columns missing), and a writer adds them in place, keeping every row."""
+    from mrcomm.experiment.store import open_readonly
+
+    exp = load_experiment(write_schema(tmp_path))
+    db = tmp_path / "v6.duckdb"
+    spec = next(iter(exp.runs()))
+    store = ResultStore.open(db)
+    store.register(exp)
+    store.write_run(result_rows(spec, run_mission(spec.config, s1_resources), 1.0))
+    store.close()
+    con = duckdb.connect(str(db))
+    con.execute("ALTER TABLE messages DROP COLUMN airtime_s")
+    con.execute("ALTER TABLE messages DROP COLUMN dropped_collision")
+    con.execute("UPDATE meta SET value = '6' WHERE key = 'schema_version'")
+    rows = con.execute("SELECT count(*) FROM messages").fetchone()
+    con.close()
+    before = _fingerprint(db)
+    reader = open_readonly(db)
+    assert reader.execute("SELECT count(*) FROM messages").fetchone() == rows
+    reader.close()
+    assert _fingerprint(db) == before  # reading changed nothing
+    ResultStore.open(db).close()
+    con = duckdb.connect(str(db), read_only=True)
+    version = con.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
+    assert version == ("7",)
+    described = [r[0] for r in con.execute("DESCRIBE messages").fetchall()]
+    assert tuple(described) == column_names("messages")
+    assert con.execute("SELECT count(*) FROM messages").fetchone() == rows
+    con.close()
+
+
 def test_a_database_with_other_columns_is_refused_untouched(tmp_path: Path) -> None:
     exp = load_experiment(write_schema(tmp_path))
     db = tmp_path / "dev.duckdb"

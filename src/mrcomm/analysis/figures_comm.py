@@ -29,7 +29,7 @@ from mrcomm.analysis.figures import (
 )
 from mrcomm.analysis.mission_map import draw_mission_map
 from mrcomm.analysis.stats import GROUP, usable_runs
-from mrcomm.net.delivery import COUNT_KEYS, DROP_CAUSES, RADIO_COUNT_KEYS
+from mrcomm.net.delivery import COUNT_KEYS, DROP_CAUSES, DROPPED_COLLISION, RADIO_COUNT_KEYS
 
 #: Why a message was not received, in the order the bars stack.
 CAUSES = DROP_CAUSES
@@ -38,9 +38,10 @@ CAUSE_COLOURS = {
     "dropped_range": "#C03D3E",
     "dropped_radio": "#8172B3",
     "dropped_queue": "#937860",
+    "dropped_collision": "#DA8BC3",
 }
 #: The count columns of the messages table (the radio's are NULL without a radio).
-COUNTS = list(COUNT_KEYS)
+COUNTS = [*COUNT_KEYS, DROPPED_COLLISION]
 DROPS = list(DROP_CAUSES)
 LINK_COLOURS = {"warning": "#F2C14E", "out of range": "#C03D3E"}
 CONNECTED_COLOUR = "#DCEFD8"
@@ -101,7 +102,7 @@ def message_loss_figure(runs: pd.DataFrame, messages: pd.DataFrame) -> Figure:
     colours = {
         cause: colour
         for cause, colour in CAUSE_COLOURS.items()
-        if cause not in RADIO_COUNT_KEYS or table[cause].sum() > 0
+        if cause not in (*RADIO_COUNT_KEYS, DROPPED_COLLISION) or table[cause].sum() > 0
     }
     for ax, key in zip(axes.flat, configs, strict=False):
         frame = table[(table[list(GROUP)] == pd.Series(key, index=list(GROUP))).all(axis=1)]

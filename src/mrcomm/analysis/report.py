@@ -47,7 +47,7 @@ from mrcomm.analysis.table_format import (
 from mrcomm.errors import InputError
 from mrcomm.experiment.tables import RUN_MODES
 from mrcomm.fileio import atomic_write_bytes
-from mrcomm.net.delivery import DROP_CAUSES, RADIO_COUNT_KEYS, count_keys
+from mrcomm.net.delivery import DROP_CAUSES, DROPPED_COLLISION, RADIO_COUNT_KEYS, count_keys
 
 
 def _check_mode(mode: str | None) -> None:
@@ -143,9 +143,11 @@ def _package_versions() -> dict[str, str]:
 
 
 def _count_keys(table: pd.DataFrame) -> list[str]:
-    """The count columns to show: the radio's only when some run had a radio."""
+    """The count columns to show: the radio's only when some run had a radio, the
+    collisions only when some run had the shared channel."""
     radio = not table.empty and bool(table[list(RADIO_COUNT_KEYS)].to_numpy().sum() > 0)
-    return count_keys(radio)
+    shared = not table.empty and bool(table[DROPPED_COLLISION].sum() > 0)
+    return count_keys(radio, shared)
 
 
 def _message_columns(runs: pd.DataFrame, messages: pd.DataFrame) -> list[str]:

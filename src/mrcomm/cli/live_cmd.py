@@ -149,6 +149,9 @@ def live(
     from mrcomm.run.resources import checked_scenario
 
     scenario = checked_scenario(run.scenario)
+    refusal = run.spec("network").load().live_refusal(run.variant_params("network"))
+    if refusal is not None:
+        raise InputError(refusal, field="network.channel")
     members = live_members(scenario)
     if operator is not None:
         from mrcomm.run.operator_plan import load_operator_plan

@@ -23,7 +23,13 @@ from mrcomm.cli.progress import MissionProgress, ProgressLine
 from mrcomm.cli.run_options import warn_ignored_settings, with_run_options
 from mrcomm.fileio import atomic_write
 from mrcomm.metrics.units import unit_of
-from mrcomm.net.delivery import DELAY_KEYS, DROP_CAUSES, count_keys, has_radio_counts
+from mrcomm.net.delivery import (
+    DELAY_KEYS,
+    DROP_CAUSES,
+    count_keys,
+    has_radio_counts,
+    has_shared_counts,
+)
 from mrcomm.output_paths import FIGURE_SUFFIXES, RECORDING_SUFFIXES, check_output_file
 from mrcomm.run.assemble import AON_TOTAL_KEYS
 from mrcomm.run.result import MissionResult
@@ -328,7 +334,7 @@ def print_result(result: MissionResult, console: Console) -> None:
     _print_links(result, console)
 
     radio = has_radio_counts(result.messages.values())
-    keys = count_keys(radio)
+    keys = count_keys(radio, has_shared_counts(result.messages.values()))
     drops = [k for k in keys if k in DROP_CAUSES]
     headers = ["topic", "sent", "received", *(DROP_CAUSES[k] for k in drops), "not received %"]
     if radio:

@@ -19,7 +19,7 @@ from zstandard import ZstdError
 
 from mrcomm.errors import InputError
 from mrcomm.experiment.recording import METADATA_NAME, TOPIC_MESSAGES, TOPIC_RESULT
-from mrcomm.net.delivery import OUTCOMES, count_keys, has_radio_counts
+from mrcomm.net.delivery import OUTCOMES, count_keys, has_radio_counts, has_shared_counts
 
 _MAGIC = b"\x89MCAP"
 # What a damaged file raises while being read: bad records, failed decompression (zstd;
@@ -141,13 +141,14 @@ def _summarise(path: Path, stream: Any) -> RecordingSummary:
                 name = sch.name if sch is not None else ""
                 stats[cid] = ChannelStats(channel.topic, name, channel.message_encoding)
     radio = has_radio_counts(outcomes.values())
+    shared = has_shared_counts(outcomes.values())
     return RecordingSummary(
         path=path,
         channels=sorted(stats.values(), key=lambda c: c.topic),
         metadata=metadata,
         result=result,
         outcomes={
-            topic: {o: counts.get(o, 0) for o in count_keys(radio) if o in OUTCOMES}
+            topic: {o: counts.get(o, 0) for o in count_keys(radio, shared) if o in OUTCOMES}
             for topic, counts in sorted(outcomes.items())
         },
     )

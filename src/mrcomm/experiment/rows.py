@@ -20,7 +20,7 @@ from mrcomm.experiment.tables import (
     RUN_TABLES,
     TRAJECTORY_STORE_PERIOD,
 )
-from mrcomm.net.delivery import COUNT_KEYS, DELAY_KEYS
+from mrcomm.net.delivery import COUNT_KEYS, DELAY_KEYS, SHARED_KEYS
 from mrcomm.run.provenance import fingerprint, provenance
 from mrcomm.run.result import MissionResult
 from mrcomm.specs import get_spec
@@ -125,7 +125,8 @@ def result_rows(
         for robot, values in result.robots.items()
         for task in values.get("failed_tasks") or []
     ]
-    # The radio's causes and delays are NULL for runs of network models without a radio.
+    # The radio's causes and delays are NULL for runs of network models without a radio,
+    # the shared channel's for runs without it.
     rows["messages"] = [
         (
             rid,
@@ -133,6 +134,7 @@ def result_rows(
             topic,
             *(c.get(key) for key in COUNT_KEYS),
             *(c.get(key) for key in DELAY_KEYS),
+            *(c.get(key) for key in SHARED_KEYS),
         )
         for agent, topics in result.messages_by_agent.items()
         for topic, c in topics.items()

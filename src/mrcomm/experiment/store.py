@@ -30,6 +30,7 @@ from mrcomm.experiment.tables import (
     RUN_TABLES,
     SCHEMA_VERSION,
     TABLES,
+    UPGRADES,
     create_statement,
 )
 
@@ -85,16 +86,17 @@ def damaged(path: Path, err: BaseException) -> InputError:
     return InputError(f"damaged or not a DuckDB database ({first})", file=path)
 
 
-def _check_version(con: duckdb.DuckDBPyConnection, path: Path) -> bool:
-    """True for an MRComm results database of this version; False for an empty file.
-    Raise InputError for anything else (a damaged file too)."""
+def _check_version(con: duckdb.DuckDBPyConnection, path: Path, *, upgrade: bool = False) -> bool:
+    """True for an MRComm results database of this version (or one it extends, upgraded
+    in place when ``upgrade``); False for an empty file. Raise InputError for anything
+    else (a damaged file too)."""
     try:
-        return _read_version(con, path)
+        return _read_version(con, path, upgrade)
     except duckdb.Error as err:
         raise damaged(path, err) from None
 
 
-def _read_version(con: duckdb.DuckDBPyConnection, path: Path) -> bool:
+def _read_version(con: duckdb.DuckDBPyConnection, path: Path, upgrade: bool) -> bool:
     tables = {row[0] for row in con.execute("SELECT table_name FROM duckdb_tables()").fetchall()}
     if not tables:
         return False
@@ -102,7 +104,8 @@ def _read_version(con: duckdb.DuckDBPyConnection, path: Path) -> bool:
         raise InputError("not an MRComm results database (no 'meta' table)", file=path)
     row = con.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
     version = row[0] if row else None
-    if version != SCHEMA_VERSION:
+    added = UPGRADES.get(version, {}) if isinstance(version, str) else {}
+    if version != SCHEMA_VERSION and not added:
         raise InputError(
             f"results schema version {version!r}, this mrcomm uses version "
             f"{SCHEMA_VERSION!r}; use a new --db (or the mrcomm that wrote it)",
@@ -113,12 +116,20 @@ def _read_version(con: duckdb.DuckDBPyConnection, path: Path) -> bool:
         raise InputError(f"damaged results database: table '{missing[0]}' is missing", file=path)
     for table, columns in TABLES.items():
         have = [row[0] for row in con.execute(f"DESCRIBE {table}").fetchall()]
-        if have != [name for name, _ in columns]:
+        new = {name for name, _ in added.get(table, ())}
+        if have != [name for name, _ in columns if name not in new]:
             raise InputError(
                 f"table '{table}' has other columns than this mrcomm writes (a database "
                 "of another development version?); use a new --db",
                 file=path,
             )
+    if added and upgrade:
+        con.execute("BEGIN TRANSACTION")
+        for table, columns in added.items():
+            for name, sql_type in columns:
+                con.execute(f"ALTER TABLE {table} ADD COLUMN {name} {sql_type}")
+        con.execute("UPDATE meta SET value = ? WHERE key = 'schema_version'", [SCHEMA_VERSION])
+        con.execute("COMMIT")
     return True
 
 
@@ -210,7 +221,7 @@ class ResultStore:
         path = Path(path)
         con = _connect(path, read_only=False)
         try:
-            if not _check_version(con, path):
+            if not _check_version(con, path, upgrade=True):
                 con.execute("BEGIN TRANSACTION")
                 for table in TABLES:
                     con.execute(create_statement(table))

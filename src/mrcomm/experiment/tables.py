@@ -8,8 +8,8 @@ Every per-run table is keyed by ``run_id = f"{config_id}-r{repetition:03d}"``.
 from __future__ import annotations
 
 #: Bumped whenever a table or column changes meaning; a database written with another
-#: version is refused before it is touched.
-SCHEMA_VERSION = "6"
+#: version is refused before it is touched, except one that :data:`UPGRADES` extends.
+SCHEMA_VERSION = "7"
 
 Columns = tuple[tuple[str, str], ...]
 
@@ -148,6 +148,10 @@ MESSAGES: Columns = (
     ("dropped_queue", "INTEGER"),
     ("delay_mean_s", "DOUBLE"),
     ("delay_max_s", "DOUBLE"),
+    # The shared channel's (NULL without it): collisions at the agent, and the seconds
+    # its own messages on the topic took on the air.
+    ("dropped_collision", "INTEGER"),
+    ("airtime_s", "DOUBLE"),
 )
 LINKS: Columns = (
     ("run_id", "TEXT"),
@@ -233,3 +237,11 @@ def column_names(table: str) -> tuple[str, ...]:
 def create_statement(table: str) -> str:
     columns = ", ".join(f"{name} {sql_type}" for name, sql_type in TABLES[table])
     return f"CREATE TABLE IF NOT EXISTS {table} ({columns})"
+
+
+#: Older schema versions this one only adds columns to (at the end of their tables): a
+#: database of such a version is read as it is (the added columns read as missing) and
+#: upgraded in place when opened for writing.
+UPGRADES: dict[str, dict[str, Columns]] = {
+    "6": {"messages": (("dropped_collision", "INTEGER"), ("airtime_s", "DOUBLE"))},
+}

@@ -65,6 +65,11 @@ class NetworkModel:
         return None
 
     @classmethod
+    def live_refusal(cls, params: Any) -> str | None:
+        """Why this model's ``params`` cannot run in live mode (one line), or None."""
+        return None
+
+    @classmethod
     def advice(cls, config: Any) -> list[str]:
         """Warnings about a run configuration with this model (one line each)."""
         return []

@@ -18,7 +18,7 @@ from mrcomm.agents.assigner import ASSIGNER_ID
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.compute import RobotFacts, mission_metrics, robot_metrics
 from mrcomm.metrics.timeline import Timeline
-from mrcomm.net.delivery import count_keys, has_radio_counts
+from mrcomm.net.delivery import count_keys, has_radio_counts, has_shared_counts
 from mrcomm.run.config import RunConfig
 from mrcomm.run.proximity import Encounter, collision_zone, judged_against_truth
 from mrcomm.run.result import MissionResult
@@ -214,13 +214,16 @@ def sum_counts(
     per_agent = list(per_agent)
     # The radio's causes appear only in runs with a radio (present in the agents' counts).
     radio = has_radio_counts(c for counts in per_agent for c in counts.values())
-    keys = count_keys(radio)
+    shared = has_shared_counts(c for counts in per_agent for c in counts.values())
+    keys = count_keys(radio, shared)
     totals: dict[str, dict[str, Any]] = {}
     for counts in per_agent:
         for topic, c in counts.items():
             t = totals.setdefault(topic, dict.fromkeys(keys, 0))
             for k in keys:
                 t[k] += int(c.get(k, 0))
+            if shared:  # the seconds the topic's messages took on the air
+                t["airtime_s"] = round(t.get("airtime_s", 0.0) + c.get("airtime_s", 0.0), 6)
             if radio:  # received-weighted mean and maximum of the radio delay
                 t["delay_total"] = t.get("delay_total", 0.0) + c.get("delay_mean_s", 0.0) * int(
                     c.get("received", 0)

@@ -136,7 +136,8 @@ class RadioChannel:
         if interference_mw <= 0.0:
             return alone, alone
         noise_mw = 10.0 ** (self._noise / 10.0) + interference_mw
-        shared = _per(_ber(power_dbm, 10.0 * math.log10(noise_mw), self._rule), bits)
+        # The preamble was judged when the frame started (radio/medium.py).
+        shared = _per(_ber(power_dbm, 10.0 * math.log10(noise_mw), self._rule, False), bits)
         return alone, max(alone, shared)
 
     def mean_error(self, power_dbm: float, bits: int) -> float:

@@ -16,12 +16,16 @@ senders share the air:
   queue while the air is busy, so a frame that finds the air idle long enough goes out
   at once. Broadcast frames are not acknowledged, so the window never doubles and a
   frame is sent once. Two nodes whose counters reach zero in the same slot collide.
-* **Reception.** A receiver locks on the strongest frame that starts while it neither
-  transmits nor receives and whose power is at least the sensitivity; frames that start
-  while it is locked, or while it transmits, are lost to it (collision; no capture). A
-  frame it locked on is lost with the packet error rate at its SINR: the noise floor
-  plus the power of every other frame on the air at any time during it (hidden terminals
-  collide here). A receiver that transmits at any time during the frame loses it.
+* **Reception.** A receiver locks on the first frame it hears (power at least the
+  sensitivity) that starts while it neither transmits nor receives — of frames starting
+  in the same instant, the strongest (the nearest: the first to arrive) — provided its
+  preamble's SINR, against every
+  frame on the air then, reaches the profile's ``preamble_snr_db`` (when it has one).
+  Frames that start while it is locked or transmits, or after a preamble it could not
+  detect, are lost to it (collision; no capture). A frame it locked on is lost with the
+  packet error rate at its SINR: the noise floor plus the power of every other frame on
+  the air at any time during it (hidden terminals collide here). A receiver that
+  transmits at any time during the frame loses it.
 * **Queue.** A frame older than ``max_queue_s`` is dropped when it reaches the head of
   the queue or when a newer one arrives behind it, so a queue holds at most
   ``max_queue_s`` of its sender's traffic.
@@ -118,6 +122,7 @@ class SharedMedium:
         self._recent: list[Frame] = []  # ended, still within one airtime of the clock
         self._finished: list[Frame] = []
         self._submitted: list[Frame] = []  # since the last advance
+        self._waiting = np.zeros(n, dtype=np.int64)  # each sender's frames not yet sent
         self._arrivals: list[tuple[float, int, Frame]] = []  # a heap by arrival
         self._sequence = 0
         self._clock = 0.0
@@ -153,12 +158,17 @@ class SharedMedium:
         """Hand a frame of ``sender`` published at ``stamp`` (the last :meth:`advance`)
         to the channel; ``token`` comes back with it when it has finished."""
         self._submitted.append(Frame(sender, max(stamp, self._clock), bits, token))
+        self._waiting[sender] += 1
 
     # -- outputs ---------------------------------------------------------------------
     def pending(self) -> int:
         """Frames submitted, queued or on the air."""
         queued = sum(len(q) for q in self._queues)
         return len(self._submitted) + len(self._arrivals) + queued + len(self._on_air)
+
+    def queued(self, sender: int) -> int:
+        """Frames of ``sender`` waiting: submitted, not yet on the air or dropped."""
+        return int(self._waiting[sender])
 
     def advance(self, now: float) -> list[Frame]:
         """Simulate the channel up to ``now``; the frames that ended (or were dropped)
@@ -228,6 +238,7 @@ class SharedMedium:
         limit = self.profile.max_queue_s
         while queue and now - queue[0].submitted > limit + _SAME_TIME_S:
             frame = queue.popleft()
+            self._waiting[node] -= 1
             frame.dropped = True
             frame.end = now
             self._finished.append(frame)
@@ -259,6 +270,7 @@ class SharedMedium:
             self._expire(node, now)
             if self._queues[node]:
                 frames.append(self._queues[node].popleft())
+                self._waiting[node] -= 1
                 queue = self._queues[node]
                 self._head_arrival[node] = queue[0].submitted if queue else np.inf
         if not frames:
@@ -274,15 +286,26 @@ class SharedMedium:
         # Receivers busy now cannot take any of these frames; who starts now too.
         self._transmitting[senders] = True
         for other in self._on_air:
-            other.blocked[senders] = True
+            if self._radio[other.sender]:  # (nothing stops a frame without a radio)
+                other.blocked[senders] |= self._radio[senders]
         blocked = self._transmitting | (self._lock_until > now + _SAME_TIME_S)
-        # Each free receiver locks on the strongest of the frames that start now.
+        # Every frame on the air now is noise to the preamble of each new one.
+        on_air_mw = self._power_mw[[f.sender for f in self._on_air] + senders.tolist()].sum(axis=0)
+        # Of the frames that start in the same instant a receiver takes the first to
+        # reach it, the nearest: here the strongest (no capture beyond that).
         strength = np.where(self._hears[senders], self._power_mw[senders], -1.0)
         strongest = strength.argmax(axis=0)
-        free = ~blocked & (strength.max(axis=0) >= 0.0)
+        free = ~blocked & self._radio & (strength.max(axis=0) >= 0.0)
+        threshold = self.profile.preamble_snr_db
         for k, frame in enumerate(frames):
+            hears = self._hears[frame.sender] & self._radio
             mine = free & (strongest == k)
-            frame.blocked = (blocked | (free & ~mine)) & self._radio
+            if threshold is not None:  # the preamble is detected above its SINR only
+                signal = self._power_mw[frame.sender]
+                with np.errstate(divide="ignore"):
+                    sinr_db = 10.0 * np.log10(signal / (self._noise_mw + on_air_mw - signal))
+                mine &= sinr_db >= threshold
+            frame.blocked = (blocked | (hears & ~mine)) & self._radio & self._radio[frame.sender]
             self._lock_until[mine] = frame.end
             self._backoff[frame.sender] = 0
         self._busy += self._senses[senders].sum(axis=0)
@@ -325,5 +348,5 @@ class SharedMedium:
         noise_dbm = 10.0 * np.log10(self._noise_mw + frame.interference_mw)
         sinr_dbm = np.nan_to_num(self._power_dbm[frame.sender], nan=-np.inf)
         with np.errstate(divide="ignore", invalid="ignore"):
-            ber = bit_error_rate_at(self.profile, sinr_dbm - noise_dbm)
+            ber = bit_error_rate_at(self.profile, sinr_dbm - noise_dbm, detect=False)
             return np.asarray(-np.expm1(frame.bits * np.log1p(-np.minimum(ber, 1.0))))

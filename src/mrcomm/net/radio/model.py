@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, Field
 
+from mrcomm.errors import InputError
 from mrcomm.net.network import NetworkModel
 from mrcomm.net.radio.channel import RadioChannel, fading_gain_db
 from mrcomm.net.radio.links import RadioLinks
@@ -149,6 +150,17 @@ class RadioNetwork(NetworkModel):
         return float(mean_power_dbm(load_profile(params.profile), [distance_m], [0])[0])
 
     @classmethod
+    def live_refusal(cls, params: Any) -> str | None:
+        """The shared channel needs every frame on the air in one place; live processes
+        each judge only the frames that reach them."""
+        if getattr(params, "channel", "queue") == "shared":
+            return (
+                "the shared channel is simulation only (each live process sees only the "
+                "frames that reach it, not the air they share); use channel: queue"
+            )
+        return None
+
+    @classmethod
     def advice(cls, config: Any) -> list[str]:
         """A pulse threshold (ESD) measures this radio: a warning level the radio passes
         within a few metres (the original robots' -41 dBm) would keep an LF team
@@ -215,6 +227,9 @@ class RadioNetwork(NetworkModel):
         return RadioChannel(self.profile, ids, rngs, medium)
 
     def live_links(self, grid: Any, node_ids: Sequence[str], aliases: Any) -> RadioLinks:
+        refusal = self.live_refusal(self.params)
+        if refusal is not None:
+            raise InputError(refusal, field="network.channel")
         return RadioLinks(self, grid, node_ids, aliases)
 
     def in_range_power(self, power: FloatArray) -> NDArray[np.bool_]:

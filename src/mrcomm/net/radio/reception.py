@@ -23,31 +23,40 @@ from mrcomm.net.radio.profile import RadioProfile
 DSSS_GAIN = 22.0
 
 
-def ber(power_dbm: float, noise_floor_dbm: float, profile: RadioProfile | None = None) -> float:
+def ber(
+    power_dbm: float,
+    noise_floor_dbm: float,
+    profile: RadioProfile | None = None,
+    detect: bool = True,
+) -> float:
     """BER of one link (0 for NaN: a node without a position has no radio): erfc(√SNR),
     or the profile's modulation; 1 (nothing received) below its preamble SNR. The
-    scalar form of :func:`bit_error_rate_at`."""
+    scalar form of :func:`bit_error_rate_at`; ``detect=False`` for a frame whose preamble
+    was already detected (the shared channel judges it at the frame's start)."""
     if power_dbm != power_dbm:
         return 0.0
     snr_db = power_dbm - noise_floor_dbm
     snr = 10.0 ** (snr_db / 10.0)
     if profile is None:
         return min(math.erfc(math.sqrt(snr)), 0.5)
-    if profile.preamble_snr_db is not None and snr_db < profile.preamble_snr_db:
+    if detect and profile.preamble_snr_db is not None and snr_db < profile.preamble_snr_db:
         return 1.0
     if profile.modulation == "dsss":
         return min(0.5 * math.exp(-DSSS_GAIN * snr), 0.5)
     return min(math.erfc(math.sqrt(snr)), 0.5)
 
 
-def bit_error_rate_at(profile: RadioProfile, snr_db: NDArray[np.float64]) -> NDArray[np.float64]:
-    """BER at each SNR (dB) by the profile's rule (see the module docstring)."""
+def bit_error_rate_at(
+    profile: RadioProfile, snr_db: NDArray[np.float64], detect: bool = True
+) -> NDArray[np.float64]:
+    """BER at each SNR (dB) by the profile's rule (see the module docstring; ``detect``:
+    as in :func:`ber`)."""
     snr = 10.0 ** (np.asarray(snr_db, dtype=np.float64) / 10.0)
     if profile.modulation == "dsss":
         rate = np.minimum(0.5 * np.exp(-DSSS_GAIN * snr), 0.5)
     else:
         rate = np.minimum(erfc(np.sqrt(snr)), 0.5)
-    if profile.preamble_snr_db is not None:
+    if detect and profile.preamble_snr_db is not None:
         rate = np.where(snr_db < profile.preamble_snr_db, 1.0, rate)
     return np.asarray(rate)
 
