@@ -343,7 +343,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=3.0, help="simulated seconds per case")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--senders", type=int, nargs="*", default=list(SENDERS))
+    parser.add_argument(
+        "--replot", type=Path, default=None,
+        help="draw --figure and print the table from a CSV this script wrote (no ns-3)",
+    )  # fmt: skip
     args = parser.parse_args(argv)
+    if args.replot is not None:
+        rows = read_rows(args.replot)
+        print(markdown(rows))
+        if args.figure is not None:
+            figure(rows, args.figure)
+        return 0
     with _filtered_stderr():
         try:
             from ns import ns  # type: ignore[import-not-found,unused-ignore]
@@ -386,6 +396,28 @@ def main(argv: Sequence[str] | None = None) -> int:
     return 0
 
 
+def read_rows(path: Path) -> list[tuple[str, int, Outcome, Outcome]]:
+    """The rows of a CSV written by :func:`main` (delivery, throughput and delay kept;
+    the outcomes rebuilt so that they give them back)."""
+    sides: dict[tuple[str, int], dict[str, Outcome]] = {}
+    with path.open() as f:
+        for rec in csv.DictReader(f):
+            received = float(rec["received"])
+            delivery = float(rec["delivery"])
+            kbps = float(rec["throughput_kbps"])
+            outcome = Outcome(
+                sent=float(rec["sent"]),
+                expected=received / delivery if delivery else math.inf,
+                received=received,
+                delay_sum=float(rec["delay_ms"]) * received / 1e3,
+                seconds=received * PAYLOAD_BYTES * 8 / (kbps * 1e3) if kbps else 1.0,
+                receivers=1,
+                cpu_s=float(rec["cpu_s"]),
+            )
+            sides.setdefault((rec["case"], int(rec["senders"])), {})[rec["side"]] = outcome
+    return [(case, n, o["ns-3"], o["model"]) for (case, n), o in sides.items()]
+
+
 def markdown(rows: list[tuple[str, int, Outcome, Outcome]]) -> str:
     lines = [
         "| case | senders | delivery ns-3 | delivery model | Δ | throughput ns-3 (kbit/s) "
@@ -415,6 +447,11 @@ def figure(rows: list[tuple[str, int, Outcome, Outcome]], path: Path) -> None:
             axes[1].plot(n, [r[side].throughput_kbps for r in mine], style, marker=marker)
     axes[0].set(xscale="log", xlabel="senders", ylabel="delivery ratio", ylim=(0, 1.02))
     axes[1].set(xscale="log", xlabel="senders", ylabel="throughput per receiver (kbit/s)")
+    counts = sorted({r[1] for r in rows})
+    for ax in axes:
+        ax.set_xticks(counts, [str(c) for c in counts])
+        ax.minorticks_off()
+        ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7)
     fig.suptitle("Shared channel against ns-3 802.11b (DSSS 1 Mbit/s, broadcast)")
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -98,7 +98,8 @@ def bit_error_rate(profile: RadioProfile, power_dbm: FloatArray | float) -> Floa
 def packet_error_rate(ber: FloatArray | float, bits: FloatArray | float) -> FloatArray:
     """PER = 1 − (1 − BER)^bits."""
     b = np.asarray(ber, dtype=np.float64)
-    return np.asarray(-np.expm1(np.asarray(bits, dtype=np.float64) * np.log1p(-b)))
+    with np.errstate(divide="ignore"):  # BER 1 (not detected): log1p(-1) = -inf, PER 1
+        return np.asarray(-np.expm1(np.asarray(bits, dtype=np.float64) * np.log1p(-b)))
 
 
 def reach_m(profile: RadioProfile) -> float:
