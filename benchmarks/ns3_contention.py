@@ -49,7 +49,7 @@ from mrcomm.net.radio.profile import DEFAULT_PROFILE, RadioProfile, load_profile
 from mrcomm.net.radio.reception import ber, per
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from ns3_validation import INSTALL_HINT, _filtered_stderr, noise_figure_db  # noqa: E402
+from ns3_validation import INSTALL_HINT, _filtered_stderr, noise_figure_db
 
 SENDERS = (2, 5, 10, 20, 50)
 CASES = ("saturated", "poses", "hidden")
@@ -429,7 +429,8 @@ def markdown(rows: list[tuple[str, int, Outcome, Outcome]]) -> str:
         lines.append(
             f"| {case} | {senders} | {theirs.delivery:.3f} | {ours.delivery:.3f} | "
             f"{ours.delivery - theirs.delivery:+.3f} | {theirs.throughput_kbps:.1f} | "
-            f"{ours.throughput_kbps:.1f} | {dt:+.1f} | {theirs.delay_ms:.2f} | {ours.delay_ms:.2f} |"
+            f"{ours.throughput_kbps:.1f} | {dt:+.1f} | {theirs.delay_ms:.2f} | "
+            f"{ours.delay_ms:.2f} |"
         )
     return "\n".join(lines)
 
