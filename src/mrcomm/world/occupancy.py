@@ -11,10 +11,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
+
+from mrcomm.world.traversal import KERNEL, loops
 
 
 @dataclass(frozen=True, eq=False)
@@ -25,7 +28,7 @@ class OccupancyGrid:
     resolution: float
     origin: tuple[float, float] = (0.0, 0.0)
     _free_distance: NDArray[np.float64] | None = field(default=None, repr=False, compare=False)
-    _clearance_list: list[float] | None = field(default=None, repr=False, compare=False)
+    _clearance_list: Any = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if self.occupied.ndim != 2 or self.occupied.dtype != np.bool_:
@@ -160,50 +163,23 @@ class OccupancyGrid:
         ray = self._ray(x0, y0, x1, y1)
         if ray is None:
             return 1
-        k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy = ray
-        clear = self._clearances()
         # Cells visited, not metres: a diagonal step covers up to √2 cells' width; count
         # the gap in cells of the shorter kind (conservative: gaps merge sooner).
         gap_cells = max(1, math.ceil(min_gap / self.resolution))
-        walls = 0
-        free_run = gap_cells  # before the first wall: any run starts a wall
-        for _ in range(cells):
-            if clear[k] == 0.0:
-                if free_run >= gap_cells:
-                    walls += 1
-                free_run = 0
-            else:
-                free_run += 1
-            if t_max_x < t_max_y:
-                k += step_x
-                t_max_x += t_dx
-            else:
-                k += step_y
-                t_max_y += t_dy
-        return walls
+        walls, _ = loops()
+        return int(walls(self._clearances(), *ray, gap_cells))
 
     def _traverse(self, x0: float, y0: float, x1: float, y1: float, clearances: bool) -> float:
         ray = self._ray(x0, y0, x1, y1)
         if ray is None:
             return -1.0  # ends on the map's outermost cells or beyond: obstructed
-        k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy = ray
         res = self.resolution
-        # One list holds both answers: an occupied cell is at distance 0 from the nearest
-        # occupied cell, a free one at least a cell's width away.
-        clear = self._clearances()
-        nearest = math.inf
-        for _ in range(cells):
-            c = clear[k]
-            if c < nearest:
-                if c == 0.0:
-                    return -1.0
-                nearest = c
-            if t_max_x < t_max_y:
-                k += step_x
-                t_max_x += t_dx
-            else:
-                k += step_y
-                t_max_y += t_dy
+        # One array holds both answers: an occupied cell is at distance 0 from the
+        # nearest occupied cell, a free one at least a cell's width away.
+        _, nearest_along = loops()
+        nearest = float(nearest_along(self._clearances(), *ray))
+        if nearest < 0.0:
+            return -1.0
         if not clearances:
             return 0.0
         # Cell-centre distances; a point in a cell is up to half a diagonal from its
@@ -230,15 +206,20 @@ class OccupancyGrid:
         that the first cast inside a timed loop does not pay for it."""
         self._clearances()
 
-    def _clearances(self) -> list[float]:
-        """The distance field as a flat list (fast scalar indexing); cached."""
+    def _clearances(self) -> Any:
+        """The distance field, flat, as the ray-cast loops read it fastest: a float
+        array for the compiled loops, a list for the plain ones (fast scalar indexing);
+        cached."""
         if self._clearance_list is None:
-            # The field holds few distinct values (cell distances): share one float object
-            # per value, so the list's targets stay few and cache-resident.
-            shared: dict[float, float] = {}
-            values = [shared.setdefault(v, v) for v in self.distance_field().ravel().tolist()]
+            field = self.distance_field().ravel()
+            if KERNEL == "numba":
+                values: Any = np.ascontiguousarray(field, dtype=np.float64)
+            else:
+                # The field holds few distinct values (cell distances): share one float
+                # object per value, so the list's targets stay few and cache-resident.
+                shared: dict[float, float] = {}
+                values = [shared.setdefault(v, v) for v in field.tolist()]
             object.__setattr__(self, "_clearance_list", values)
-        assert self._clearance_list is not None
         return self._clearance_list
 
 

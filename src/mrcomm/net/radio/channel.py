@@ -101,9 +101,12 @@ class RadioChannel:
     def set_links(self, power: FloatArray, sight: NDArray[np.bool_] | None) -> None:
         """The step's received power ``power[s, r]`` (dBm) and line of sight."""
         self._power = power.tolist()
-        if self.medium is not None:
-            self.medium.set_power(power)
         self._sight = sight.tolist() if sight is not None else None
+        if self.medium is not None:
+            # The shared channel judges each frame at its SINR (shared_errors), never
+            # from the links' BER alone: no table of it.
+            self.medium.set_power(power)
+            return
         # A team has a handful of links: plain Python beats numpy's per-call overhead.
         self._ber = [[_ber(p, self._noise, self._rule) for p in row] for row in self._power]
 
