@@ -232,3 +232,27 @@ def test_live_mode_refuses_the_shared_channel(monkeypatch, capsys) -> None:  # t
     )  # fmt: skip
     assert code == 2
     assert err.strip().count("\n") == 0 and "shared channel is simulation only" in err
+
+
+@pytest.mark.parametrize("spl", [0, 40])
+def test_frames_decided_together_or_one_by_one_give_the_same_mission(
+    s1_resources: ScenarioResources, spl: int
+) -> None:
+    """The bus decides a step's frames on one topic together for many receivers
+    (InProcessNetwork.batch_from) and one by one for few: the same errors, draws,
+    decisions, counts and handler calls. S1 forced both ways, with and without SPL."""
+    from mrcomm.run.config import make_config
+    from mrcomm.sim.mission import Mission
+    from tests.golden.golden import SCENARIO
+
+    results = []
+    for batch_from in (0, 10**6):
+        config = make_config(
+            None, scenario=SCENARIO, network="radio", threshold="slt", behaviour="lf",
+            seed=2, spl=spl, params={"network": {"channel": "shared"}},
+        )  # fmt: skip
+        mission = Mission(config, s1_resources)
+        mission.network.batch_from = batch_from
+        results.append(comparable(mission.run()))
+    assert results[0] == results[1]
+    assert results[0]["messages"]["pose"]["dropped_collision"] > 0

@@ -16,6 +16,13 @@ from mrcomm.world.mapio import load_map
 S4_MAP = Path(__file__).resolve().parents[2] / "data" / "scenarios" / "s4" / "s4_map.yaml"
 
 
+def _cast_ray(grid, x0: float, y0: float, x1: float, y1: float, count: bool) -> tuple[int, float]:  # type: ignore[no-untyped-def]
+    clearance = grid.ray_clearance(x0, y0, x1, y1)
+    if clearance >= 0.0:
+        return 0, clearance
+    return (grid.walls_between(x0, y0, x1, y1) if count else 1), -1.0
+
+
 def _rays(grid, n: int, seed: int) -> np.ndarray:  # type: ignore[no-untyped-def]
     x0, x1, y0, y1 = grid.extent
     rng = np.random.default_rng(seed)
@@ -28,14 +35,23 @@ def test_compiled_and_plain_loops_agree_on_every_ray() -> None:
     grid = load_map(S4_MAP)
     field = grid.distance_field().ravel()
     as_list, as_array = field.tolist(), np.ascontiguousarray(field)
-    fast_walls, fast_nearest = traversal.loops()
-    for x0, y0, x1, y1 in _rays(grid, 3000, seed=1).tolist():
-        ray = grid._ray(x0, y0, x1, y1)
-        if ray is None:
+    height, width = grid.occupied.shape
+    ox, oy = grid.origin
+    shape = (grid.resolution, ox, oy, width, height)
+    rays = _rays(grid, 3000, seed=1)
+    for x0, y0, x1, y1 in rays.tolist():
+        ray = traversal.ray_setup(*shape, x0, y0, x1, y1)
+        assert ray == traversal.setup(*shape, x0, y0, x1, y1)
+        if ray[1] < 0:
             continue
         for gap in (1, 3):
-            assert traversal.walls_loop(as_list, *ray, gap) == fast_walls(as_array, *ray, gap)
-        assert traversal.nearest_loop(as_list, *ray) == fast_nearest(as_array, *ray)
+            assert traversal.walls_loop(as_list, *ray, gap) == traversal.walls(as_array, *ray, gap)
+        assert traversal.nearest_loop(as_list, *ray) == traversal.nearest(as_array, *ray)
+    # Many at once, compiled, against one at a time through the grid.
+    for count in (True, False):
+        walls, clearance = grid.cast_many(rays, count)
+        one_by_one = [_cast_ray(grid, *r, count) for r in rays.tolist()]
+        assert list(zip(walls.tolist(), clearance.tolist(), strict=True)) == one_by_one
 
 
 def test_without_numba_the_grid_casts_the_same_rays() -> None:
@@ -43,7 +59,10 @@ def test_without_numba_the_grid_casts_the_same_rays() -> None:
     wall counts and clearances the compiled ones give."""
     grid = load_map(S4_MAP)
     rays = _rays(grid, 400, seed=2)
+    walls, clearance = grid.cast_many(rays, True)
     here = [(grid.walls_between(*r), grid.ray_clearance(*r)) for r in rays.tolist()]
+    assert walls.tolist() == [w if c < 0 else 0 for w, c in here]
+    assert clearance.tolist() == [c for _, c in here]
     code = (
         "import json, sys, numpy as np\n"
         "from mrcomm.world import traversal\n"
@@ -52,6 +71,8 @@ def test_without_numba_the_grid_casts_the_same_rays() -> None:
         "rays = json.loads(sys.stdin.read())\n"
         "print(traversal.KERNEL)\n"
         "print(json.dumps([(grid.walls_between(*r), grid.ray_clearance(*r)) for r in rays]))\n"
+        "w, c = grid.cast_many(np.array(rays), True)\n"
+        "print(json.dumps([w.tolist(), c.tolist()]))\n"
     )
     import json
     import os
@@ -62,3 +83,4 @@ def test_without_numba_the_grid_casts_the_same_rays() -> None:
     ).stdout.splitlines()  # fmt: skip
     assert out[0] == "python"
     assert [tuple(pair) for pair in json.loads(out[1])] == here
+    assert json.loads(out[2]) == [walls.tolist(), clearance.tolist()]

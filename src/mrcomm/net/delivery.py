@@ -9,12 +9,17 @@ For one message reaching one receiver:
 3. range: the link from the sender must be connected (the network model's decision);
 4. radio packet error: lost with the link's packet error rate for the message's size,
    one uniform draw from the receiver's stream (``radio`` only; every topic that is not
-   exempt, since the radio does not know topics); on the shared channel the same draw
-   decides a collision: lost to the other frames on the air when it falls between the
-   packet error alone and the packet error at the SINR (1 for a receiver that was
-   transmitting or receiving another frame);
+   exempt, since the radio does not know topics);
 5. simulated packet loss (SPL X %): on lossy topics the receiver drops X % of the
    messages, one uniform draw per message from its own seeded stream.
+
+On the shared channel (simulation only) one draw u per delivery decides all three
+(:meth:`DeliveryPolicy.decide_shared`, and for many at once
+:meth:`DeliveryPolicy.shared_outcomes`): packet error when u < the error alone, a
+collision when u < the error at the SINR (1 for a receiver that was sending or receiving
+another frame), else SPL when (u − that) / (1 − that) < X %: the same chances as
+separate draws, and a number of draws known before the decisions, so a step's frames
+can be decided together.
 
 The in-process bus (simulation) and the Zenoh bus (live mode) both call
 :meth:`DeliveryPolicy.decide` with their receiver's :class:`LossStream` and count with
@@ -23,10 +28,11 @@ The in-process bus (simulation) and the Zenoh bus (live mode) both call
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mrcomm.messaging.topics import EXEMPT_TOPICS, LOSSY_TOPICS
 
@@ -37,7 +43,7 @@ DROPPED_RADIO = "dropped_radio"
 DROPPED_QUEUE = "dropped_queue"
 DROPPED_COLLISION = "dropped_collision"
 
-#: What can become of one message at one receiver.
+#: What can become of one message at one receiver (an outcome code is an index here).
 OUTCOMES = (
     RECEIVED, DROPPED_LOSS, DROPPED_RANGE, DROPPED_RADIO, DROPPED_QUEUE, DROPPED_COLLISION
 )  # fmt: skip
@@ -168,6 +174,20 @@ class TopicCounts:
         self.dropped_loss += dropped_loss
         self.dropped_range += dropped_range
 
+    def add_codes(self, codes: NDArray[np.int8], delays: NDArray[np.float64]) -> None:
+        """Add the outcomes (codes of :data:`OUTCOMES`) of several messages with their
+        radio delays, as :meth:`count` would one by one."""
+        tally = np.bincount(codes, minlength=len(OUTCOMES)).tolist()
+        for outcome, n in zip(OUTCOMES, tally, strict=True):
+            if n:
+                setattr(self, outcome, getattr(self, outcome) + n)
+        kept = delays[(codes == 0) & (delays > 0.0)]
+        if kept.size:
+            # Added one by one, as count() adds them: the same float sum.
+            for delay in kept.tolist():
+                self.delay_total += delay
+            self.delay_max = max(self.delay_max, float(kept.max()))
+
     def as_dict(self, radio: bool = False, shared: bool = False) -> dict[str, float]:
         """The counts (:data:`COUNT_KEYS`; without a ``radio``, none of
         :data:`RADIO_COUNT_KEYS`, which are then always 0; on the ``shared`` channel
@@ -210,25 +230,72 @@ class DeliveryPolicy:
         connected: bool,
         stream: LossStream,
         packet_error: float = 0.0,
-        shared_error: float = 0.0,
     ) -> str:
         """The outcome of one message on ``topic`` reaching one receiver, whose link from
         the sender is ``connected`` and loses this message with probability
-        ``packet_error`` (the radio's) alone and ``shared_error`` (at least as large)
-        with the other frames on the shared channel; draws from ``stream`` only when a
-        loss applies."""
+        ``packet_error`` (the radio's); draws from ``stream`` only when a loss applies."""
         if topic in self.exempt_topics:
             return RECEIVED
         if not connected:
             return DROPPED_RANGE
-        if shared_error > 0.0:
-            draw = stream.draw()
-            if draw < packet_error:
-                return DROPPED_RADIO
-            if draw < shared_error:
-                return DROPPED_COLLISION
-        elif packet_error > 0.0 and stream.draw() < packet_error:
+        if packet_error > 0.0 and stream.draw() < packet_error:
             return DROPPED_RADIO
         if self._loss > 0.0 and topic in self.lossy_topics and stream.draw() < self._loss:
             return DROPPED_LOSS
         return RECEIVED
+
+    def decide_shared(
+        self, topic: str, connected: bool, stream: LossStream, alone: float, shared: float
+    ) -> str:
+        """The outcome of one frame of the shared channel at one receiver: lost with
+        probability ``alone`` to packet error, ``shared`` (at least ``alone``) with the
+        other frames on the air; one draw decides these and SPL (module docstring)."""
+        if topic in self.exempt_topics:
+            return RECEIVED
+        if not connected:
+            return DROPPED_RANGE
+        spl = self._loss > 0.0 and topic in self.lossy_topics
+        if shared <= 0.0 and not spl:
+            return RECEIVED
+        draw = stream.draw()
+        if draw < alone:
+            return DROPPED_RADIO
+        if draw < shared:
+            return DROPPED_COLLISION
+        if spl and (draw - shared) / (1.0 - shared) < self._loss:
+            return DROPPED_LOSS
+        return RECEIVED
+
+    def shared_outcomes(
+        self,
+        topic: str,
+        connected: NDArray[np.bool_],
+        streams: Sequence[LossStream],
+        alone: NDArray[np.float64],
+        shared: NDArray[np.float64],
+    ) -> NDArray[np.int8]:
+        """:meth:`decide_shared` for k frames (rows, in order) at R receivers (columns,
+        ``streams`` theirs): the outcome codes (indices of :data:`OUTCOMES`), from the
+        same draws in the same order."""
+        codes = np.where(connected, 0, OUTCOMES.index(DROPPED_RANGE)).astype(np.int8)
+        if topic in self.exempt_topics:
+            return np.zeros_like(codes)
+        spl = self._loss > 0.0 and topic in self.lossy_topics
+        needs = connected & ((shared > 0.0) | spl)
+        counts = needs.sum(axis=0).tolist()
+        draws = [stream.take(k) for stream, k in zip(streams, counts, strict=True) if k]
+        if not draws:
+            return codes
+        u_t = np.zeros(needs.T.shape)
+        u_t[needs.T] = np.concatenate(draws)  # receiver by receiver, frames in order
+        u = u_t.T
+        radio = needs & (u < alone)
+        collision = needs & ~radio & (u < shared)
+        codes[radio] = OUTCOMES.index(DROPPED_RADIO)
+        codes[collision] = OUTCOMES.index(DROPPED_COLLISION)
+        if spl:
+            rest = needs & ~radio & ~collision
+            with np.errstate(divide="ignore", invalid="ignore"):
+                lost = rest & ((u - shared) / (1.0 - shared) < self._loss)
+            codes[lost] = OUTCOMES.index(DROPPED_LOSS)
+        return codes

@@ -12,8 +12,8 @@ its sender and is delivered at the first step at or after its publication plus i
 delay (wait + airtime; within one step for light traffic), or is lost to the queue, and
 each receiver may lose it to packet error. On the shared channel
 (:mod:`mrcomm.net.radio.medium`) the senders contend for the air: each delivery first
-runs the channel up to ``now`` and delivers the frames that ended, in the order they
-ended, each receiver losing a frame also to collisions.
+runs the channel up to ``now`` and delivers the frames that ended, topic by topic in the
+order they ended, each receiver losing a frame also to collisions.
 
 With relaying on (:mod:`mrcomm.net.relay`), a robot that receives a task status or AON
 message first passes a copy on at the next delivery; copies are counted by the relay,
@@ -189,7 +189,12 @@ class InProcessNetwork:
         outbox, self._outbox = self._outbox, []
         medium = self.channel.medium if self.channel is not None else None
         if medium is not None:
-            outbox = [*outbox, *self._ended(medium.advance(now))]
+            # The step's frames topic by topic (in the order each topic's first frame
+            # ended, each topic's in the order they ended): runs of one topic are
+            # decided together.
+            ended = self._ended(medium.advance(now))
+            order = {topic: k for k, topic in enumerate(dict.fromkeys(m[1] for m in ended))}
+            outbox = [*outbox, *sorted(ended, key=lambda m: order[m[1]])]
         elif self.channel is not None:
             due = [m for m in outbox if m[3] <= now + 1e-9]
             self._outbox = [m for m in outbox if m[3] > now + 1e-9]
@@ -210,6 +215,20 @@ class InProcessNetwork:
             if not receivers:
                 continue
             relayed = relay is not None and relay.relays(topic)
+            many = len(receivers) >= self.batch_from
+            if frame is not None and many and not relayed and observer is None:
+                frames = [frame]
+                end = position
+                while end < len(outbox) and outbox[end][1] == topic:
+                    following = outbox[end][8]
+                    if following is None:  # dropped from its queue: decided alone
+                        break
+                    frames.append(following)
+                    end += 1
+                messages = [message] + [queued[2] for queued in outbox[position:end]]
+                self._deliver_frames(topic, frames, messages, receivers)
+                position = end
+                continue
             if batching and not relayed and len(receivers) >= self.batch_from:
                 end = position
                 while end < len(outbox) and outbox[end][1] == topic:
@@ -224,17 +243,21 @@ class InProcessNetwork:
             # Per message, not per receiver: lost to the sender's queue, and its delay.
             queued_out = delay is None and not exempt(topic)
             delay_s = delay or 0.0
-            for receiver, handlers in receivers.items():
+            if frame is not None:  # the shared channel: this frame at every receiver
+                alone, shared = self._frame_errors(frame, topic, receivers)
+            for column, (receiver, handlers) in enumerate(receivers.items()):
                 if receiver == sender:
                     continue
                 if queued_out:
                     outcome = DROPPED_QUEUE
                 elif frame is not None:
-                    outcome = self._decide_shared(topic, frame, receiver, links[receiver])
-                else:
+                    outcome = self.policy.decide_shared(
+                        topic, links[receiver], streams[receiver], alone[column], shared[column]
+                    )
+                else:  # (on the shared channel: an exempt frame its queue dropped)
                     per = (
                         channel.packet_error(sender, receiver, bits)
-                        if channel is not None and links[receiver]
+                        if channel is not None and medium is None and links[receiver]
                         else 0.0
                     )
                     outcome = decide(topic, links[receiver], streams[receiver], per)
@@ -308,10 +331,26 @@ class InProcessNetwork:
                 dropped_loss=reached_n[column] - received_n[column],
                 dropped_range=decided[column] - reached_n[column],
             )
-        # Batch handlers (receiver-local, publishing nothing: see ports.BatchHandler)
-        # get each receiver's messages in one call; the others, which may publish, are
-        # called message by message, in order, as one message at a time would call them.
+        self._hand_over(topic, takers, rows, messages, received, received_n)
+
+    def _hand_over(
+        self,
+        topic: str,
+        takers: _Takers,
+        rows: NDArray[np.intp],
+        messages: list[Message],
+        received: NDArray[np.bool_],
+        received_n: list[int] | None = None,
+    ) -> None:
+        """Call the handlers of a batch's receivers: ``received[m, c]`` says whether the
+        receiver of column c (of ``takers.targets``) got message m (sent by ``rows[m]``).
+
+        Batch handlers (receiver-local, publishing nothing: see ports.BatchHandler) get
+        each receiver's messages in one call; the others, which may publish, are called
+        message by message, in order, as one message at a time would call them."""
         if takers.batched:
+            if received_n is None:
+                received_n = received.sum(axis=0).tolist()
             ever = self._ever_sent.get(topic)
             if ever is None:
                 ever = self._ever_sent[topic] = np.zeros(len(self._members), dtype=np.bool_)
@@ -328,7 +367,7 @@ class InProcessNetwork:
         handlers = takers.plain
         if not handlers:
             return
-        if len(handlers) < len(targets):
+        if len(handlers) < len(takers.targets):
             received = received[:, takers.plain_columns]
         heard_rows, heard_columns = np.nonzero(received)  # message by message, in order
         for row, column in zip(heard_rows.tolist(), heard_columns.tolist(), strict=True):
@@ -376,18 +415,53 @@ class InProcessNetwork:
                         crossed, copy, frame))  # fmt: skip
         return out
 
-    def _decide_shared(self, topic: str, frame: Frame, receiver: int, connected: bool) -> str:
-        """One receiver's outcome of a frame of the shared channel."""
+    def _frame_errors(
+        self, frame: Frame, topic: str, receivers: dict[int, list[Handler]]
+    ) -> tuple[list[float], list[float]]:
+        """A shared-channel frame's chances of loss at each of ``receivers`` (in their
+        order) without and with the other frames on the air."""
         assert self.channel is not None
-        if not connected or self.policy.exempt(topic):
-            return self.policy.decide(topic, connected, self._streams[receiver])
-        if frame.blocked[receiver]:
-            alone, shared = 0.0, 1.0
-        else:
-            alone, shared = self.channel.shared_errors(
-                frame.sender, receiver, frame.bits, float(frame.interference_mw[receiver])
-            )
-        return self.policy.decide(topic, True, self._streams[receiver], alone, shared)
+        targets = np.fromiter(receivers, dtype=np.intp, count=len(receivers))
+        judged = self._links[frame.sender, targets] & (targets != frame.sender)
+        if self.policy.exempt(topic):
+            judged[:] = False  # always received: no fading drawn
+        alone, shared = self.channel.frame_errors(frame, targets, judged)
+        return alone.tolist(), shared.tolist()
+
+    def _deliver_frames(
+        self,
+        topic: str,
+        frames: list[Frame],
+        messages: list[Message],
+        receivers: dict[int, list[Handler]],
+    ) -> None:
+        """Decide and deliver consecutive frames of the shared channel on ``topic``
+        (none relayed, so none a copy; no observer) together: the same errors, draws,
+        decisions, counts and handler calls, in the same order, as one at a time."""
+        takers = self._takers.get(topic)
+        if takers is None:
+            takers = self._takers[topic] = _Takers.of(receivers)
+        targets = np.array(takers.targets, dtype=np.intp)
+        rows = np.array([f.sender for f in frames], dtype=np.intp)
+        others = rows[:, None] != targets[None, :]
+        connected = self._links[rows[:, None], targets[None, :]] & others
+        errors = [self._frame_errors(frame, topic, receivers) for frame in frames]
+        alone = np.array([e[0] for e in errors])
+        shared = np.array([e[1] for e in errors])
+        streams = [self._streams[r] for r in takers.targets]
+        codes = self.policy.shared_outcomes(topic, connected, streams, alone, shared)
+        received = (codes == 0) & others
+        delays = np.array([f.delay for f in frames])
+        counts = self._topic_counts(topic)
+        for column, receiver in enumerate(takers.targets):
+            mine = others[:, column]
+            if not mine.any():
+                continue
+            entry = counts[receiver]
+            if entry is None:
+                entry = counts[receiver] = self._count(receiver, topic)
+            entry.add_codes(codes[mine, column], delays[mine])
+        self._hand_over(topic, takers, rows, messages, received)
 
     def _subscribe(self, receiver: int, topic: str, handler: Handler) -> None:
         self._subs.setdefault(topic, {}).setdefault(receiver, []).append(handler)

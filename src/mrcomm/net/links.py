@@ -221,6 +221,8 @@ class LinkModel:
         # receiver's fresh cast); only its line of sight may wait ``los_refresh``.
         obstructed_slack = _MOVED if count else self.los_refresh
         walls: list[int] = []
+        recast: list[int] = []  # pairs whose ends moved enough: cast together below
+        segments: list[tuple[float, float, float, float]] = []
         for k, (a, b) in enumerate(self.layout.pairs):
             dist = distance[k]
             if not (0.0 < dist <= reach):  # also False for NaN (virtual node)
@@ -233,11 +235,18 @@ class LinkModel:
                 or hypot(ax - last[0], ay - last[1]) >= cast_slack[k]
                 or hypot(bx - last[2], by - last[3]) >= cast_slack[k]
             ):
-                cast_walls[k], clearance = cast_ray(grid, ax, ay, bx, by, count)
-                cast_slack[k] = clearance if clearance >= 0.0 else obstructed_slack
-                self.casts += 1
-                cast_from[k] = (ax, ay, bx, by)
+                recast.append(k)
+                segments.append((ax, ay, bx, by))
             walls.append(cast_walls[k])
+        if recast:
+            counted, clearances = grid.cast_many(np.array(segments), count)
+            for k, segment, n, clearance in zip(
+                recast, segments, counted.tolist(), clearances.tolist(), strict=True
+            ):
+                walls[k] = cast_walls[k] = n
+                cast_slack[k] = clearance if clearance >= 0.0 else obstructed_slack
+                cast_from[k] = segment
+            self.casts += len(recast)
         return walls
 
 

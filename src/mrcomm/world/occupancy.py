@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
-from mrcomm.world.traversal import KERNEL, loops
+from mrcomm.world import traversal
 
 
 @dataclass(frozen=True, eq=False)
@@ -112,44 +112,14 @@ class OccupancyGrid:
         moved segment is within that displacement of the old one)."""
         return self._traverse(x0, y0, x1, y1, True)
 
-    def _ray(
-        self, x0: float, y0: float, x1: float, y1: float
-    ) -> tuple[int, int, int, float, float, int, float, float] | None:
-        """Set-up of an exact grid traversal (Amanatides & Woo) of the segment: first
-        flat cell index, number of cells, x step, next x crossing, x crossing interval,
-        y step (± width), next y crossing, y crossing interval. None when an end is off
-        the map or on its outermost cells."""
-        res = self.resolution
-        ox, oy = self.origin
-        fx0, fy0 = (x0 - ox) / res, (y0 - oy) / res
-        fx1, fy1 = (x1 - ox) / res, (y1 - oy) / res
-        ix, iy = math.floor(fx0), math.floor(fy0)
-        end_x, end_y = math.floor(fx1), math.floor(fy1)
+    def _ray(self, x0: float, y0: float, x1: float, y1: float) -> traversal.Ray | None:
+        """Set-up of the exact grid traversal of the segment (see
+        :func:`~mrcomm.world.traversal.ray_setup`); None when an end is off the map or on
+        its outermost cells."""
         height, width = self.occupied.shape
-        # Every visited cell lies in the box spanned by the two end cells (give or take
-        # one cell of rounding at a tie), so bounds are checked once, here, not per cell.
-        if not (
-            0 < ix < width - 1
-            and 0 < end_x < width - 1
-            and 0 < iy < height - 1
-            and 0 < end_y < height - 1
-        ):
-            return None
-        dx, dy = fx1 - fx0, fy1 - fy0
-        if dx > 0:
-            step_x, t_max_x, t_dx = 1, (ix + 1 - fx0) / dx, 1.0 / dx
-        elif dx < 0:
-            step_x, t_max_x, t_dx = -1, (fx0 - ix) / -dx, -1.0 / dx
-        else:
-            step_x, t_max_x, t_dx = 0, math.inf, math.inf
-        if dy > 0:
-            step_y, t_max_y, t_dy = width, (iy + 1 - fy0) / dy, 1.0 / dy
-        elif dy < 0:
-            step_y, t_max_y, t_dy = -width, (fy0 - iy) / -dy, -1.0 / dy
-        else:
-            step_y, t_max_y, t_dy = 0, math.inf, math.inf
-        cells = abs(end_x - ix) + abs(end_y - iy) + 1
-        return iy * width + ix, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy
+        ox, oy = self.origin
+        ray = traversal.setup(self.resolution, ox, oy, width, height, x0, y0, x1, y1)
+        return None if ray[1] < 0 else ray
 
     def walls_between(
         self, x0: float, y0: float, x1: float, y1: float, min_gap: float = 0.3
@@ -166,8 +136,27 @@ class OccupancyGrid:
         # Cells visited, not metres: a diagonal step covers up to √2 cells' width; count
         # the gap in cells of the shorter kind (conservative: gaps merge sooner).
         gap_cells = max(1, math.ceil(min_gap / self.resolution))
-        walls, _ = loops()
-        return int(walls(self._clearances(), *ray, gap_cells))
+        return traversal.walls(self._clearances(), *ray, gap_cells)
+
+    def cast_many(
+        self, segments: NDArray[np.float64], count_walls: bool, min_gap: float = 0.3
+    ) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+        """For each segment (rows x0, y0, x1, y1) the walls it crosses (0 in line of
+        sight; an obstructed one counts 1 unless ``count_walls``, then as
+        :meth:`walls_between`) and its clearance (as :meth:`ray_clearance`): the casts
+        of one step of the radio's links, in one call."""
+        segments = np.ascontiguousarray(segments, dtype=np.float64).reshape(-1, 4)
+        n = len(segments)
+        walls = np.zeros(n, dtype=np.int64)
+        clearance = np.zeros(n)
+        height, width = self.occupied.shape
+        ox, oy = self.origin
+        gap_cells = max(1, math.ceil(min_gap / self.resolution))
+        traversal.cast(
+            self._clearances(), self.resolution, float(ox), float(oy), width, height,
+            segments, count_walls, gap_cells, walls, clearance,
+        )  # fmt: skip
+        return walls, clearance
 
     def _traverse(self, x0: float, y0: float, x1: float, y1: float, clearances: bool) -> float:
         ray = self._ray(x0, y0, x1, y1)
@@ -176,8 +165,7 @@ class OccupancyGrid:
         res = self.resolution
         # One array holds both answers: an occupied cell is at distance 0 from the
         # nearest occupied cell, a free one at least a cell's width away.
-        _, nearest_along = loops()
-        nearest = float(nearest_along(self._clearances(), *ray))
+        nearest = traversal.nearest(self._clearances(), *ray)
         if nearest < 0.0:
             return -1.0
         if not clearances:
@@ -212,7 +200,7 @@ class OccupancyGrid:
         cached."""
         if self._clearance_list is None:
             field = self.distance_field().ravel()
-            if KERNEL == "numba":
+            if traversal.KERNEL == "numba":
                 values: Any = np.ascontiguousarray(field, dtype=np.float64)
             else:
                 # The field holds few distinct values (cell distances): share one float

@@ -1,26 +1,64 @@
-"""The inner loops of a ray cast over an occupancy grid, compiled when numba is there.
+"""Ray casts over an occupancy grid: the exact grid traversal (Amanatides & Woo) of a
+segment, compiled when numba is there.
 
-:class:`~mrcomm.world.occupancy.OccupancyGrid` sets up an exact grid traversal
-(Amanatides & Woo) of a segment and hands its parameters to one of these loops: one
-counts the walls the segment crosses, the other finds the clearance along it. They walk
-every cell the segment passes through, hundreds for a long ray across a large map,
-which made them most of a large team's time on the radio (S4: 17 of 36 s). With numba
-(the ``fast`` extra, in the development install) the same functions are compiled to
-machine code; without it they run as plain Python. The arithmetic is the same IEEE
-double arithmetic in the same order either way (no fast-math), so the answers are
-identical (``tests/world/test_traversal.py``); set ``MRCOMM_NO_NUMBA=1`` to use the plain
-Python loops even where numba is installed.
+:class:`~mrcomm.world.occupancy.OccupancyGrid` asks these functions for a segment's
+traversal (:func:`ray_setup`), the walls it crosses (:func:`walls_loop`), its clearance
+(:func:`nearest_loop`), or all of that for many segments at once (:func:`cast_loop`,
+what the radio's link model uses each step). They walk every cell a segment passes
+through, hundreds for a long ray across a large map, which made them most of a large
+team's time on the radio (S4: 17 of 36 s). With numba (the ``fast`` extra, in the
+development install) the same functions are compiled to machine code; without it they
+run as plain Python. The arithmetic is the same IEEE double arithmetic in the same order
+either way (no fast-math), so the answers are identical (``tests/world/test_traversal.py``);
+set ``MRCOMM_NO_NUMBA=1`` to use the plain functions even where numba is installed.
 """
 
 from __future__ import annotations
 
+import math
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
 Cells = Sequence[float] | np.ndarray
+#: A traversal: first flat cell index, number of cells (-1: an end off the map or on its
+#: outermost cells), x step, next x crossing, x crossing interval, y step (± width),
+#: next y crossing, y crossing interval.
+Ray = tuple[int, int, int, float, float, int, float, float]
+
+
+def ray_setup(
+    res: float, ox: float, oy: float, width: int, height: int,
+    x0: float, y0: float, x1: float, y1: float,
+) -> Ray:  # fmt: skip
+    """The traversal of the segment (x0, y0)–(x1, y1) over a grid of ``width`` ×
+    ``height`` cells of ``res`` m whose corner is at (ox, oy)."""
+    fx0, fy0 = (x0 - ox) / res, (y0 - oy) / res
+    fx1, fy1 = (x1 - ox) / res, (y1 - oy) / res
+    ix, iy = math.floor(fx0), math.floor(fy0)
+    end_x, end_y = math.floor(fx1), math.floor(fy1)
+    # Every visited cell lies in the box spanned by the two end cells (give or take one
+    # cell of rounding at a tie), so bounds are checked once, here, not per cell.
+    if not (0 < ix < width - 1 and 0 < end_x < width - 1 and 0 < iy < height - 1
+            and 0 < end_y < height - 1):  # fmt: skip
+        return 0, -1, 0, 0.0, 0.0, 0, 0.0, 0.0
+    dx, dy = fx1 - fx0, fy1 - fy0
+    if dx > 0:
+        step_x, t_max_x, t_dx = 1, (ix + 1 - fx0) / dx, 1.0 / dx
+    elif dx < 0:
+        step_x, t_max_x, t_dx = -1, (fx0 - ix) / -dx, -1.0 / dx
+    else:
+        step_x, t_max_x, t_dx = 0, math.inf, math.inf
+    if dy > 0:
+        step_y, t_max_y, t_dy = width, (iy + 1 - fy0) / dy, 1.0 / dy
+    elif dy < 0:
+        step_y, t_max_y, t_dy = -width, (fy0 - iy) / -dy, -1.0 / dy
+    else:
+        step_y, t_max_y, t_dy = 0, math.inf, math.inf
+    cells = abs(end_x - ix) + abs(end_y - iy) + 1
+    return iy * width + ix, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy
 
 
 def walls_loop(
@@ -52,7 +90,7 @@ def nearest_loop(
     step_y: int, t_max_y: float, t_dy: float,
 ) -> float:  # fmt: skip
     """The smallest clearance along the traversal, or -1 at the first occupied cell."""
-    nearest = np.inf
+    nearest = math.inf
     for _ in range(cells):
         c = clear[k]
         if c < nearest:
@@ -65,25 +103,79 @@ def nearest_loop(
         else:
             k += step_y
             t_max_y += t_dy
-    return float(nearest)
+    return nearest
 
 
-def _compiled() -> tuple[Callable[..., int], Callable[..., float]] | None:
+def cast_loop(
+    clear: Cells, res: float, ox: float, oy: float, width: int, height: int,
+    segments: np.ndarray, count_walls: bool, gap_cells: int,
+    walls_out: np.ndarray, clearance_out: np.ndarray,
+) -> None:  # fmt: skip
+    """For each segment (rows of x0, y0, x1, y1): the walls it crosses (0 in line of
+    sight; 1 for any obstructed one unless ``count_walls``; 1 for an end off the map)
+    and its clearance (-1 when obstructed; see OccupancyGrid.ray_clearance)."""
+    diagonal = math.sqrt(2.0) * res
+    for i in range(segments.shape[0]):
+        k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy = _setup(
+            res, ox, oy, width, height,
+            segments[i, 0], segments[i, 1], segments[i, 2], segments[i, 3],
+        )  # fmt: skip
+        if cells < 0:
+            walls_out[i] = 1
+            clearance_out[i] = -1.0
+            continue
+        near = _nearest(clear, k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy)
+        if near >= 0.0:
+            walls_out[i] = 0
+            clearance_out[i] = max(0.0, near - diagonal)
+            continue
+        clearance_out[i] = -1.0
+        if count_walls:
+            walls_out[i] = _walls(
+                clear, k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy, gap_cells
+            )
+        else:
+            walls_out[i] = 1
+
+
+# What cast_loop calls: the plain functions, or their compiled forms (numba resolves
+# these globals when it compiles cast_loop, so they are set before).
+_setup: Any = ray_setup
+_walls: Any = walls_loop
+_nearest: Any = nearest_loop
+_cast: Any = cast_loop
+
+
+def _compile() -> bool:
+    global _setup, _walls, _nearest, _cast
     if os.environ.get("MRCOMM_NO_NUMBA"):
-        return None
+        return False
     try:
         import numba  # type: ignore[import-untyped,unused-ignore]
     except ImportError:
-        return None
+        return False
     jit: Any = numba.njit(cache=True, nogil=True)
-    return jit(walls_loop), jit(nearest_loop)
+    _setup, _walls, _nearest = jit(ray_setup), jit(walls_loop), jit(nearest_loop)
+    _cast = jit(cast_loop)
+    return True
 
 
-_FAST = _compiled()
-#: Which loops ray casts use: "numba" or "python".
-KERNEL = "python" if _FAST is None else "numba"
+#: Which functions ray casts use: "numba" or "python".
+KERNEL = "numba" if _compile() else "python"
 
 
-def loops() -> tuple[Callable[..., int], Callable[..., float]]:
-    """(walls, nearest): the compiled loops where numba is there, else the plain ones."""
-    return _FAST if _FAST is not None else (walls_loop, nearest_loop)
+def setup(*args: Any) -> Ray:
+    ray: Ray = _setup(*args)
+    return ray
+
+
+def walls(*args: Any) -> int:
+    return int(_walls(*args))
+
+
+def nearest(*args: Any) -> float:
+    return float(_nearest(*args))
+
+
+def cast(*args: Any) -> None:
+    _cast(*args)

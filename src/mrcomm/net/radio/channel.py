@@ -27,9 +27,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mrcomm.messaging.messages import Message, encode
-from mrcomm.net.radio.medium import SharedMedium
+from mrcomm.net.radio.medium import Frame, SharedMedium
 from mrcomm.net.radio.profile import RadioProfile
 from mrcomm.net.radio.reception import ber as _ber
+from mrcomm.net.radio.reception import bit_error_rate_at, packet_error_rate
 from mrcomm.net.radio.reception import per as _per
 
 FloatArray = NDArray[np.float64]
@@ -63,6 +64,7 @@ class RadioChannel:
         self._free_at = [0.0] * len(self.ids)
         self._seconds_per_bit = 1.0 / profile.rate_bps
         self._power: list[list[float]] | None = None
+        self._power_array: FloatArray | None = None
         self._ber: list[list[float]] = []
         self._noise = profile.noise_floor_dbm
         # The profile's reception rule, or None for the plain QPSK one (the common case,
@@ -102,6 +104,7 @@ class RadioChannel:
         """The step's received power ``power[s, r]`` (dBm) and line of sight."""
         self._power = power.tolist()
         self._sight = sight.tolist() if sight is not None else None
+        self._power_array = power
         if self.medium is not None:
             # The shared channel judges each frame at its SINR (shared_errors), never
             # from the links' BER alone: no table of it.
@@ -120,28 +123,37 @@ class RadioChannel:
         in_sight = self._sight is None or self._sight[sender][receiver]
         return self.error_at(receiver, self._power[sender][receiver], in_sight, bits)
 
-    def shared_errors(
-        self, sender: int, receiver: int, bits: int, interference_mw: float
-    ) -> tuple[float, float]:
-        """Probability that a frame of ``bits`` from ``sender`` is lost at ``receiver``
-        this step without and with ``interference_mw`` of other frames on the air (the
-        shared channel), this packet's fast fading drawn once for both."""
-        if self._power is None:
-            return 0.0, 0.0
-        power_dbm = self._power[sender][receiver]
-        if power_dbm != power_dbm:
-            return 0.0, 0.0
+    def frame_errors(
+        self, frame: Frame, receivers: NDArray[np.intp], judged: NDArray[np.bool_]
+    ) -> tuple[FloatArray, FloatArray]:
+        """Probability that the shared channel's ``frame`` is lost at each of
+        ``receivers`` without and with the other frames on the air this step (1 for a
+        receiver it was blocked at; 0 for a node without a position). Fast fading, where
+        the profile has it, is drawn from the stream of each receiver in ``judged`` (the
+        ones in range that take the frame), once for both."""
+        assert self.medium is not None and self._power_array is not None
+        power = self._power_array[frame.sender, receivers].copy()
+        blocked = frame.blocked[receivers]
         if self._fading is not None:
-            in_sight = self._sight is None or self._sight[sender][receiver]
-            k_db = self.profile.rician_k_db if in_sight else None
-            power_dbm += fading_gain_db(self._fading[receiver], k_db)
-        alone = _per(_ber(power_dbm, self._noise, self._rule), bits)
-        if interference_mw <= 0.0:
-            return alone, alone
-        noise_mw = 10.0 ** (self._noise / 10.0) + interference_mw
-        # The preamble was judged when the frame started (radio/medium.py).
-        shared = _per(_ber(power_dbm, 10.0 * math.log10(noise_mw), self._rule, False), bits)
-        return alone, max(alone, shared)
+            sight = self._sight
+            for j in np.flatnonzero(judged & ~blocked).tolist():
+                r = int(receivers[j])
+                in_sight = sight is None or sight[frame.sender][r]
+                k_db = self.profile.rician_k_db if in_sight else None
+                power[j] += fading_gain_db(self._fading[r], k_db)
+        profile = self.profile
+        with np.errstate(invalid="ignore", divide="ignore"):
+            snr = power - profile.noise_floor_dbm
+            noise_mw = 10.0 ** (profile.noise_floor_dbm / 10.0)
+            sinr = power - 10.0 * np.log10(noise_mw + frame.interference_mw[receivers])
+            alone = packet_error_rate(bit_error_rate_at(profile, snr), frame.bits)
+            # The preamble was judged when the frame started (radio/medium.py).
+            shared = packet_error_rate(bit_error_rate_at(profile, sinr, False), frame.bits)
+        alone = np.nan_to_num(alone, nan=0.0)
+        shared = np.maximum(np.nan_to_num(shared, nan=0.0), alone)
+        alone[blocked] = 0.0
+        shared[blocked] = 1.0
+        return alone, shared
 
     def mean_error(self, power_dbm: float, bits: int) -> float:
         """Probability that a packet of ``bits`` is lost over a link of mean power

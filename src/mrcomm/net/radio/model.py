@@ -26,7 +26,7 @@ from mrcomm.net.radio.channel import RadioChannel, fading_gain_db
 from mrcomm.net.radio.links import RadioLinks
 from mrcomm.net.radio.medium import SharedMedium
 from mrcomm.net.radio.profile import DEFAULT_PROFILE, RadioProfile, load_profile, profile_path
-from mrcomm.net.radio.reception import bit_error_rate_at
+from mrcomm.net.radio.reception import bit_error_rate_at, packet_error_rate
 from mrcomm.net.radio.shadowing import ShadowingField
 from mrcomm.net.relay import RelayParams
 from mrcomm.net.signal.pathloss import log_distance_range, log_distance_rssi
@@ -93,13 +93,6 @@ def bit_error_rate(profile: RadioProfile, power_dbm: FloatArray | float) -> Floa
     erfc(√SNR) for QPSK, SNR = power − noise floor."""
     snr_db = np.asarray(power_dbm, dtype=np.float64) - profile.noise_floor_dbm
     return bit_error_rate_at(profile, snr_db)
-
-
-def packet_error_rate(ber: FloatArray | float, bits: FloatArray | float) -> FloatArray:
-    """PER = 1 − (1 − BER)^bits."""
-    b = np.asarray(ber, dtype=np.float64)
-    with np.errstate(divide="ignore"):  # BER 1 (not detected): log1p(-1) = -inf, PER 1
-        return np.asarray(-np.expm1(np.asarray(bits, dtype=np.float64) * np.log1p(-b)))
 
 
 def reach_m(profile: RadioProfile) -> float:

@@ -69,3 +69,12 @@ def per(ber: float, bits: int) -> float:
     if ber >= 1.0:
         return 1.0
     return -math.expm1(bits * math.log1p(-ber))
+
+
+def packet_error_rate(
+    ber: NDArray[np.float64] | float, bits: NDArray[np.float64] | float
+) -> NDArray[np.float64]:
+    """PER = 1 − (1 − BER)^bits (1 where BER is 1: not detected)."""
+    b = np.asarray(ber, dtype=np.float64)
+    with np.errstate(divide="ignore"):  # BER 1: log1p(-1) = -inf, PER 1
+        return np.asarray(-np.expm1(np.asarray(bits, dtype=np.float64) * np.log1p(-b)))
