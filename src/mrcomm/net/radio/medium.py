@@ -95,7 +95,8 @@ class Frame:
 
 def _dbm_to_mw(dbm: FloatArray) -> FloatArray:
     """Power in mW (0 for NaN: a node without a position has no radio)."""
-    return np.nan_to_num(10.0 ** (dbm / 10.0), nan=0.0)
+    mw = 10.0 ** (dbm / 10.0)
+    return np.where(np.isnan(mw), 0.0, mw)
 
 
 class SharedMedium:
@@ -346,7 +347,8 @@ class SharedMedium:
     def _sinr_error(self, frame: Frame) -> FloatArray:
         """Packet error of ``frame`` at every receiver at its SINR (no fading)."""
         noise_dbm = 10.0 * np.log10(self._noise_mw + frame.interference_mw)
-        sinr_dbm = np.nan_to_num(self._power_dbm[frame.sender], nan=-np.inf)
+        power = self._power_dbm[frame.sender]
+        sinr_dbm = np.where(np.isnan(power), -np.inf, power)
         with np.errstate(divide="ignore", invalid="ignore"):
             ber = bit_error_rate_at(self.profile, sinr_dbm - noise_dbm, detect=False)
             return np.asarray(-np.expm1(frame.bits * np.log1p(-np.minimum(ber, 1.0))))
