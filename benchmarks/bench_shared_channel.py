@@ -8,7 +8,8 @@ radio with the shared channel, interleaved seed by seed on one pinned core: the
 real-time factor (simulated s / wall s) and CPU time of each, and the shared channel's
 cost against AH (paired by seed).
 
-``team``: S4 (100 robots) · radio · LF · SLT, the same seeds with each channel: the
+``team``: S4 (100 robots) · radio · LF · SLT, the same seeds with each channel (or the
+channels given, so that two processes can take one each, on the two cores): the
 mission (successful, finish time, tasks reported), pose delivery (received over
 received + every drop, among mates in range), the poses lost to collisions and to the
 queue, the mean pose delay, the channel load (airtime of all poses / mission time) and
@@ -99,8 +100,8 @@ def _pose_figures(result: Any) -> dict[str, float]:
     }
 
 
-def team(seeds: list[int], max_time: float | None) -> None:
-    _pin(last=True)
+def team(seeds: list[int], max_time: float | None, channels: list[str], last: bool) -> None:
+    _pin(last=last)
     resources = ScenarioResources.load(S4)
     print(f"load before: {os.getloadavg()}")
     print(
@@ -110,7 +111,7 @@ def team(seeds: list[int], max_time: float | None) -> None:
     )
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for seed in seeds:
-        for channel in ("queue", "shared"):
+        for channel in channels:
             extra: dict[str, Any] = {"max_time": max_time} if max_time else {}
             config = make_config(
                 None, scenario=S4, seed=seed, network="radio", behaviour="lf",
@@ -139,11 +140,15 @@ def main() -> None:
     t = sub.add_parser("team")
     t.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
     t.add_argument("--max-time", type=float, default=None)
+    t.add_argument("--channels", nargs="+", default=["queue", "shared"])
+    t.add_argument(
+        "--first-core", action="store_true", help="pin to the first core (else the last)"
+    )
     args = parser.parse_args()
     if args.what == "cost":
         cost(args.repeats)
     else:
-        team(args.seeds, args.max_time)
+        team(args.seeds, args.max_time, args.channels, last=not args.first_core)
 
 
 if __name__ == "__main__":

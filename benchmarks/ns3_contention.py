@@ -3,9 +3,10 @@ against ns-3's 802.11 with the same nodes, the same received powers and the same
 traffic. A benchmark, not a dependency:
 
     pip install ns3            # into the project venv (make ns3-validation does it)
-    python benchmarks/ns3_contention.py [--out DIR] [--figure PATH] [--seconds S]
+    python benchmarks/ns3_contention.py [--out DIR] [--figure PATH] [--seconds S] [--seeds 1 2 3]
 
-Three cases, each for 2, 5, 10, 20 and 50 senders:
+Three cases, each for 2, 5, 10, 20 and 50 senders, for each of ``--seeds`` (each seed
+its own start instants and draws on both sides; the outcomes pooled):
 
 * ``saturated``: every sender always has a frame waiting (a packet every 0.5 ms, more
   than the channel carries), all within range of each other (on a 5 m circle);
@@ -252,6 +253,17 @@ class Outcome:
         return 1e3 * self.delay_sum / self.received if self.received else math.nan
 
 
+def pooled(outcomes: Sequence[Outcome]) -> Outcome:
+    """Several seeds' outcomes of one case as one: frames, receptions, delays and
+    seconds summed (the ratios over all of them)."""
+    return Outcome(
+        sum(o.sent for o in outcomes), sum(o.expected for o in outcomes),
+        sum(o.received for o in outcomes), sum(o.delay_sum for o in outcomes),
+        sum(o.seconds for o in outcomes), outcomes[0].receivers,
+        sum(o.cpu_s for o in outcomes),
+    )  # fmt: skip
+
+
 def _in_range(s: Setup, profile: RadioProfile) -> np.ndarray:
     power = profile.tx_power_dbm - s.loss
     return (power >= profile.sensitivity_dbm) & ~np.eye(len(s.loss), dtype=bool)
@@ -341,7 +353,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=Path("benchmarks/results"))
     parser.add_argument("--figure", type=Path, default=None)
     parser.add_argument("--seconds", type=float, default=3.0, help="simulated seconds per case")
-    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument(
+        "--seeds", type=int, nargs="+", default=[1],
+        help="seeds (each its own start instants and draws); the outcomes are pooled",
+    )  # fmt: skip
     parser.add_argument("--senders", type=int, nargs="*", default=list(SENDERS))
     parser.add_argument(
         "--replot", type=Path, default=None,
@@ -366,11 +381,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     rows = []
     for case in CASES:
         for senders in args.senders:
-            s = setup(case, senders, profile, args.seed)
-            stop = min(s.starts) + args.seconds
-            with _filtered_stderr():
-                theirs = run_ns3(ns, s, profile, stop, args.seed)
-            ours = run_model(s, profile, stop, args.seed)
+            runs = []
+            for seed in args.seeds:
+                s = setup(case, senders, profile, seed)
+                stop = min(s.starts) + args.seconds
+                with _filtered_stderr():
+                    ns3_side = run_ns3(ns, s, profile, stop, seed)
+                runs.append((ns3_side, run_model(s, profile, stop, seed)))
+            theirs = pooled([r[0] for r in runs])
+            ours = pooled([r[1] for r in runs])
             rows.append((case, senders, theirs, ours))
             print(
                 f"{case:9s} {senders:3d}  delivery ns-3 {theirs.delivery:.3f} model "

@@ -82,6 +82,13 @@ def list_profiles() -> None:
         typer.echo(f"{name}: {load_profile(name).source}")
 
 
+#: What an unset optional profile value means, as `radio show` prints it.
+_UNSET = {
+    "preamble_snr_db": "none (the sensitivity decides)",
+    "carrier_sense_dbm": "the sensitivity",
+}
+
+
 @radio_app.command()
 def show(
     profile: Annotated[
@@ -107,7 +114,8 @@ def show(
     values.add_column("parameter")
     values.add_column("value", justify="right")
     for key, value in data["profile"].items():
-        values.add_row(key, f"{value:g}" if isinstance(value, float) else str(value))
+        shown = _UNSET.get(key, "-") if value is None else str(value)
+        values.add_row(key, f"{value:g}" if isinstance(value, float) else shown)
     console.print(values)
     table = Table(
         title=(
