@@ -10,10 +10,11 @@ cost against AH (paired by seed).
 
 ``team``: S4 (100 robots) · radio · LF · SLT, the same seeds with each channel (or the
 channels given, so that two processes can take one each, on the two cores): the
-mission (successful, finish time, tasks reported), pose delivery (received over
-received + every drop, among mates in range), the poses lost to collisions and to the
-queue, the mean pose delay, the channel load (airtime of all poses / mission time) and
-the real-time factor with CPU time. Prints Markdown tables for BENCHMARKS.md.
+mission (simulated time, timed out, tasks completed and reported, near collisions),
+pose delivery (received over received + every drop, among mates in range), the poses
+lost to collisions and to the queue, the mean pose delay, the channel load (airtime
+of all poses / mission time) and the real-time factor with CPU time (``--max-time``:
+only the mission's first seconds). Prints Markdown tables for BENCHMARKS.md.
 """
 
 from __future__ import annotations
@@ -105,11 +106,11 @@ def team(seeds: list[int], max_time: float | None, channels: list[str], last: bo
     resources = ScenarioResources.load(S4)
     print(f"load before: {os.getloadavg()}")
     print(
-        "| channel | seed | successful | finish (s) | tasks reported | pose delivery | "
-        "lost to collisions | lost to the queue | pose delay (ms) | pose airtime / s | "
-        "real-time factor | per CPU s |"
+        "| channel | seed | simulated (s) | timed out | tasks completed | tasks reported | "
+        "near collisions | pose delivery | lost to collisions | lost to the queue | "
+        "pose delay (ms) | pose airtime / s | real-time factor | per CPU s |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for seed in seeds:
         for channel in channels:
             extra: dict[str, Any] = {"max_time": max_time} if max_time else {}
@@ -122,8 +123,9 @@ def team(seeds: list[int], max_time: float | None, channels: list[str], last: bo
             p = _pose_figures(result)
             tasks = len(resources.scenario.tasks) - len(m.get("failed_tasks") or [])
             print(
-                f"| {channel} | {seed} | {m.get('successful')} | {result.sim_time_s:.0f} | "
-                f"{tasks}/{len(resources.scenario.tasks)} | {p['delivery']:.3f} | "
+                f"| {channel} | {seed} | {result.sim_time_s:.0f} | {m.get('timed_out')} | "
+                f"{m.get('tasks_completed')} | {tasks}/{len(resources.scenario.tasks)} | "
+                f"{m.get('near_collisions')} | {p['delivery']:.3f} | "
                 f"{p['collisions']:.3f} | {p['queue']:.3f} | {p['delay_ms']:.2f} | "
                 f"{p['load']:.2f} | {result.sim_time_s / wall:.2f}× | "
                 f"{result.sim_time_s / cpu:.2f}× |",

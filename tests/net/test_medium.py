@@ -152,6 +152,25 @@ def test_the_queue_holds_at_most_max_queue_s_of_traffic() -> None:
     assert 20 <= len(sent) <= 40 and dropped
 
 
+def test_a_frame_releases_the_nodes_it_kept_busy_though_the_links_moved() -> None:
+    """Robots move between steps: a frame that started when node 2 heard its sender and
+    ends after it no longer does still releases node 2 (a busy count kept for ever
+    silenced whole teams), and node 2 then sends at once."""
+    power = _all_in_range(3)
+    medium = _medium(power)
+    _at(medium, 0, 0.010)  # on the air until ~0.0119; 2 hears it: busy
+    assert medium._busy[2] == 1
+    moved = power.copy()
+    moved[0, 2] = moved[2, 0] = -200.0  # 2 moved out of range
+    np.fill_diagonal(moved, np.nan)
+    medium.set_power(moved)
+    (_left,) = medium.advance(0.05)
+    assert not medium._busy.any()
+    medium.submit(2, 0.05, BITS, 2)
+    (second,) = medium.advance(0.05) + medium.advance(0.2)
+    assert second.start == pytest.approx(0.05)
+
+
 def test_the_same_seeds_give_the_same_air() -> None:
     def run(seed: int) -> list[tuple[int, float, float]]:
         medium = _medium(_all_in_range(5), seed=seed)

@@ -35,7 +35,9 @@ takes the frames finished by then from :meth:`SharedMedium.advance` (in the orde
 ended) with, per receiver, whether it was blocked and the interference it had; the
 packet error draws stay the bus's (one per message and receiver from the receiver's
 stream, as with the per-sender queue). The power matrix is the step's mean received
-power (:meth:`SharedMedium.set_power`), fixed for the frames of that step.
+power (:meth:`SharedMedium.set_power`); a frame keeps the links of the step it started
+in (who it kept busy, who could hear it, the power it brought as interference) until it
+ends.
 
 Not modelled: acknowledged unicast and retransmissions (the bus broadcasts), RTS/CTS,
 frame capture, rate adaptation, energy-detection carrier sense below the preamble.
@@ -66,8 +68,9 @@ class Frame:
     """One message on the shared channel, from its submission to the end of its
     transmission (or its drop from the queue)."""
 
-    __slots__ = ("bits", "blocked", "dropped", "end", "interference_mw", "sender", "start",
-                 "submitted", "token")  # fmt: skip
+    __slots__ = ("bits", "blocked", "dropped", "end", "heard_by", "interference_mw",
+                 "power_dbm", "power_mw", "sender", "sensed_by", "start", "submitted",
+                 "token")  # fmt: skip
 
     def __init__(self, sender: int, submitted: float, bits: int, token: Any) -> None:
         self.sender = sender
@@ -82,6 +85,12 @@ class Frame:
         self.blocked: BoolArray = np.zeros(0, dtype=np.bool_)
         #: Power of the other frames on the air during it, mW per receiver.
         self.interference_mw: FloatArray = np.zeros(0)
+        # Its links as they were when it started (robots move between steps: the nodes
+        # it kept busy are the ones to release, its power the one others received).
+        self.sensed_by: BoolArray = np.zeros(0, dtype=np.bool_)
+        self.heard_by: BoolArray = np.zeros(0, dtype=np.bool_)
+        self.power_mw: FloatArray = np.zeros(0)
+        self.power_dbm: FloatArray = np.zeros(0)
 
     @property
     def delay(self) -> float:
@@ -283,6 +292,10 @@ class SharedMedium:
         for frame in frames:
             frame.start = now
             frame.end = now + self.airtime(frame.bits)
+            frame.sensed_by = self._senses[frame.sender]
+            frame.heard_by = self._hears[frame.sender] & self._radio
+            frame.power_mw = self._power_mw[frame.sender]
+            frame.power_dbm = self._power_dbm[frame.sender]
             self._longest = max(self._longest, frame.end - now)
         # Receivers busy now cannot take any of these frames; who starts now too.
         self._transmitting[senders] = True
@@ -291,7 +304,7 @@ class SharedMedium:
                 other.blocked[senders] |= self._radio[senders]
         blocked = self._transmitting | (self._lock_until > now + _SAME_TIME_S)
         # Every frame on the air now is noise to the preamble of each new one.
-        on_air_mw = self._power_mw[[f.sender for f in self._on_air] + senders.tolist()].sum(axis=0)
+        on_air_mw = np.sum([f.power_mw for f in (*self._on_air, *frames)], axis=0)
         # Of the frames that start in the same instant a receiver takes the first to
         # reach it, the nearest: here the strongest (no capture beyond that).
         strength = np.where(self._hears[senders], self._power_mw[senders], -1.0)
@@ -299,17 +312,17 @@ class SharedMedium:
         free = ~blocked & self._radio & (strength.max(axis=0) >= 0.0)
         threshold = self.profile.preamble_snr_db
         for k, frame in enumerate(frames):
-            hears = self._hears[frame.sender] & self._radio
+            hears = frame.heard_by
             mine = free & (strongest == k)
             if threshold is not None:  # the preamble is detected above its SINR only
-                signal = self._power_mw[frame.sender]
+                signal = frame.power_mw
                 with np.errstate(divide="ignore"):
                     sinr_db = 10.0 * np.log10(signal / (self._noise_mw + on_air_mw - signal))
                 mine &= sinr_db >= threshold
             frame.blocked = (blocked | (hears & ~mine)) & self._radio & self._radio[frame.sender]
             self._lock_until[mine] = frame.end
             self._backoff[frame.sender] = 0
-        self._busy += self._senses[senders].sum(axis=0)
+        self._busy += np.sum([f.sensed_by for f in frames], axis=0)
         self._on_air.extend(frames)
 
     def _end_frames(self, now: float) -> None:
@@ -318,27 +331,25 @@ class SharedMedium:
         window = self._on_air + self._recent + ending
         for frame in ending:
             overlapping = [
-                g.sender
+                g.power_mw
                 for g in window
                 if g is not frame and g.start < frame.end - _SAME_TIME_S
                 and g.end > frame.start + _SAME_TIME_S
             ]  # fmt: skip
-            frame.interference_mw = (
-                self._power_mw[overlapping].sum(axis=0) if overlapping else np.zeros(self.n)
-            )
+            frame.interference_mw = np.sum(overlapping, axis=0) if overlapping else np.zeros(self.n)
             self._finished.append(frame)
         senders = np.array([f.sender for f in ending], dtype=np.intp)
-        self._busy -= self._senses[senders].sum(axis=0)
+        self._busy -= np.sum([f.sensed_by for f in ending], axis=0)
         self._transmitting[senders] = False
         for frame in ending:
             self._backoff[frame.sender] = self._draw(frame.sender)  # post-backoff
             # 802.11 waits EIFS, not DIFS, after a frame received in error: here one
             # its receiver more likely than not lost (the bus draws the real outcome).
-            locked = self._hears[frame.sender] & ~frame.blocked
+            locked = frame.heard_by & ~frame.blocked
             lost = self._sinr_error(frame) > 0.5
             self._ifs[locked & lost] = self._eifs
             self._ifs[locked & ~lost] = self._difs
-        sensed = np.asarray(self._senses[senders].any(axis=0), dtype=np.bool_)
+        sensed = np.asarray(np.any([f.sensed_by for f in ending], axis=0), dtype=np.bool_)
         sensed[senders] = True
         now_idle = sensed & (self._busy == 0) & ~self._transmitting
         self._idle_since[now_idle] = now
@@ -347,7 +358,7 @@ class SharedMedium:
     def _sinr_error(self, frame: Frame) -> FloatArray:
         """Packet error of ``frame`` at every receiver at its SINR (no fading)."""
         noise_dbm = 10.0 * np.log10(self._noise_mw + frame.interference_mw)
-        power = self._power_dbm[frame.sender]
+        power = frame.power_dbm
         sinr_dbm = np.where(np.isnan(power), -np.inf, power)
         with np.errstate(divide="ignore", invalid="ignore"):
             ber = bit_error_rate_at(self.profile, sinr_dbm - noise_dbm, detect=False)
