@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import tempfile
 import typing
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
@@ -77,10 +77,13 @@ def _candidates(model: type[BaseModel], name: str, default: Any) -> list[Any]:
     return []
 
 
-def non_default_values(model: type[BaseModel]) -> tuple[dict[str, Any], list[str]]:
+def non_default_values(
+    model: type[BaseModel], refuses: Callable[[BaseModel], str | None] | None = None
+) -> tuple[dict[str, Any], list[str]]:
     """Parameters of ``model`` each set to a value other than its default that
-    validates together with the others (nested as a parameter section is), and the
-    names no value could be found for."""
+    validates together with the others (nested as a parameter section is) and that
+    ``refuses`` (e.g. live mode's refusals) does not refuse, and the names no value
+    could be found for."""
     defaults = model.model_validate({})
     chosen: dict[str, Any] = {}
     missed: list[str] = []
@@ -91,6 +94,8 @@ def non_default_values(model: type[BaseModel]) -> tuple[dict[str, Any], list[str
                 validated = model.model_validate(_nested({**chosen, name: candidate}))
             except (ValidationError, InputError):  # a value its own validator refuses
                 continue
+            if refuses is not None and refuses(validated) is not None:
+                continue  # e.g. the shared channel, which live mode cannot run
             if _value(validated, name) != default:
                 chosen[name] = candidate
                 break

@@ -224,7 +224,10 @@ def check_assembly(spec: VariantSpec) -> str:
     from mrcomm.run.config import make_config
 
     base = mission_config(spec)
-    values, missed = non_default_values(spec.params_model())
+    entry = spec.load()
+    # Values live mode refuses (a network's simulation-only options) cannot be compared.
+    refusal = getattr(entry, "live_refusal", None) if spec.kind == "network" else None
+    values, missed = non_default_values(spec.params_model(), refusal)
     params = {kind: dict(section) for kind, section in base.params.items()}
     if spec.kind == "behaviour":
         params.setdefault("behaviour", {}).update(values)
