@@ -4,12 +4,12 @@ are installed (pip install ns3; make ns3-validation installs them)."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 from types import ModuleType
 
 import pytest
+
+from tests.scripts import load_script
 
 SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "ns3_contention.py"
 NO_NS3 = "ns-3's Python bindings are not installed (pip install ns3): no ns-3 comparison"
@@ -17,14 +17,7 @@ NO_NS3 = "ns-3's Python bindings are not installed (pip install ns3): no ns-3 co
 
 @pytest.fixture(scope="module")
 def bench() -> ModuleType:
-    name = "mrcomm_bench_ns3_contention"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, SCRIPT)
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module
-        spec.loader.exec_module(module)
-    return sys.modules[name]
+    return load_script(SCRIPT, "mrcomm_bench_ns3_contention")
 
 
 def test_the_model_side_loses_more_as_senders_crowd_the_air(bench: ModuleType) -> None:

@@ -5,7 +5,6 @@ ns3-validation installs them)."""
 
 from __future__ import annotations
 
-import importlib.util
 import itertools
 import os
 import subprocess
@@ -20,20 +19,14 @@ from scipy.special import ndtr
 
 from mrcomm.net.radio.model import delivery_ratio
 from mrcomm.net.radio.profile import load_profile
+from tests.scripts import load_script
 
 SCRIPT = Path(__file__).resolve().parents[2] / "benchmarks" / "ns3_validation.py"
 NO_NS3 = "ns-3's Python bindings are not installed (pip install ns3): no ns-3 comparison"
 
 
 def _script() -> ModuleType:
-    name = "mrcomm_bench_ns3_validation"
-    if name not in sys.modules:
-        spec = importlib.util.spec_from_file_location(name, SCRIPT)
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[name] = module  # dataclasses look their module up while defining
-        spec.loader.exec_module(module)
-    return sys.modules[name]
+    return load_script(SCRIPT, "mrcomm_bench_ns3_validation")
 
 
 @pytest.fixture(scope="module")

@@ -16,9 +16,7 @@ its held-out ones.
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +30,7 @@ from mrcomm.net.radio.profile import load_profile
 from mrcomm.net.radio.validate import validate
 from tests.cli.test_signal_cli import mrcomm
 from tests.conftest import ROOT
+from tests.scripts import load_script
 
 SETS = ROOT / "data" / "radio" / "validation"
 
@@ -105,13 +104,9 @@ def test_a_csv_may_give_its_walls(tmp_path: Path) -> None:
 
 
 def test_the_bundled_sets_are_derived_as_documented(tmp_path: Path) -> None:
-    spec = importlib.util.spec_from_file_location(
-        "make_wifi_validation_set", ROOT / "scripts" / "make_wifi_validation_set.py"
+    script = load_script(
+        ROOT / "scripts" / "make_wifi_validation_set.py", "make_wifi_validation_set"
     )
-    assert spec is not None and spec.loader is not None
-    script = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("make_wifi_validation_set", script)
-    spec.loader.exec_module(script)
     source = tmp_path / "database_office_train.csv"
     header = ",".join(["X", "Y", *(f"AP{k} RTT(mm)" for k in (1, 2)),
                        *(f"AP{k} RSS(dBm)" for k in (1, 2)), "LOS APs"])  # fmt: skip

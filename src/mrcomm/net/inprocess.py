@@ -244,7 +244,13 @@ class InProcessNetwork:
             queued_out = delay is None and not exempt(topic)
             delay_s = delay or 0.0
             if frame is not None:  # the shared channel: this frame at every receiver
-                alone, shared = self._frame_errors(frame, topic, receivers)
+                assert channel is not None
+                targets = np.fromiter(receivers, dtype=np.intp, count=len(receivers))
+                # Fading is drawn for the receivers in range of a topic that can be lost.
+                reach = self._links[sender, targets] & (targets != sender)
+                judged = reach & (not exempt(topic))
+                errors = channel.frame_errors(frame, targets, judged)
+                alone, shared = errors[0].tolist(), errors[1].tolist()
             for column, (receiver, handlers) in enumerate(receivers.items()):
                 if receiver == sender:
                     continue
@@ -415,19 +421,6 @@ class InProcessNetwork:
                         crossed, copy, frame))  # fmt: skip
         return out
 
-    def _frame_errors(
-        self, frame: Frame, topic: str, receivers: dict[int, list[Handler]]
-    ) -> tuple[list[float], list[float]]:
-        """A shared-channel frame's chances of loss at each of ``receivers`` (in their
-        order) without and with the other frames on the air."""
-        assert self.channel is not None
-        targets = np.fromiter(receivers, dtype=np.intp, count=len(receivers))
-        judged = self._links[frame.sender, targets] & (targets != frame.sender)
-        if self.policy.exempt(topic):
-            judged[:] = False  # always received: no fading drawn
-        alone, shared = self.channel.frame_errors(frame, targets, judged)
-        return alone.tolist(), shared.tolist()
-
     def _deliver_frames(
         self,
         topic: str,
@@ -445,7 +438,9 @@ class InProcessNetwork:
         rows = np.array([f.sender for f in frames], dtype=np.intp)
         others = rows[:, None] != targets[None, :]
         connected = self._links[rows[:, None], targets[None, :]] & others
-        errors = [self._frame_errors(frame, topic, receivers) for frame in frames]
+        assert self.channel is not None
+        judged = connected & (not self.policy.exempt(topic))  # as one frame at a time
+        errors = [self.channel.frame_errors(f, targets, judged[k]) for k, f in enumerate(frames)]
         alone = np.array([e[0] for e in errors])
         shared = np.array([e[1] for e in errors])
         streams = [self._streams[r] for r in takers.targets]

@@ -102,14 +102,14 @@ class RadioChannel:
 
     def set_links(self, power: FloatArray, sight: NDArray[np.bool_] | None) -> None:
         """The step's received power ``power[s, r]`` (dBm) and line of sight."""
-        self._power = power.tolist()
         self._sight = sight.tolist() if sight is not None else None
         self._power_array = power
         if self.medium is not None:
-            # The shared channel judges each frame at its SINR (shared_errors), never
-            # from the links' BER alone: no table of it.
+            # The shared channel judges each frame at its SINR (frame_errors, on the
+            # array), never from the links' BER alone: no lists, no table of it.
             self.medium.set_power(power)
             return
+        self._power = power.tolist()
         # A team has a handful of links: plain Python beats numpy's per-call overhead.
         self._ber = [[_ber(p, self._noise, self._rule) for p in row] for row in self._power]
 
