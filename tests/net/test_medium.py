@@ -159,13 +159,13 @@ def test_a_frame_releases_the_nodes_it_kept_busy_though_the_links_moved() -> Non
     power = _all_in_range(3)
     medium = _medium(power)
     _at(medium, 0, 0.010)  # on the air until ~0.0119; 2 hears it: busy
-    assert medium._busy[2] == 1
+    assert medium.sensed(2) == 1
     moved = power.copy()
     moved[0, 2] = moved[2, 0] = -200.0  # 2 moved out of range
     np.fill_diagonal(moved, np.nan)
     medium.set_power(moved)
     (_left,) = medium.advance(0.05)
-    assert not medium._busy.any()
+    assert not any(medium.sensed(k) for k in range(3))
     medium.submit(2, 0.05, BITS, 2)
     (second,) = medium.advance(0.05) + medium.advance(0.2)
     assert second.start == pytest.approx(0.05)

@@ -246,9 +246,12 @@ class InProcessNetwork:
             if frame is not None:  # the shared channel: this frame at every receiver
                 assert channel is not None
                 targets = np.fromiter(receivers, dtype=np.intp, count=len(receivers))
-                # Fading is drawn for the receivers in range of a topic that can be lost.
-                reach = self._links[sender, targets] & (targets != sender)
-                judged = reach & (not exempt(topic))
+                judged = None
+                if channel.fades:
+                    # Fading is drawn for the receivers in range of a topic that can be
+                    # lost.
+                    reach = self._links[sender, targets] & (targets != sender)
+                    judged = reach & (not exempt(topic))
                 errors = channel.frame_errors(frame, targets, judged)
                 alone, shared = errors[0].tolist(), errors[1].tolist()
             for column, (receiver, handlers) in enumerate(receivers.items()):

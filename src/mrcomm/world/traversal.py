@@ -16,11 +16,13 @@ set ``MRCOMM_NO_NUMBA=1`` to use the plain functions even where numba is install
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+
+from mrcomm.compiled import KERNEL as KERNEL  # (re-exported: which loops run)
+from mrcomm.compiled import compiled
 
 Cells = Sequence[float] | np.ndarray
 #: A traversal: first flat cell index, number of cells (-1: an end off the map or on its
@@ -138,30 +140,12 @@ def cast_loop(
             walls_out[i] = 1
 
 
-# What cast_loop calls: the plain functions, or their compiled forms (numba resolves
-# these globals when it compiles cast_loop, so they are set before).
-_setup: Any = ray_setup
-_walls: Any = walls_loop
-_nearest: Any = nearest_loop
-_cast: Any = cast_loop
-
-
-def _compile() -> bool:
-    global _setup, _walls, _nearest, _cast
-    if os.environ.get("MRCOMM_NO_NUMBA"):
-        return False
-    try:
-        import numba  # type: ignore[import-untyped,unused-ignore]
-    except ImportError:
-        return False
-    jit: Any = numba.njit(cache=True, nogil=True)
-    _setup, _walls, _nearest = jit(ray_setup), jit(walls_loop), jit(nearest_loop)
-    _cast = jit(cast_loop)
-    return True
-
-
-#: Which functions ray casts use: "numba" or "python".
-KERNEL = "numba" if _compile() else "python"
+# What cast_loop calls: the compiled forms where numba is there, else the plain
+# functions (numba resolves these globals when it compiles cast_loop).
+_setup: Any = compiled(ray_setup)
+_walls: Any = compiled(walls_loop)
+_nearest: Any = compiled(nearest_loop)
+_cast: Any = compiled(cast_loop)
 
 
 def setup(*args: Any) -> Ray:

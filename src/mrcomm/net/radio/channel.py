@@ -30,7 +30,6 @@ from mrcomm.messaging.messages import Message, encode
 from mrcomm.net.radio.medium import Frame, SharedMedium
 from mrcomm.net.radio.profile import RadioProfile
 from mrcomm.net.radio.reception import ber as _ber
-from mrcomm.net.radio.reception import bit_error_rate_at, packet_error_rate
 from mrcomm.net.radio.reception import per as _per
 
 FloatArray = NDArray[np.float64]
@@ -123,37 +122,34 @@ class RadioChannel:
         in_sight = self._sight is None or self._sight[sender][receiver]
         return self.error_at(receiver, self._power[sender][receiver], in_sight, bits)
 
+    @property
+    def fades(self) -> bool:
+        """Whether each packet has its own fast fading (the profile's ``fading``)."""
+        return self._fading is not None
+
     def frame_errors(
-        self, frame: Frame, receivers: NDArray[np.intp], judged: NDArray[np.bool_]
+        self, frame: Frame, receivers: NDArray[np.intp], judged: NDArray[np.bool_] | None
     ) -> tuple[FloatArray, FloatArray]:
         """Probability that the shared channel's ``frame`` is lost at each of
         ``receivers`` without and with the other frames on the air this step (1 for a
         receiver it was blocked at; 0 for a node without a position). Fast fading, where
         the profile has it, is drawn from the stream of each receiver in ``judged`` (the
-        ones in range that take the frame), once for both."""
+        ones in range that take the frame; needed only when it :attr:`fades`), once for
+        both."""
         assert self.medium is not None and self._power_array is not None
+        if self._fading is None:  # (the channel computed them as the frame ended)
+            return frame.alone[receivers], frame.shared[receivers]
+        assert judged is not None
         power = self._power_array[frame.sender, receivers].copy()
         blocked = frame.blocked[receivers]
-        if self._fading is not None:
-            sight = self._sight
-            for j in np.flatnonzero(judged & ~blocked).tolist():
-                r = int(receivers[j])
-                in_sight = sight is None or sight[frame.sender][r]
-                k_db = self.profile.rician_k_db if in_sight else None
-                power[j] += fading_gain_db(self._fading[r], k_db)
-        profile = self.profile
-        with np.errstate(invalid="ignore", divide="ignore"):
-            snr = power - profile.noise_floor_dbm
-            noise_mw = 10.0 ** (profile.noise_floor_dbm / 10.0)
-            sinr = power - 10.0 * np.log10(noise_mw + frame.interference_mw[receivers])
-            alone = packet_error_rate(bit_error_rate_at(profile, snr), frame.bits)
-            # The preamble was judged when the frame started (radio/medium.py).
-            shared = packet_error_rate(bit_error_rate_at(profile, sinr, False), frame.bits)
-        # (np.where: nan_to_num costs several times as much on a handful of receivers)
-        alone = np.where(np.isnan(alone), 0.0, alone)
-        shared = np.maximum(np.where(np.isnan(shared), 0.0, shared), alone)
-        alone[blocked] = 0.0
-        shared[blocked] = 1.0
+        sight = self._sight
+        for j in np.flatnonzero(judged & ~blocked).tolist():
+            r = int(receivers[j])
+            in_sight = sight is None or sight[frame.sender][r]
+            k_db = self.profile.rician_k_db if in_sight else None
+            power[j] += fading_gain_db(self._fading[r], k_db)
+        alone, shared = np.empty(len(receivers)), np.empty(len(receivers))
+        self.medium.frame_errors(frame, power, receivers, alone, shared)
         return alone, shared
 
     def mean_error(self, power_dbm: float, bits: int) -> float:

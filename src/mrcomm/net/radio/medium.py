@@ -39,58 +39,69 @@ power (:meth:`SharedMedium.set_power`); a frame keeps the links of the step it s
 in (who it kept busy, who could hear it, the power it brought as interference) until it
 ends.
 
+The event loop itself is :mod:`mrcomm.net.radio.air`, over arrays and compiled where
+numba is installed; this class keeps its state, hands it the frames and gives back the
+finished ones.
+
 Not modelled: acknowledged unicast and retransmissions (the bus broadcasts), RTS/CTS,
 frame capture, rate adaptation, energy-detection carrier sense below the preamble.
 """
 
 from __future__ import annotations
 
-import heapq
 import math
-from collections import deque
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from mrcomm.net.radio import air
 from mrcomm.net.radio.profile import RadioProfile
-from mrcomm.net.radio.reception import bit_error_rate_at
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
-#: Two instants closer than this (s) are the same instant (slot boundaries are sums).
-_SAME_TIME_S = 1e-12
+#: Frame slots, queue places and backoff draws per node to begin with (each grows by
+#: doubling when needed).
+_FIRST_SLOTS = 64
+_FIRST_PLACES = 4
+_FIRST_DRAWS = 64
+#: 64-bit draws kept for rejections in the bounded draws beyond the most a call can use
+#: (for an 802.11 window, 2^k slots, there are none).
+_MARGIN = 16
+
+
+# What a frame has per receiver until it has been on the air (read-only: shared).
+_NO_RECEIVERS: BoolArray = np.zeros(0, dtype=np.bool_)
+_NO_VALUES: FloatArray = np.zeros(0)
+_NO_RECEIVERS.flags.writeable = _NO_VALUES.flags.writeable = False
 
 
 class Frame:
     """One message on the shared channel, from its submission to the end of its
     transmission (or its drop from the queue)."""
 
-    __slots__ = ("bits", "blocked", "dropped", "end", "heard_by", "interference_mw",
-                 "power_dbm", "power_mw", "sender", "sensed_by", "start", "submitted",
-                 "token")  # fmt: skip
+    __slots__ = ("alone", "bits", "blocked", "dropped", "end", "interference_mw", "sender",
+                 "shared", "start", "submitted", "token")  # fmt: skip
 
     def __init__(self, sender: int, submitted: float, bits: int, token: Any) -> None:
         self.sender = sender
-        self.submitted = submitted
+        self.submitted = submitted  # then its arrival at the MAC queue
         self.bits = bits
         self.token = token
         self.start = math.nan
         self.end = math.nan
         self.dropped = False
         #: Receivers that could not receive it: transmitting during it, or locked on
-        #: another frame when it started (set when it starts).
-        self.blocked: BoolArray = np.zeros(0, dtype=np.bool_)
+        #: another frame when it started (empty for a dropped frame).
+        self.blocked: BoolArray = _NO_RECEIVERS
         #: Power of the other frames on the air during it, mW per receiver.
-        self.interference_mw: FloatArray = np.zeros(0)
-        # Its links as they were when it started (robots move between steps: the nodes
-        # it kept busy are the ones to release, its power the one others received).
-        self.sensed_by: BoolArray = np.zeros(0, dtype=np.bool_)
-        self.heard_by: BoolArray = np.zeros(0, dtype=np.bool_)
-        self.power_mw: FloatArray = np.zeros(0)
-        self.power_dbm: FloatArray = np.zeros(0)
+        self.interference_mw: FloatArray = _NO_VALUES
+        #: Probability that it is lost at each receiver without and with the other
+        #: frames, at the mean power of the step it ended in (1 where blocked).
+        self.alone: FloatArray = _NO_VALUES
+        self.shared: FloatArray = _NO_VALUES
 
     @property
     def delay(self) -> float:
@@ -116,49 +127,62 @@ class SharedMedium:
         self.n = n
         self._rngs = list(rngs)
         self._seconds_per_bit = 1.0 / profile.rate_bps
-        self._slot = profile.slot_s
-        self._difs = profile.sifs_s + 2.0 * profile.slot_s
-        self._eifs = self._difs + profile.sifs_s + profile.ack_s
+        difs = profile.sifs_s + 2.0 * profile.slot_s
+        eifs = difs + profile.sifs_s + profile.ack_s
         self._cw = profile.cw_min
-        self._queues: list[deque[Frame]] = [deque() for _ in range(n)]
-        self._head_arrival = np.full(n, np.inf)  # submission of each queue's head
-        self._busy = np.zeros(n, dtype=np.int64)  # frames on the air each node senses
-        self._transmitting = np.zeros(n, dtype=np.bool_)
-        self._idle_since = np.zeros(n)
-        self._ifs = np.full(n, self._difs)
-        self._backoff = np.zeros(n, dtype=np.int64)
-        self._lock_until = np.full(n, -np.inf)  # end of the frame each receiver is on
-        self._on_air: list[Frame] = []
-        self._recent: list[Frame] = []  # ended, still within one airtime of the clock
-        self._finished: list[Frame] = []
-        self._submitted: list[Frame] = []  # since the last advance
-        self._waiting = np.zeros(n, dtype=np.int64)  # each sender's frames not yet sent
-        self._arrivals: list[tuple[float, int, Frame]] = []  # a heap by arrival
-        self._sequence = 0
-        self._clock = 0.0
-        self._power_dbm = np.full((n, n), np.nan)
-        self._power_mw = np.zeros((n, n))
-        self._senses = np.zeros((n, n), dtype=np.bool_)
-        self._hears = np.zeros((n, n), dtype=np.bool_)
-        self._radio = np.ones(n, dtype=np.bool_)
-        self._noise_mw = 10.0 ** (profile.noise_floor_dbm / 10.0)
+        threshold = profile.preamble_snr_db
+        self._settings = np.array([
+            profile.slot_s, difs, eifs, profile.preamble_s, self._seconds_per_bit,
+            profile.max_queue_s, 10.0 ** (profile.noise_floor_dbm / 10.0),
+            profile.noise_floor_dbm, math.nan if threshold is None else threshold,
+            1.0 if profile.modulation == "dsss" else 0.0, profile.cw_min,
+        ])  # fmt: skip
+        self._nodes = (
+            np.full(n, np.inf),  # submission of each queue's head
+            np.zeros(n),  # when each node last heard the air turn idle
+            np.full(n, difs),  # interframe space
+            np.full(n, -np.inf),  # end of the frame each receiver is on
+            np.zeros(n, dtype=np.int64),  # frames on the air each node senses
+            np.zeros(n, dtype=np.int64),  # backoff counters (slots)
+            np.zeros(n, dtype=np.int64),  # each sender's frames not yet sent or dropped
+            np.zeros(n, dtype=np.bool_),  # transmitting
+            np.ones(n, dtype=np.bool_),  # has a radio
+            np.zeros((n, _FIRST_PLACES), dtype=np.int64),  # queues: rings of slots
+            np.zeros(n, dtype=np.int64),  # queue heads
+            np.zeros(n, dtype=np.int64),  # queue lengths
+            # Each node's stream, drawn ahead: 64-bit draws, how many used, how many
+            # there are, and the half of one kept for the next 32 bits (PCG64's).
+            np.zeros((n, _FIRST_DRAWS), dtype=np.uint64),
+            np.zeros(n, dtype=np.int64),
+            np.zeros(n, dtype=np.int64),
+            np.array([r.bit_generator.state["has_uint32"] for r in rngs], dtype=np.bool_),
+            np.array([r.bit_generator.state["uinteger"] for r in rngs], dtype=np.uint64),
+        )
         sense = profile.carrier_sense_dbm
         self._sense_dbm = profile.sensitivity_dbm if sense is None else sense
-        self._longest = 0.0
+        empty = np.zeros((n, n), dtype=np.bool_)
+        self._links: tuple[Any, ...] = (None, None, empty, empty.copy())
+        self._short = np.zeros(n, dtype=np.int64)
+        self.set_power(np.full((n, n), np.nan))
+        self._frames: list[Frame | None] = []
+        self._free: list[int] = []
+        self._store: tuple[Any, ...] = ()
+        self._lists: tuple[Any, ...] = ()
+        self._scratch: tuple[Any, ...] = ()
+        self._grow(_FIRST_SLOTS)
+        self._clock = 0.0
+        self._unfinished = 0
 
     # -- inputs ----------------------------------------------------------------------
     def set_power(self, power_dbm: FloatArray) -> None:
         """The step's mean received power ``power_dbm[s, r]`` (dBm; NaN: no radio)."""
-        self._power_dbm = power_dbm
-        self._power_mw = _dbm_to_mw(power_dbm)
-        off_diagonal = ~np.eye(self.n, dtype=np.bool_)
-        with np.errstate(invalid="ignore"):
-            self._senses = (power_dbm >= self._sense_dbm) & off_diagonal
-            self._hears = (power_dbm >= self.profile.sensitivity_dbm) & off_diagonal
-        # A node with no power to anyone (the operator's virtual node) has no radio: it
-        # is never blocked, and its frames are neither sensed nor interfere.
-        without = (np.isnan(power_dbm) | ~off_diagonal).all(axis=0)
-        self._radio = np.asarray(~without | (self.n == 1), dtype=np.bool_)
+        power_dbm = np.ascontiguousarray(power_dbm, dtype=np.float64)
+        senses, hears = self._links[2], self._links[3]
+        air.set_links(
+            power_dbm, self._sense_dbm, self.profile.sensitivity_dbm, senses, hears,
+            self._nodes[8],
+        )  # fmt: skip
+        self._links = (_dbm_to_mw(power_dbm), power_dbm, senses, hears)
 
     def airtime(self, bits: int) -> float:
         """Seconds on the air of a frame of ``bits``: preamble and bits at the rate."""
@@ -167,199 +191,149 @@ class SharedMedium:
     def submit(self, sender: int, stamp: float, bits: int, token: Any) -> None:
         """Hand a frame of ``sender`` published at ``stamp`` (the last :meth:`advance`)
         to the channel; ``token`` comes back with it when it has finished."""
-        self._submitted.append(Frame(sender, max(stamp, self._clock), bits, token))
-        self._waiting[sender] += 1
+        if not self._free:
+            self._grow(2 * len(self._frames))
+        slot = self._free.pop()
+        frame = Frame(sender, max(stamp, self._clock), bits, token)
+        self._frames[slot] = frame
+        store = self._store
+        store[0][slot] = sender
+        store[2][slot] = bits
+        store[1][slot] = frame.submitted
+        store[5][slot] = False
+        lists = self._lists
+        lists[5][lists[4][air.FRESH]] = slot
+        lists[4][air.FRESH] += 1
+        self._nodes[6][sender] += 1
+        self._unfinished += 1
 
     # -- outputs ---------------------------------------------------------------------
     def pending(self) -> int:
         """Frames submitted, queued or on the air."""
-        queued = sum(len(q) for q in self._queues)
-        return len(self._submitted) + len(self._arrivals) + queued + len(self._on_air)
+        return self._unfinished
 
     def queued(self, sender: int) -> int:
         """Frames of ``sender`` waiting: submitted, not yet on the air or dropped."""
-        return int(self._waiting[sender])
+        return int(self._nodes[6][sender])
+
+    def sensed(self, node: int) -> int:
+        """How many frames on the air ``node`` senses (it hears the air busy if any)."""
+        return int(self._nodes[4][node])
 
     def advance(self, now: float) -> list[Frame]:
         """Simulate the channel up to ``now``; the frames that ended (or were dropped)
         since the last call, in the order they did."""
-        self._arrive_within(now)
-        while True:
-            end = min((f.end for f in self._on_air), default=math.inf)
-            start, starters = self._next_access()
-            arrival = self._arrivals[0][0] if self._arrivals else math.inf
-            first = min(end, start, arrival)
-            if first > now + _SAME_TIME_S:
-                break
-            if arrival <= first:
-                self._arrive(heapq.heappop(self._arrivals)[2])
-            elif end <= start:
-                self._end_frames(end)
-            else:
-                self._start_frames(start, starters)
+        short, most = air.shortfall(self._nodes, _MARGIN, self._short)
+        if most > self._nodes[9].shape[1]:
+            self._fit_queues(most)
+        if short:
+            self._draw_ahead(self._short[:short].tolist())
+        counts = self._lists[4]
+        counts[air.FINISHED] = counts[air.RELEASED] = 0
+        air.advance(
+            now, self._settings, self._nodes, self._links, self._store, self._lists,
+            self._scratch,
+        )  # fmt: skip
         self._clock = max(self._clock, now)
-        finished, self._finished = self._finished, []
+        return self._collect()
+
+    def frame_errors(
+        self, frame: Frame, power_dbm: FloatArray, receivers: NDArray[np.intp],
+        alone: FloatArray, shared: FloatArray,
+    ) -> None:  # fmt: skip
+        """``frame``'s errors at ``receivers`` (into ``alone`` and ``shared``) at
+        received powers ``power_dbm`` (the step's with this packet's fast fading), by
+        the rule the channel uses for frames without fading."""
+        air.frame_errors(
+            power_dbm, frame.interference_mw[receivers], frame.blocked[receivers],
+            frame.bits, self._settings, alone, shared,
+        )  # fmt: skip
+
+    # -- between the loop and the frames ----------------------------------------------
+    def _fit_queues(self, need: int) -> None:
+        """Make every queue's ring hold ``need`` frames (its sender's unsent frames)."""
+        qbuf, qhead, qlen = self._nodes[9], self._nodes[10], self._nodes[11]
+        places = qbuf.shape[1]
+        while places < need:
+            places *= 2
+        wider = np.zeros((self.n, places), dtype=np.int64)
+        for node in range(self.n):
+            ring = [qbuf[node, (qhead[node] + k) % qbuf.shape[1]] for k in range(qlen[node])]
+            wider[node, : len(ring)] = ring
+        qhead[:] = 0
+        self._nodes = (*self._nodes[:9], wider, *self._nodes[10:])
+
+    def _draw_ahead(self, short: list[int]) -> None:
+        """Draw ahead from the streams of the ``short`` nodes (:func:`air.shortfall`).
+        The channel alone draws from these streams, and ``air`` takes from them what
+        numpy's ``random`` and ``integers`` would, in the same order."""
+        waiting = self._nodes[6]
+        raw, used, length = self._nodes[12], self._nodes[13], self._nodes[14]
+        for node in short:
+            kept = raw[node, used[node] : length[node]]
+            need = 2 * int(waiting[node]) + 1 + _MARGIN
+            block = self._rngs[node].bit_generator.random_raw(max(_FIRST_DRAWS, need))
+            row = np.concatenate((kept, block))
+            if len(row) > raw.shape[1]:
+                wider = np.zeros((self.n, max(len(row), 2 * raw.shape[1])), dtype=np.uint64)
+                wider[:, : raw.shape[1]] = raw
+                raw = wider
+                self._nodes = (*self._nodes[:12], raw, *self._nodes[13:])
+            raw[node, : len(row)] = row
+            used[node] = 0
+            length[node] = len(row)
+
+    def _collect(self) -> list[Frame]:
+        """The frames finished during the last call, with their outcome; the slots it
+        released become free."""
+        store, lists = self._store, self._lists
+        counts = lists[4]
+        arrival, start, end, dropped, blocked, interference, alone, shared = (
+            store[1], store[3], store[4], store[5], store[6], store[7], store[12], store[13]
+        )  # fmt: skip
+        finished: list[Frame] = []
+        for slot in lists[2][: counts[air.FINISHED]].tolist():
+            frame = self._frames[slot]
+            assert frame is not None
+            frame.submitted = float(arrival[slot])
+            frame.end = float(end[slot])
+            if dropped[slot]:
+                frame.dropped = True
+            else:
+                frame.start = float(start[slot])
+                frame.blocked = blocked[slot].copy()
+                frame.interference_mw = interference[slot].copy()
+                frame.alone = alone[slot].copy()
+                frame.shared = shared[slot].copy()
+            finished.append(frame)
+        for slot in lists[3][: counts[air.RELEASED]].tolist():
+            self._frames[slot] = None
+            self._free.append(slot)
+        self._unfinished -= len(finished)
         return finished
 
-    def _arrive_within(self, now: float) -> None:
-        """Give the frames submitted since the last call their arrival at the MAC.
-
-        A step publishes all its messages at one instant, where robots publish at
-        instants of their own: frames that arrived together at idle nodes would all
-        collide. Each frame therefore arrives at a uniform instant of the interval up
-        to ``now`` (from its sender's stream; one sender's frames keep their order)."""
-        if not self._submitted:
-            return
-        by_sender: dict[int, list[Frame]] = {}
-        for frame in self._submitted:
-            by_sender.setdefault(frame.sender, []).append(frame)
-        self._submitted = []
-        for sender, frames in sorted(by_sender.items()):
-            begin = frames[0].submitted
-            span = max(now - begin, 0.0)
-            offsets = np.sort(self._rngs[sender].random(len(frames))) * span
-            for frame, offset in zip(frames, offsets.tolist(), strict=True):
-                frame.submitted = begin + offset
-                heapq.heappush(self._arrivals, (frame.submitted, self._sequence, frame))
-                self._sequence += 1
-
-    def _arrive(self, frame: Frame) -> None:
-        """``frame`` reaches its sender's MAC queue."""
-        sender = frame.sender
-        queue = self._queues[sender]
-        self._expire(sender, frame.submitted)
-        if not queue:
-            self._head_arrival[sender] = frame.submitted
-            # 802.11: a frame that finds the air busy (and no counter running) backs off.
-            if self._backoff[sender] == 0 and self._air_busy(sender):
-                self._backoff[sender] = self._draw(sender)
-        queue.append(frame)
-
-    # -- the DCF ---------------------------------------------------------------------
-    def _draw(self, node: int) -> int:
-        return int(self._rngs[node].integers(0, self._cw + 1))
-
-    def _air_busy(self, node: int) -> bool:
-        return bool(self._busy[node] > 0 or self._transmitting[node])
-
-    def _expire(self, node: int, now: float) -> None:
-        """Drop the frames at the head of ``node``'s queue older than ``max_queue_s``."""
-        queue = self._queues[node]
-        limit = self.profile.max_queue_s
-        while queue and now - queue[0].submitted > limit + _SAME_TIME_S:
-            frame = queue.popleft()
-            self._waiting[node] -= 1
-            frame.dropped = True
-            frame.end = now
-            self._finished.append(frame)
-        self._head_arrival[node] = queue[0].submitted if queue else np.inf
-
-    def _next_access(self) -> tuple[float, NDArray[np.intp]]:
-        """When the next frames go on the air, and whose."""
-        ready = (self._busy == 0) & ~self._transmitting & np.isfinite(self._head_arrival)
-        if not ready.any():
-            return math.inf, np.empty(0, dtype=np.intp)
-        nodes = np.flatnonzero(ready)
-        counted = self._idle_since[nodes] + self._ifs[nodes] + self._backoff[nodes] * self._slot
-        access = np.maximum(counted, self._head_arrival[nodes])
-        first = float(access.min())
-        return first, nodes[access <= first + _SAME_TIME_S]
-
-    def _freeze(self, nodes: BoolArray, now: float) -> None:
-        """The air turns busy at ``now`` for ``nodes`` that heard it idle: their
-        counters keep the slots not yet counted down."""
-        idle = nodes & (self._busy == 0) & ~self._transmitting
-        if idle.any():
-            waited = now - self._idle_since[idle] - self._ifs[idle]
-            counted = np.floor(np.maximum(waited, 0.0) / self._slot + 1e-9).astype(np.int64)
-            self._backoff[idle] = np.maximum(self._backoff[idle] - counted, 0)
-
-    def _start_frames(self, now: float, starters: NDArray[np.intp]) -> None:
-        frames: list[Frame] = []
-        for node in starters.tolist():
-            self._expire(node, now)
-            if self._queues[node]:
-                frames.append(self._queues[node].popleft())
-                self._waiting[node] -= 1
-                queue = self._queues[node]
-                self._head_arrival[node] = queue[0].submitted if queue else np.inf
-        if not frames:
-            return
-        senders = np.array([f.sender for f in frames], dtype=np.intp)
-        sensing = np.asarray(self._senses[senders].any(axis=0), dtype=np.bool_)
-        sensing[senders] = True  # a sender's own counter is spent
-        self._freeze(sensing, now)
-        for frame in frames:
-            frame.start = now
-            frame.end = now + self.airtime(frame.bits)
-            frame.sensed_by = self._senses[frame.sender]
-            frame.heard_by = self._hears[frame.sender] & self._radio
-            frame.power_mw = self._power_mw[frame.sender]
-            frame.power_dbm = self._power_dbm[frame.sender]
-            self._longest = max(self._longest, frame.end - now)
-        # Receivers busy now cannot take any of these frames; who starts now too.
-        self._transmitting[senders] = True
-        for other in self._on_air:
-            if self._radio[other.sender]:  # (nothing stops a frame without a radio)
-                other.blocked[senders] |= self._radio[senders]
-        blocked = self._transmitting | (self._lock_until > now + _SAME_TIME_S)
-        # Every frame on the air now is noise to the preamble of each new one.
-        on_air_mw = np.sum([f.power_mw for f in (*self._on_air, *frames)], axis=0)
-        # Of the frames that start in the same instant a receiver takes the first to
-        # reach it, the nearest: here the strongest (no capture beyond that).
-        strength = np.where(self._hears[senders], self._power_mw[senders], -1.0)
-        strongest = strength.argmax(axis=0)
-        free = ~blocked & self._radio & (strength.max(axis=0) >= 0.0)
-        threshold = self.profile.preamble_snr_db
-        for k, frame in enumerate(frames):
-            hears = frame.heard_by
-            mine = free & (strongest == k)
-            if threshold is not None:  # the preamble is detected above its SINR only
-                signal = frame.power_mw
-                with np.errstate(divide="ignore"):
-                    sinr_db = 10.0 * np.log10(signal / (self._noise_mw + on_air_mw - signal))
-                mine &= sinr_db >= threshold
-            frame.blocked = (blocked | (hears & ~mine)) & self._radio & self._radio[frame.sender]
-            self._lock_until[mine] = frame.end
-            self._backoff[frame.sender] = 0
-        self._busy += np.sum([f.sensed_by for f in frames], axis=0)
-        self._on_air.extend(frames)
-
-    def _end_frames(self, now: float) -> None:
-        ending = [f for f in self._on_air if f.end <= now + _SAME_TIME_S]
-        self._on_air = [f for f in self._on_air if f.end > now + _SAME_TIME_S]
-        window = self._on_air + self._recent + ending
-        for frame in ending:
-            overlapping = [
-                g.power_mw
-                for g in window
-                if g is not frame and g.start < frame.end - _SAME_TIME_S
-                and g.end > frame.start + _SAME_TIME_S
-            ]  # fmt: skip
-            frame.interference_mw = np.sum(overlapping, axis=0) if overlapping else np.zeros(self.n)
-            self._finished.append(frame)
-        senders = np.array([f.sender for f in ending], dtype=np.intp)
-        self._busy -= np.sum([f.sensed_by for f in ending], axis=0)
-        self._transmitting[senders] = False
-        for frame in ending:
-            self._backoff[frame.sender] = self._draw(frame.sender)  # post-backoff
-            # 802.11 waits EIFS, not DIFS, after a frame received in error: here one
-            # its receiver more likely than not lost (the bus draws the real outcome).
-            locked = frame.heard_by & ~frame.blocked
-            lost = self._sinr_error(frame) > 0.5
-            self._ifs[locked & lost] = self._eifs
-            self._ifs[locked & ~lost] = self._difs
-        sensed = np.asarray(np.any([f.sensed_by for f in ending], axis=0), dtype=np.bool_)
-        sensed[senders] = True
-        now_idle = sensed & (self._busy == 0) & ~self._transmitting
-        self._idle_since[now_idle] = now
-        self._recent = [f for f in self._recent + ending if f.end > now - self._longest]
-
-    def _sinr_error(self, frame: Frame) -> FloatArray:
-        """Packet error of ``frame`` at every receiver at its SINR (no fading)."""
-        noise_dbm = 10.0 * np.log10(self._noise_mw + frame.interference_mw)
-        power = frame.power_dbm
-        sinr_dbm = np.where(np.isnan(power), -np.inf, power)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ber = bit_error_rate_at(self.profile, sinr_dbm - noise_dbm, detect=False)
-            return np.asarray(-np.expm1(frame.bits * np.log1p(-np.minimum(ber, 1.0))))
+    def _grow(self, slots: int) -> None:
+        """Room for ``slots`` frames (the state of the ones there is kept)."""
+        n, old = self.n, len(self._frames)
+        kinds = (np.int64, np.float64, np.int64, np.float64, np.float64, np.bool_)
+        wide = (np.bool_, np.float64, np.bool_, np.bool_, *[np.float64] * 4)
+        store = tuple(np.zeros(slots, dtype=k) for k in kinds) + tuple(
+            np.zeros((slots, n), dtype=k) for k in wide
+        )
+        lists = (
+            *(np.zeros(slots, dtype=np.int64) for _ in range(4)),
+            np.zeros(6, dtype=np.int64),
+            *(np.zeros(slots, dtype=np.int64) for _ in range(2)),
+        )
+        if old:
+            for new, was in zip(store, self._store, strict=True):
+                new[:old] = was
+            for new, was in zip(lists, self._lists, strict=True):
+                new[: len(was)] = was
+        scratch = air.new_scratch(n, slots)
+        if self._scratch:
+            scratch[3][0] = self._scratch[3][0]  # the longest airtime so far
+        self._store, self._lists, self._scratch = store, lists, scratch
+        self._frames.extend([None] * (slots - old))
+        # Lowest slots first (a stack: pop from the end).
+        self._free = list(range(slots - 1, old - 1, -1)) + self._free

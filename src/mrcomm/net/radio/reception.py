@@ -16,11 +16,27 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.special import erfc
 
+from mrcomm.compiled import compiled
 from mrcomm.net.radio.profile import RadioProfile
 
 #: 802.11b at 1 Mbit/s spreads each bit over 22 MHz: Eb/N0 = SNR · 22 MHz / 1 Mbit/s
 #: (ns-3's DsssErrorRateModel for DBPSK).
 DSSS_GAIN = 22.0
+
+
+@compiled
+def bit_error(snr_db: float, dsss: bool, preamble_snr_db: float, detect: bool) -> float:
+    """BER at ``snr_db`` (dB): erfc(√SNR), or ½·exp(−22·SNR) with ``dsss``; 1 (nothing
+    received) below ``preamble_snr_db`` (NaN: no such threshold) when ``detect``. The one
+    scalar form of the rule: the per-message decisions and the shared channel's loop
+    (compiled, :mod:`mrcomm.compiled`) use it."""
+    if detect and snr_db < preamble_snr_db:
+        return 1.0
+    snr = 10.0 ** (snr_db / 10.0)
+    rate = 0.5 * math.exp(-DSSS_GAIN * snr) if dsss else math.erfc(math.sqrt(snr))
+    if rate > 0.5:  # (NaN stays NaN)
+        rate = 0.5
+    return rate
 
 
 def ber(
@@ -36,14 +52,10 @@ def ber(
     if power_dbm != power_dbm:
         return 0.0
     snr_db = power_dbm - noise_floor_dbm
-    snr = 10.0 ** (snr_db / 10.0)
     if profile is None:
-        return min(math.erfc(math.sqrt(snr)), 0.5)
-    if detect and profile.preamble_snr_db is not None and snr_db < profile.preamble_snr_db:
-        return 1.0
-    if profile.modulation == "dsss":
-        return min(0.5 * math.exp(-DSSS_GAIN * snr), 0.5)
-    return min(math.erfc(math.sqrt(snr)), 0.5)
+        return float(bit_error(snr_db, False, math.nan, False))
+    threshold = math.nan if profile.preamble_snr_db is None else profile.preamble_snr_db
+    return float(bit_error(snr_db, profile.modulation == "dsss", threshold, detect))
 
 
 def bit_error_rate_at(
@@ -61,9 +73,9 @@ def bit_error_rate_at(
     return np.asarray(rate)
 
 
+@compiled
 def per(ber: float, bits: int) -> float:
-    """PER = 1 − (1 − BER)^bits; the scalar form of
-    :func:`~mrcomm.net.radio.model.packet_error_rate`."""
+    """PER = 1 − (1 − BER)^bits; the scalar form of :func:`packet_error_rate`."""
     if ber <= 0.0:
         return 0.0
     if ber >= 1.0:
