@@ -96,7 +96,8 @@ def draw_readings(
                 0 if grid.line_of_sight(*xy[a], *xy[b]) else grid.walls_between(*xy[a], *xy[b])
                 for a, b in pairs
             ]
-            power = network.pair_power(xy, pairs, distance, crossed)
+            ends = (np.array([a for a, _ in pairs]), np.array([b for _, b in pairs]))
+            power = network.pair_power(xy, ends, np.array(distance), np.array(crossed))
             for k, (a, b) in enumerate(pairs):
                 for sender, receiver in ((a, b), (b, a)):
                     tx.append(xy[sender])

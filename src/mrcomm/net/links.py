@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mrcomm.net import pair_loops
 from mrcomm.net.network import NetworkModel
 from mrcomm.net.thresholds import BoolArray, FloatArray, PairGeometry, PairLayout, Threshold
 from mrcomm.world.occupancy import OccupancyGrid
@@ -135,9 +136,13 @@ class LinkModel:
         # Per pair: its ends at the last ray cast, what that cast found, and how far an
         # end may move before the answer may change.
         pairs = self.layout.pairs
-        self._cast_from: list[tuple[float, float, float, float] | None] = [None] * len(pairs)
-        self._cast_walls = [0] * len(pairs)
-        self._cast_slack = [0.0] * len(pairs)
+        self._first = np.array([a for a, _ in pairs], dtype=np.int64)
+        self._second = np.array([b for _, b in pairs], dtype=np.int64)
+        self._cast_from = np.full((len(pairs), 4), np.nan)  # NaN: never cast
+        self._cast_walls = np.zeros(len(pairs), dtype=np.int64)
+        self._cast_slack = np.zeros(len(pairs))
+        self._recast = np.zeros(len(pairs), dtype=np.int64)
+        self._segments = np.zeros((len(pairs), 4))
         self._sight: tuple[tuple[bool, ...], BoolArray] | None = None
         self.casts = 0
         self._count_walls = network.needs_walls
@@ -158,21 +163,20 @@ class LinkModel:
             # needed one by one, and the whole matrix is a few array operations.
             distance = distance_matrix(np.array(xy, dtype=np.float64))
         else:
-            hypot = math.hypot
-            pair_distance = [
-                hypot(xy[a][0] - xy[b][0], xy[a][1] - xy[b][1]) for a, b in self.layout.pairs
-            ]
+            at = np.array(xy, dtype=np.float64).reshape(-1, 2)
+            distances = np.empty(len(self._first))
+            pair_loops.pair_distances(at, self._first, self._second, distances)
+            pair_distance = distances.tolist()
             distance = self.layout.matrix(pair_distance, 0.0)
         line_of_sight: BoolArray | None = None
         sight: list[bool] | None = None
         power: FloatArray | None = None
         if self._casts_rays:
-            assert pair_distance is not None
-            walls = self._walls(xy, pair_distance)
-            sight = [w == 0 for w in walls]
+            walls = self._walls(at, distances)
+            sight = (walls == 0).tolist()
             line_of_sight = self._sight_matrix(sight)
             if self._count_walls:
-                power = self._power(xy, pair_distance, walls)
+                power = self._power(xy, distances, walls)
         pairs = PairGeometry(distance, self.layout, pair_distance, sight, power)
         rssi, warning = self.threshold.evaluate(pairs, now)
         warning = warning & self._off_diagonal
@@ -189,12 +193,12 @@ class LinkModel:
         return LinkState(self.ids, distance, line_of_sight, rssi, warning, connected, power)
 
     def _power(
-        self, xy: Sequence[Sequence[float]], distance: list[float], walls: list[int]
+        self, xy: Sequence[Sequence[float]], distance: FloatArray, walls: NDArray[np.int64]
     ) -> FloatArray:
         """(n, n) received power of the evaluated nodes: the network model's reciprocal
         power per pair plus its per-direction offsets; NaN on the diagonal."""
         network: Any = self.network
-        per_pair = network.pair_power(xy, self.layout.pairs, distance, walls)
+        per_pair = network.pair_power(xy, (self._first, self._second), distance, walls)
         matrix = self.layout.matrix(per_pair, math.nan)
         return np.asarray(matrix + network.offsets(len(self.evaluated_ids)))
 
@@ -206,47 +210,28 @@ class LinkModel:
             self._sight = (key, matrix)
         return self._sight[1]
 
-    def _walls(self, xy: Sequence[Sequence[float]], distance: list[float]) -> list[int]:
+    def _walls(self, xy: FloatArray, distance: FloatArray) -> NDArray[np.int64]:
         """Walls crossed by each pair's ray (0: line of sight). Without a wall-counting
         network model an obstructed ray counts as 1 (its exact count is not needed).
         Only pairs within the network's reach are cast: farther pairs count as
         obstructed (beyond the reach nothing is delivered anyway)."""
-        reach = self.network.reach_m
-        count = self._count_walls
-        hypot = math.hypot
-        cast_from, cast_walls, cast_slack = self._cast_from, self._cast_walls, self._cast_slack
-        grid = self.grid
-        # Counted walls change wherever the ray crosses a wall's edge: recast an
-        # obstructed ray as soon as an end moves (the count is then exact, as a live
-        # receiver's fresh cast); only its line of sight may wait ``los_refresh``.
-        obstructed_slack = _MOVED if count else self.los_refresh
-        walls: list[int] = []
-        recast: list[int] = []  # pairs whose ends moved enough: cast together below
-        segments: list[tuple[float, float, float, float]] = []
-        for k, (a, b) in enumerate(self.layout.pairs):
-            dist = distance[k]
-            if not (0.0 < dist <= reach):  # also False for NaN (virtual node)
-                walls.append(1 if dist > reach else 0)
-                continue
-            (ax, ay), (bx, by) = xy[a], xy[b]
-            last = cast_from[k]
-            if (
-                last is None
-                or hypot(ax - last[0], ay - last[1]) >= cast_slack[k]
-                or hypot(bx - last[2], by - last[3]) >= cast_slack[k]
-            ):
-                recast.append(k)
-                segments.append((ax, ay, bx, by))
-            walls.append(cast_walls[k])
+        walls = np.zeros(len(distance), dtype=np.int64)
+        recast = pair_loops.rays_to_cast(
+            xy, self._first, self._second, distance, self.network.reach_m, self._cast_from,
+            self._cast_slack, self._cast_walls, walls, self._recast, self._segments,
+        )  # fmt: skip
         if recast:
-            counted, clearances = grid.cast_many(np.array(segments), count)
-            for k, segment, n, clearance in zip(
-                recast, segments, counted.tolist(), clearances.tolist(), strict=True
-            ):
-                walls[k] = cast_walls[k] = n
-                cast_slack[k] = clearance if clearance >= 0.0 else obstructed_slack
-                cast_from[k] = segment
-            self.casts += len(recast)
+            segments = self._segments[:recast]
+            counted, clearances = self.grid.cast_many(segments, self._count_walls)
+            # Counted walls change wherever the ray crosses a wall's edge: recast an
+            # obstructed ray as soon as an end moves (the count is then exact, as a live
+            # receiver's fresh cast); only its line of sight may wait ``los_refresh``.
+            obstructed_slack = _MOVED if self._count_walls else self.los_refresh
+            pair_loops.record_casts(
+                self._recast[:recast], segments, counted, clearances, obstructed_slack,
+                self._cast_from, self._cast_slack, self._cast_walls, walls,
+            )  # fmt: skip
+            self.casts += recast
         return walls
 
 

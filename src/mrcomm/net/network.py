@@ -100,12 +100,13 @@ class NetworkModel:
     def pair_power(
         self,
         xy: Sequence[Sequence[float]],
-        pairs: Sequence[tuple[int, int]],
-        distance: Sequence[float],
-        walls: Sequence[int],
-    ) -> list[float]:
-        """Received power of each unordered pair of nodes, dBm, the same both ways (NaN
-        for a pair with a node without a position)."""
+        pairs: tuple[NDArray[np.int64], NDArray[np.int64]],
+        distance: NDArray[np.float64],
+        walls: NDArray[np.int64],
+    ) -> NDArray[np.float64]:
+        """Received power of each unordered pair of nodes (``pairs``: their first and
+        second nodes, rows of ``xy``), dBm, the same both ways (NaN for a pair with a
+        node without a position)."""
         raise NotImplementedError(f"network model {self.name!r} does not model power")
 
     def offsets(self, n: int) -> NDArray[np.float64]:

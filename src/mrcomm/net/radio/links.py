@@ -19,9 +19,15 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from mrcomm.net.links import cast_ray
 from mrcomm.net.radio.channel import RadioChannel
 from mrcomm.world.occupancy import OccupancyGrid
+
+# The one pair of a link: node 0 and node 1 (for the network model's pair power).
+_FIRST = np.array([0], dtype=np.int64)
+_SECOND = np.array([1], dtype=np.int64)
 
 if TYPE_CHECKING:  # the model makes these: only its type is needed here
     from mrcomm.net.radio.model import RadioNetwork
@@ -74,7 +80,11 @@ class RadioLinks:
             walls, _ = cast_ray(self.grid, at[0], at[1], to[0], to[1], True)
         else:  # as the link model: beyond the reach counts as obstructed, uncast
             walls = 1 if distance > reach else 0
-        mean = self.network.pair_power([at, to], [(0, 1)], [distance], [walls])[0]
+        mean = float(
+            self.network.pair_power(
+                [at, to], (_FIRST, _SECOND), np.array([distance]), np.array([walls])
+            )[0]
+        )
         return mean + self._offsets[row][column], walls
 
     def judge(

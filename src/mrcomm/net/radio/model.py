@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, Field
 
 from mrcomm.errors import InputError
+from mrcomm.net import pair_loops
 from mrcomm.net.network import NetworkModel
 from mrcomm.net.radio.channel import RadioChannel, fading_gain_db
 from mrcomm.net.radio.links import RadioLinks
@@ -188,28 +189,21 @@ class RadioNetwork(NetworkModel):
     def pair_power(
         self,
         xy: Sequence[Sequence[float]],
-        pairs: Sequence[tuple[int, int]],
-        distance: Sequence[float],
-        walls: Sequence[int],
-    ) -> list[float]:
+        pairs: tuple[NDArray[np.int64], NDArray[np.int64]],
+        distance: NDArray[np.float64],
+        walls: NDArray[np.int64],
+    ) -> FloatArray:
         """Mean received power of each unordered pair with its shadowing, dBm (NaN for
         a pair with a node without a position)."""
         p = self.profile
-        base = p.tx_power_dbm - p.reference_loss_db
-        slope = 10.0 * p.exponent
-        wall_loss = p.wall_loss_db
         # The field once per node (a pair's shadowing is the scaled sum of its ends').
         at = self.field.at
-        field = [at(x, y) if x == x else math.nan for x, y in xy]
-        scale = 1.0 / math.sqrt(2.0)
-        out: list[float] = []
-        for k, (a, b) in enumerate(pairs):
-            d = distance[k]
-            if d != d:  # NaN: a virtual node
-                out.append(math.nan)
-                continue
-            loss = slope * math.log10(max(d, REFERENCE_DISTANCE_M) / REFERENCE_DISTANCE_M)
-            out.append(base - loss - wall_loss * walls[k] + (field[a] + field[b]) * scale)
+        field = np.array([at(x, y) if x == x else math.nan for x, y in xy])
+        out = np.empty(len(distance))
+        pair_loops.pair_power(
+            distance, walls, pairs[0], pairs[1], field, p.tx_power_dbm - p.reference_loss_db,
+            10.0 * p.exponent, p.wall_loss_db, REFERENCE_DISTANCE_M, out,
+        )  # fmt: skip
         return out
 
     def channel(self, ids: Sequence[str]) -> Any:
