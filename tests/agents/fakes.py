@@ -94,7 +94,7 @@ class Harness:
         self.bus = FakeBus(robot)
         self.timeline = Timeline(robot)
         self.now = 0.0
-        ranks = {"robot_1": 0.0, "robot_2": 1.0, "robot_3": 2.0}
+        ranks = {f"robot_{i}": float(i - 1) for i in range(1, 10)}  # robot_1 first
         params = kwargs.pop("params", None) or cls.Params()
         context = AgentContext(
             bus=self.bus,

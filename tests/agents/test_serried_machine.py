@@ -1,7 +1,8 @@
 """serried's machine on a fake base and bus (SLT link sensor, warning at 4 m): the
 lowest-ranked robot with tasks leads and the others follow it; the leader holds for a
 mate in warning; a robot whose agenda is done reports it with AON and follows the next
-leader; the agenda is over only when everyone's is."""
+leader; the agenda is over only when everyone's is; the team splits into groups by
+rank; a leader never heard is passed over."""
 
 from __future__ import annotations
 
@@ -109,3 +110,35 @@ def test_every_added_transition_is_taken() -> None:
     for t in missing:
         sources = t["source"] if isinstance(t["source"], list) else [t["source"]]
         assert not any((t["trigger"], s) in main for s in sources), t
+
+
+def test_the_team_splits_into_groups_by_its_random_order() -> None:
+    """Groups of group_size by rank, the same as every member computes them; 0 is one
+    group of the whole team."""
+    team = tuple(f"robot_{i}" for i in range(1, 8))
+    groups = {}
+    for robot in team:
+        h = Harness(SerriedExecutor, robot=robot, params=SerriedParams(group_size=3))
+        h.assign([task("1", 1.0, 0.0)], team=team)
+        groups[robot] = {robot, *h.agent.group}
+    assert groups["robot_1"] == groups["robot_3"] == {"robot_1", "robot_2", "robot_3"}
+    assert groups["robot_4"] == groups["robot_6"] == {"robot_4", "robot_5", "robot_6"}
+    assert groups["robot_7"] == {"robot_7"}
+    whole = Harness(SerriedExecutor, robot="robot_5", params=SerriedParams(group_size=0))
+    whole.assign([task("1", 1.0, 0.0)], team=team)
+    assert set(whole.agent.group) == set(team) - {"robot_5"}
+
+
+def test_a_leader_never_heard_is_passed_over_after_lost_timeout() -> None:
+    """robot_2 would follow robot_1 (first in rank, tasks left) but never hears it: once
+    the mission is lost_timeout old it leads its group to its own task instead (it
+    followed a leader it never heard for ever before)."""
+    h = serried("robot_2")
+    h.assign([task("5", -6.0, 0.0)], team=TEAM)
+    assert h.step() == "following" and h.agent.group_leader() == "robot_1"
+    h.step(times=int(SerriedParams().lost_timeout / 0.1) + 2)
+    assert h.agent.group_leader() == "robot_2"
+    assert h.agent.state == "navigating" and h.base.goal == (-6.0, 0.0)
+    h.hear(pose_of("robot_1", 6.0, 0.0, role="leader"))  # heard again: it leads again
+    assert h.agent.group_leader() == "robot_1"
+

@@ -1,5 +1,6 @@
 """serried on whole S1 missions: successful under AH + SLT at SPL 0-50 over five seeds,
-the team kept together (no pair ever out of the 8 m range)."""
+the team kept together (no pair ever out of the 8 m range); in groups on S2 and S3,
+every task completed."""
 
 from __future__ import annotations
 
@@ -36,3 +37,16 @@ def test_serried_does_not_hold_for_ever_under_a_signal_threshold() -> None:
         )  # fmt: skip
         mission = run_mission(config).mission
         assert mission["successful"] and not mission["timed_out"], seed
+
+
+@pytest.mark.parametrize("scenario, tasks", [("s2", 20), ("s3", 60)])
+def test_serried_in_groups_completes_the_large_teams(scenario: str, tasks: int) -> None:
+    """S2 (10 robots) and S3 (30) · AH + SLT · SPL 25: every task completed before the
+    limit (one group of ten completed 1 of S2's 20 tasks in 1,800 s)."""
+    config = make_config(
+        scenario=f"data/scenarios/{scenario}/{scenario}.yaml", network="ah",
+        threshold="slt", behaviour="serried", spl=25.0, seed=1,
+    )  # fmt: skip
+    mission = run_mission(config).mission
+    assert mission["tasks_completed"] == tasks and not mission["timed_out"]
+

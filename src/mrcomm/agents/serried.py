@@ -1,12 +1,18 @@
-"""serried — serried ranks: the team moves as one close group to each task in turn.
+"""serried — serried ranks: the team moves in close groups, each to its members' tasks in
+turn.
 
-One robot leads at a time: the robot of lowest rank in the team-wide random order (the
-order every robot draws from the mission's seed) among those this robot believes still
-have tasks. The leader drives to its own tasks one after another (the closest available
-first, as NB), the others follow it; when its agenda is done it says so (its
+The team splits into groups of ``group_size`` robots by the team-wide random order (the
+order every robot draws from the mission's seed: the first ``group_size`` robots are
+one group, the next the second, …), so every robot knows the groups without a message.
+With ``group_size`` 0, or at least the team's size, the whole team is one group (the
+original serried; S1's three robots are one group either way). In a group one robot
+leads at a time: the robot of lowest rank among the group's members this robot believes
+still have tasks. The leader drives to its own tasks one after another (the closest
+available first, as NB), the others follow it; when its agenda is done it says so (its
 AGENDA_COMPLETE status goes with AON, as its task statuses do, so every member learns
-it) and the next robot in the order leads the group to its tasks. The mission ends when
-every robot's agenda is done.
+it) and the next robot of the group leads it to its tasks. A group whose agendas are all
+done stays where it is, making way. The mission ends when every robot's agenda is done.
+(One group of ten robots on S2 crawled from task to task: 1 of 20 tasks in 1,800 s.)
 
 * A follower drives towards the leader's last known position and stops within
   ``follow_distance`` of it; it re-targets when the leader has moved more than 0.5 m
@@ -55,6 +61,12 @@ class SerriedParams(ExecutorParams):
         "s",
         gt=0,
     )
+    group_size: int = parameter(
+        3,
+        "robots per group: the team splits by its random order into groups of this many, "
+        "each moving as one to its members' tasks (0: the whole team is one group)",
+        ge=0,
+    )
 
 
 SERRIED_STATES = [*NB_STATES, "following", "holding"]
@@ -97,6 +109,7 @@ class SerriedExecutor(TaskExecutor):
         self._follow_target: tuple[float, float] | None = None
         self._next_refresh = 0.0
         self._no_hold_until = 0.0
+        self._group: tuple[tuple[str, ...], tuple[str, ...]] | None = None  # (team, group)
         super().__init__(context, params)
 
     @property
@@ -105,12 +118,27 @@ class SerriedExecutor(TaskExecutor):
         return self.params
 
     @property
+    def group(self) -> tuple[str, ...]:
+        """The other members of this robot's group (see the module docstring)."""
+        team = tuple(self.team)
+        if self._group is None or self._group[0] != team:
+            order = sorted([self.robot_id, *team], key=self._rank)
+            size = self.serried.group_size or len(order)
+            first = order.index(self.robot_id) // size * size
+            members = tuple(m for m in order[first : first + size] if m != self.robot_id)
+            self._group = (team, members)
+        return self._group[1]
+
+    @property
     def done(self) -> bool:
-        """Every robot's agenda done (as far as this robot knows), it idles, and its
+        """Nobody left to lead its group (every member's agenda done as far as this
+        robot knows, or the member out of range: :meth:`group_leader`), it idles, and its
         statuses have reached everyone."""
-        everyone = all(m in self.finished for m in self.team)
         return (
-            self.leaf() == "idle" and not self.agenda and everyone and self.aon_statuses.settled()
+            self.leaf() == "idle"
+            and not self.agenda
+            and self.group_leader() is None
+            and self.aon_statuses.settled()
         )
 
     def activity_of(self, state: str) -> str | None:
@@ -123,11 +151,23 @@ class SerriedExecutor(TaskExecutor):
 
     # -- who leads ---------------------------------------------------------------------
     def group_leader(self) -> str | None:
-        """The robot of lowest rank among those believed to have tasks left (None: the
-        whole team is done)."""
+        """The robot of lowest rank among the group's members believed to have tasks
+        left (None: the whole group is done)."""
         mine = [self.robot_id] if self.agenda else []
-        left = [*mine, *(m for m in self.team if m not in self.finished)]
+        left = [*mine, *(m for m in self.group if m not in self.finished and self._within(m))]
         return min(left, key=self._rank) if left else None
+
+    def _within(self, mate: str) -> bool:
+        """Whether ``mate`` may lead this robot: heard within ``lost_timeout``, or never
+        heard yet in the mission's first ``lost_timeout``. A member out of range for
+        longer is passed over (the group goes on without it, and takes it back once it
+        is heard again): a follower waiting for a leader it never hears waited for ever
+        (S3: groups drawn by the random order may start far apart)."""
+        timeout = self.serried.lost_timeout
+        age = self.team_view.age(mate, self._now)
+        if age == math.inf:
+            return self._t0 is None or self._now - self._t0 < timeout
+        return age <= timeout
 
     def current_role(self) -> str:
         if self._t0 is None:
@@ -153,9 +193,10 @@ class SerriedExecutor(TaskExecutor):
 
     # -- leading ---------------------------------------------------------------------
     def _mate_out(self) -> bool:
-        """A mate heard lately whose link (from its last pose) is in warning."""
+        """A member of the group heard lately whose link (from its last pose) is in
+        warning."""
         pose = self.base.pose
-        for mate in self.team:
+        for mate in self.group:
             known = self.mates.get(mate)
             if known is None or self.team_view.age(mate, self._now) > self.serried.lost_timeout:
                 continue
