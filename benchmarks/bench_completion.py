@@ -5,8 +5,10 @@ time limit) and reports, per condition, how many runs hit the time limit, how ma
 successful (every task's status reached the assigner), the tasks completed and the
 statuses lost, and the simulated mission time:
 
-* ``s2``: S2 (10 robots) · NB and LF · AH + SLT · SPL 0 / 25 / 50 · seeds 1-10 (``--seeds``);
-* ``s3``: S3 (30 robots) · NB and LF · AH + SLT · SPL 25 · seeds 1-6 (``--s3-seeds``);
+* ``s2``: S2 (10 robots) · every behaviour (or ``--behaviour``, repeatable) · AH + SLT ·
+  SPL 0 / 25 / 50 · seeds 1-10 (``--seeds``);
+* ``s3``: S3 (30 robots) · every behaviour · AH + SLT · SPL 25 · seeds 1-6
+  (``--s3-seeds``);
 * ``s4``: S4 (100 robots) · NB · WLAN · SPL 0 · seed 1, and LF and NB · AH + SLT · SPL
   25 · seed 1 (on WLAN every robot is always connected, so LF never leaves NB's states).
 
@@ -14,7 +16,7 @@ Runs go to a process pool (``--workers``, default 2); each is deterministic, so 
 figures do not depend on the machine, only its wall times do.
 
 Run: ``.venv/bin/python benchmarks/bench_completion.py [--only s2 --only s3 --only s4]
-[--seeds 10] [--s3-seeds 6] [--workers 2]``
+[--behaviour serried ...] [--seeds 10] [--s3-seeds 6] [--workers 2]``
 """
 
 from __future__ import annotations
@@ -33,15 +35,17 @@ SCENARIOS = ROOT / "data" / "scenarios"
 MAX_TIME = 1800.0
 
 
-def cases(only: list[str], seeds: int, s3_seeds: int) -> Iterator[dict[str, Any]]:
+def cases(
+    only: list[str], behaviours: list[str], seeds: int, s3_seeds: int
+) -> Iterator[dict[str, Any]]:
     if "s2" in only:
-        for behaviour in ("nb", "lf"):
+        for behaviour in behaviours:
             for spl in (0, 25, 50):
                 for seed in range(1, seeds + 1):
                     yield dict(scenario="s2", behaviour=behaviour, network="ah",
                                threshold="slt", spl=spl, seed=seed)  # fmt: skip
     if "s3" in only:
-        for behaviour in ("nb", "lf"):
+        for behaviour in behaviours:
             for seed in range(1, s3_seeds + 1):
                 yield dict(scenario="s3", behaviour=behaviour, network="ah",
                            threshold="slt", spl=25, seed=seed)  # fmt: skip
@@ -77,11 +81,15 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", action="append", choices=["s2", "s3", "s4"])
+    parser.add_argument("--behaviour", action="append", help="S2 and S3: these (every one)")
     parser.add_argument("--seeds", type=int, default=10, help="S2 seeds 1..N")
     parser.add_argument("--s3-seeds", type=int, default=6, help="S3 seeds 1..N")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args()
-    todo = list(cases(args.only or ["s2", "s3", "s4"], args.seeds, args.s3_seeds))
+    from mrcomm.agents.behaviours import behaviour_names
+
+    behaviours = args.behaviour or behaviour_names()
+    todo = list(cases(args.only or ["s2", "s3", "s4"], behaviours, args.seeds, args.s3_seeds))
     print(f"{len(todo)} runs on {args.workers} workers; load {os.getloadavg()}")
     start = time.perf_counter()
     with ProcessPoolExecutor(args.workers) as pool:

@@ -21,6 +21,7 @@ RANKS = {
     "fileio": 0,
     "output_paths": 0,
     "seeding": 0,
+    "compiled": 0,  # numba or plain Python for the hot loops
     "specs": 0,
     "bundled": 0,  # where the bundled data is, and its names
     "ports": 2,  # the agents' ports speak in messages and poses
