@@ -47,6 +47,7 @@ DROPPED_COLLISION = "dropped_collision"
 OUTCOMES = (
     RECEIVED, DROPPED_LOSS, DROPPED_RANGE, DROPPED_RADIO, DROPPED_QUEUE, DROPPED_COLLISION
 )  # fmt: skip
+_CODES = np.arange(len(OUTCOMES), dtype=np.int8)
 #: The causes of a lost message, as reports name them.
 DROP_CAUSES = {
     DROPPED_LOSS: "lost (SPL)",
@@ -174,20 +175,6 @@ class TopicCounts:
         self.dropped_loss += dropped_loss
         self.dropped_range += dropped_range
 
-    def add_codes(self, codes: NDArray[np.int8], delays: NDArray[np.float64]) -> None:
-        """Add the outcomes (codes of :data:`OUTCOMES`) of several messages with their
-        radio delays, as :meth:`count` would one by one."""
-        tally = np.bincount(codes, minlength=len(OUTCOMES)).tolist()
-        for outcome, n in zip(OUTCOMES, tally, strict=True):
-            if n:
-                setattr(self, outcome, getattr(self, outcome) + n)
-        kept = delays[(codes == 0) & (delays > 0.0)]
-        if kept.size:
-            # Added one by one, as count() adds them: the same float sum.
-            for delay in kept.tolist():
-                self.delay_total += delay
-            self.delay_max = max(self.delay_max, float(kept.max()))
-
     def as_dict(self, radio: bool = False, shared: bool = False) -> dict[str, float]:
         """The counts (:data:`COUNT_KEYS`; without a ``radio``, none of
         :data:`RADIO_COUNT_KEYS`, which are then always 0; on the ``shared`` channel
@@ -202,6 +189,37 @@ class TopicCounts:
         """Mean and largest radio delay of the received messages, s."""
         mean = self.delay_total / self.received if self.received else 0.0
         return {"delay_mean_s": round(mean, 6), "delay_max_s": round(self.delay_max, 6)}
+
+
+def add_outcomes(
+    entries: Sequence[TopicCounts],
+    codes: NDArray[np.int8],
+    decided: NDArray[np.bool_],
+    delays: NDArray[np.float64],
+) -> None:
+    """Add to ``entries[c]`` the outcomes ``codes[m, c]`` (of :data:`OUTCOMES`) of the
+    messages m it ``decided`` (a sender is not its own receiver), with their radio
+    ``delays[m]``: the counts, delay sum and largest delay :meth:`TopicCounts.count`
+    would give one message at a time. The sum is the same float sum: each column's
+    delays added in order from its total (numpy's cumulative sum runs in order; a
+    message not received adds 0.0, which changes no sum)."""
+    tally = ((codes[:, :, None] == _CODES) & decided[:, :, None]).sum(axis=0).tolist()
+    kept = decided & (codes == 0) & (delays[:, None] > 0.0)
+    any_kept = kept.any(axis=0)
+    totals: list[float] = []
+    largest: list[float] = []
+    if any_kept.any():
+        added = np.where(kept, delays[:, None], 0.0)
+        start = np.array([entry.delay_total for entry in entries])[None, :]
+        totals = np.cumsum(np.vstack([start, added]), axis=0)[-1].tolist()
+        largest = added.max(axis=0).tolist()
+    for column, entry in enumerate(entries):
+        for outcome, n in zip(OUTCOMES, tally[column], strict=True):
+            if n:
+                setattr(entry, outcome, getattr(entry, outcome) + n)
+        if totals and any_kept[column]:
+            entry.delay_total = totals[column]
+            entry.delay_max = max(entry.delay_max, largest[column])
 
 
 class DeliveryPolicy:

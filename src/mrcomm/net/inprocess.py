@@ -45,6 +45,7 @@ from mrcomm.net.delivery import (
     DeliveryPolicy,
     LossStream,
     TopicCounts,
+    add_outcomes,
 )
 from mrcomm.net.radio.channel import RadioChannel
 from mrcomm.net.radio.medium import Frame
@@ -451,14 +452,16 @@ class InProcessNetwork:
         received = (codes == 0) & others
         delays = np.array([f.delay for f in frames])
         counts = self._topic_counts(topic)
-        for column, receiver in enumerate(takers.targets):
-            mine = others[:, column]
-            if not mine.any():
-                continue
+        deciding = others.any(axis=0).tolist()
+        columns = [column for column, decides in enumerate(deciding) if decides]
+        entries = []
+        for column in columns:
+            receiver = takers.targets[column]
             entry = counts[receiver]
             if entry is None:
                 entry = counts[receiver] = self._count(receiver, topic)
-            entry.add_codes(codes[mine, column], delays[mine])
+            entries.append(entry)
+        add_outcomes(entries, codes[:, columns], others[:, columns], delays)
         self._hand_over(topic, takers, rows, messages, received)
 
     def _subscribe(self, receiver: int, topic: str, handler: Handler) -> None:
