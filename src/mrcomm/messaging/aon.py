@@ -176,6 +176,7 @@ class AonEndpoint:
         self._last_heard: dict[str, float] = {}
         self._heard: set[str] = set()  # publishers heard since the last step
         self._expired_bits = 0
+        self._oldest_heard = -math.inf  # a lower bound of the times in _last_heard
         #: Unfinished messages each member brought in (see :data:`MAX_INTRODUCED`).
         self._introduced: Counter[str] = Counter()
         self._introducer: dict[MessageId, str] = {}
@@ -416,13 +417,24 @@ class AonEndpoint:
 
     def _check_lease(self, now: float) -> None:
         assert self._lease is not None
+        # Times heard only grow (and a member first heard now is heard last), so the
+        # oldest found by the last full look is a lower bound: while it is within the
+        # lease nobody is silent, and the team of 100 is not looked through each step.
+        if now - self._oldest_heard <= self._lease:
+            self._expired_bits = 0
+            return
         expired = 0
+        oldest = math.inf
         for member, heard in self._last_heard.items():
             if now - heard > self._lease:
                 expired |= self._team.bit[member]
+            oldest = min(oldest, heard)
+        self._oldest_heard = oldest if self._last_heard else -math.inf
         # A member heard again un-pauses the messages it blocked; their overdue re-send
         # then goes out at once, bringing it up to date.
         self._expired_bits = expired
+        if not expired:
+            return
         full = self._team.full
         for msg_id, st in self._states.items():
             if st.reported_left_out is not None:
