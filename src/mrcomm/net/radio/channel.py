@@ -30,6 +30,7 @@ from mrcomm.messaging.messages import Message, encode
 from mrcomm.net.radio.medium import Frame, SharedMedium
 from mrcomm.net.radio.profile import RadioProfile
 from mrcomm.net.radio.reception import ber as _ber
+from mrcomm.net.radio.reception import ber_matrix
 from mrcomm.net.radio.reception import per as _per
 
 FloatArray = NDArray[np.float64]
@@ -109,8 +110,7 @@ class RadioChannel:
             self.medium.set_power(power)
             return
         self._power = power.tolist()
-        # A team has a handful of links: plain Python beats numpy's per-call overhead.
-        self._ber = [[_ber(p, self._noise, self._rule) for p in row] for row in self._power]
+        self._ber = ber_matrix(np.ascontiguousarray(power), self._noise, self._rule).tolist()
 
     def packet_error(self, sender: int, receiver: int, bits: int) -> float:
         """Probability that one message of ``bits`` from ``sender`` is lost at

@@ -74,6 +74,33 @@ def bit_error_rate_at(
 
 
 @compiled
+def _ber_loop(
+    power_dbm: NDArray[np.float64], noise_floor_dbm: float, dsss: bool, preamble_snr_db: float,
+    detect: bool, out: NDArray[np.float64],
+) -> None:  # fmt: skip
+    for s in range(power_dbm.shape[0]):
+        for r in range(power_dbm.shape[1]):
+            power = power_dbm[s, r]
+            if math.isnan(power):
+                out[s, r] = 0.0
+            else:
+                out[s, r] = bit_error(power - noise_floor_dbm, dsss, preamble_snr_db, detect)
+
+
+def ber_matrix(
+    power_dbm: NDArray[np.float64], noise_floor_dbm: float, profile: RadioProfile | None = None
+) -> NDArray[np.float64]:
+    """:func:`ber` of every link of a (senders, receivers) power matrix, in one call."""
+    out = np.empty(power_dbm.shape)
+    if profile is None:
+        _ber_loop(power_dbm, noise_floor_dbm, False, math.nan, False, out)
+    else:
+        threshold = math.nan if profile.preamble_snr_db is None else profile.preamble_snr_db
+        _ber_loop(power_dbm, noise_floor_dbm, profile.modulation == "dsss", threshold, True, out)
+    return out
+
+
+@compiled
 def per(ber: float, bits: int) -> float:
     """PER = 1 − (1 − BER)^bits; the scalar form of :func:`packet_error_rate`."""
     if ber <= 0.0:
