@@ -176,3 +176,11 @@ def test_with_fast_fading_a_frame_is_judged_at_each_packets_power() -> None:
     out_alone, out_shared = np.empty(1), np.empty(1)
     medium.frame_errors(frame, np.array([faded]), np.array([1]), out_alone, out_shared)
     assert (out_alone[0], out_shared[0]) == (alone[0], shared[0])
+
+
+def test_the_channel_takes_only_pcg64_streams() -> None:
+    """Its draws are numpy's values as PCG64 serves them: another bit generator is
+    refused rather than drawn from wrongly."""
+    profile = load_profile("office-2.4ghz")
+    with pytest.raises(ValueError, match="PCG64"):
+        SharedMedium(profile, 2, [np.random.Generator(np.random.Philox(i)) for i in range(2)])

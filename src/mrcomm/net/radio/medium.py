@@ -126,10 +126,13 @@ class SharedMedium:
         self.profile = profile
         self.n = n
         self._rngs = list(rngs)
+        # The loop turns 64-bit draws into numpy's values as PCG64 (numpy's default)
+        # serves them (net/radio/draws.py): another bit generator would differ.
+        if any(not isinstance(r.bit_generator, np.random.PCG64) for r in self._rngs):
+            raise ValueError("the shared channel's streams must be PCG64 generators")
         self._seconds_per_bit = 1.0 / profile.rate_bps
         difs = profile.sifs_s + 2.0 * profile.slot_s
         eifs = difs + profile.sifs_s + profile.ack_s
-        self._cw = profile.cw_min
         threshold = profile.preamble_snr_db
         self._settings = np.array([
             profile.slot_s, difs, eifs, profile.preamble_s, self._seconds_per_bit,
