@@ -141,4 +141,3 @@ def test_a_leader_never_heard_is_passed_over_after_lost_timeout() -> None:
     assert h.agent.state == "navigating" and h.base.goal == (-6.0, 0.0)
     h.hear(pose_of("robot_1", 6.0, 0.0, role="leader"))  # heard again: it leads again
     assert h.agent.group_leader() == "robot_1"
-

@@ -49,4 +49,3 @@ def test_serried_in_groups_completes_the_large_teams(scenario: str, tasks: int) 
     )  # fmt: skip
     mission = run_mission(config).mission
     assert mission["tasks_completed"] == tasks and not mission["timed_out"]
-
