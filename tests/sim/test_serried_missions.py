@@ -39,13 +39,15 @@ def test_serried_does_not_hold_for_ever_under_a_signal_threshold() -> None:
         assert mission["successful"] and not mission["timed_out"], seed
 
 
-@pytest.mark.parametrize("scenario, tasks", [("s2", 20), ("s3", 60)])
-def test_serried_in_groups_completes_the_large_teams(scenario: str, tasks: int) -> None:
+@pytest.mark.parametrize("scenario, tasks, seed", [("s2", 20, 1), ("s2", 20, 3), ("s3", 60, 1)])
+def test_serried_in_groups_completes_the_large_teams(scenario: str, tasks: int, seed: int) -> None:
     """S2 (10 robots) and S3 (30) · AH + SLT · SPL 25: every task completed before the
-    limit (one group of ten completed 1 of S2's 20 tasks in 1,800 s)."""
+    limit (one group of ten completed 1 of S2's 20 tasks in 1,800 s; in S2's seed 3 the
+    three groups jammed at the start area until a stopped follower made way for other
+    groups' robots too: 2 of 20)."""
     config = make_config(
         scenario=f"data/scenarios/{scenario}/{scenario}.yaml", network="ah",
-        threshold="slt", behaviour="serried", spl=25.0, seed=1,
+        threshold="slt", behaviour="serried", spl=25.0, seed=seed,
     )  # fmt: skip
     mission = run_mission(config).mission
     assert mission["tasks_completed"] == tasks and not mission["timed_out"]

@@ -29,7 +29,8 @@ done stays where it is, making way. The mission ends when every robot's agenda i
 
 Near collisions are judged while leading (as NB), not while following: followers drive
 into the leader's wake on purpose, and the base keeps them clear of it. A follower that
-has stopped in the leader's way steps aside (NB's making way), then follows again.
+has stopped in the way of its leader, or of a robot of another group, with a goal steps
+aside (NB's making way), then follows again.
 """
 
 from __future__ import annotations
@@ -244,9 +245,18 @@ class SerriedExecutor(TaskExecutor):
         known = self.mates.get(leader)
         if known is None:
             return
-        if self.base.status is not NavStatus.ACTIVE and self.in_way_of(known):
-            self.step_aside(known)  # stopped in the leader's way: make room (NB's rule)
-            return
+        if self.base.status is not NavStatus.ACTIVE:
+            # Stopped in the way of a mate with a goal — its leader, or a robot of
+            # another group: make room (NB's rule). Groups that met at one spot jammed
+            # there, each group's followers closing in on the spot the others drove to.
+            # (Not for its own group's followers: the group would come apart.)
+            pose = self.base.pose
+            group = self.group
+            strangers = (m for r, m in self.mates.items() if r not in group)
+            for mate in (known, *strangers):
+                if self.in_way_of(mate, pose):
+                    self.step_aside(mate)
+                    return
         pose = self.base.pose
         close = math.hypot(known.x - pose.x, known.y - pose.y) <= self.serried.follow_distance
         # Close is not enough when its own link to the leader warns (a wall between
