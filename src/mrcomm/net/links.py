@@ -162,7 +162,7 @@ class LinkModel:
             # Rays are cast pair by pair, in Python; without them the pairs are not
             # needed one by one, and the whole matrix is a few array operations.
             distance = distance_matrix(np.array(xy, dtype=np.float64))
-        else:
+        else:  # (always so when rays are cast: ``at`` and ``distances`` serve below)
             at = np.array(xy, dtype=np.float64).reshape(-1, 2)
             distances = np.empty(len(self._first))
             pair_loops.pair_distances(at, self._first, self._second, distances)

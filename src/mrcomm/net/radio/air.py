@@ -308,15 +308,21 @@ def _start_frames(
 
 
 @compiled
+def _sinr_error(power_dbm: float, interference_mw: float, bits: int, settings: Any) -> float:
+    """Probability that a frame of ``bits`` received at ``power_dbm`` is lost with
+    ``interference_mw`` from other frames on the air (its preamble already detected)."""
+    sinr_db = power_dbm - _db(settings[NOISE_MW] + interference_mw)
+    return per(bit_error(sinr_db, settings[MODULATION] == 1.0, math.nan, False), bits)
+
+
+@compiled
 def _error_above_half(f: int, settings: Any, store: Any, r: int) -> bool:
     """Whether frame ``f`` is more likely lost than not at receiver ``r`` at its SINR
     (no fading): 802.11 then waits EIFS."""
     interference, frame_dbm, bits = store[7], store[11], store[2]
-    noise_dbm = _db(settings[NOISE_MW] + interference[f, r])
     power = frame_dbm[f, r]
-    sinr_db = -math.inf if math.isnan(power) else power
-    rate = bit_error(sinr_db - noise_dbm, settings[MODULATION] == 1.0, math.nan, False)
-    return bool(per(min(rate, 1.0), bits[f]) > 0.5)
+    received = -math.inf if math.isnan(power) else power
+    return bool(_sinr_error(received, interference[f, r], bits[f], settings) > 0.5)
 
 
 @compiled
@@ -339,11 +345,9 @@ def frame_errors(
         elif math.isnan(power):
             alone[r], shared[r] = 0.0, 0.0
         else:
-            sinr_db = power - _db(settings[NOISE_MW] + interference_mw[r])
             lost = per(bit_error(power - floor_dbm, dsss, threshold, True), bits)
-            together = per(bit_error(sinr_db, dsss, threshold, False), bits)
             alone[r] = lost
-            shared[r] = max(together, lost)
+            shared[r] = max(_sinr_error(power, interference_mw[r], bits, settings), lost)
 
 
 @compiled

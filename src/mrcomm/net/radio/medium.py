@@ -58,6 +58,7 @@ from numpy.typing import NDArray
 
 from mrcomm.net.radio import air
 from mrcomm.net.radio.profile import RadioProfile
+from mrcomm.net.radio.reception import rule_of
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -133,12 +134,11 @@ class SharedMedium:
         self._seconds_per_bit = 1.0 / profile.rate_bps
         difs = profile.sifs_s + 2.0 * profile.slot_s
         eifs = difs + profile.sifs_s + profile.ack_s
-        threshold = profile.preamble_snr_db
+        dsss, threshold = rule_of(profile)
         self._settings = np.array([
             profile.slot_s, difs, eifs, profile.preamble_s, self._seconds_per_bit,
             profile.max_queue_s, 10.0 ** (profile.noise_floor_dbm / 10.0),
-            profile.noise_floor_dbm, math.nan if threshold is None else threshold,
-            1.0 if profile.modulation == "dsss" else 0.0, profile.cw_min,
+            profile.noise_floor_dbm, threshold, 1.0 if dsss else 0.0, profile.cw_min,
         ])  # fmt: skip
         self._nodes = (
             np.full(n, np.inf),  # submission of each queue's head

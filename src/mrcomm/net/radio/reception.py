@@ -39,6 +39,13 @@ def bit_error(snr_db: float, dsss: bool, preamble_snr_db: float, detect: bool) -
     return rate
 
 
+def rule_of(profile: RadioProfile) -> tuple[bool, float]:
+    """The profile's reception rule as :func:`bit_error` takes it: whether DSSS, and the
+    preamble SNR threshold (NaN: none)."""
+    threshold = math.nan if profile.preamble_snr_db is None else profile.preamble_snr_db
+    return profile.modulation == "dsss", threshold
+
+
 def ber(
     power_dbm: float,
     noise_floor_dbm: float,
@@ -54,8 +61,7 @@ def ber(
     snr_db = power_dbm - noise_floor_dbm
     if profile is None:
         return float(bit_error(snr_db, False, math.nan, False))
-    threshold = math.nan if profile.preamble_snr_db is None else profile.preamble_snr_db
-    return float(bit_error(snr_db, profile.modulation == "dsss", threshold, detect))
+    return float(bit_error(snr_db, *rule_of(profile), detect))
 
 
 def bit_error_rate_at(
@@ -95,8 +101,7 @@ def ber_matrix(
     if profile is None:
         _ber_loop(power_dbm, noise_floor_dbm, False, math.nan, False, out)
     else:
-        threshold = math.nan if profile.preamble_snr_db is None else profile.preamble_snr_db
-        _ber_loop(power_dbm, noise_floor_dbm, profile.modulation == "dsss", threshold, True, out)
+        _ber_loop(power_dbm, noise_floor_dbm, *rule_of(profile), True, out)
     return out
 
 
