@@ -35,6 +35,8 @@ def test_compiled_and_plain_loops_agree_on_every_ray() -> None:
     grid = load_map(S4_MAP)
     field = grid.distance_field().ravel()
     as_list, as_array = field.tolist(), np.ascontiguousarray(field)
+    occupied = grid.occupied.ravel()
+    occupied_list, occupied_array = occupied.tolist(), np.ascontiguousarray(occupied)
     height, width = grid.occupied.shape
     ox, oy = grid.origin
     shape = (grid.resolution, ox, oy, width, height)
@@ -45,8 +47,10 @@ def test_compiled_and_plain_loops_agree_on_every_ray() -> None:
         if ray[1] < 0:
             continue
         for gap in (1, 3):
-            assert traversal.walls_loop(as_list, *ray, gap) == traversal.walls(as_array, *ray, gap)
-        assert traversal.nearest_loop(as_list, *ray) == traversal.nearest(as_array, *ray)
+            assert traversal.walls_loop(occupied_list, *ray, gap) == traversal.walls(
+                occupied_array, *ray, gap
+            )
+        assert traversal.approach_loop(as_list, *ray)[0] == traversal.nearest(as_array, *ray)
     # Many at once, compiled, against one at a time through the grid.
     for count in (True, False):
         walls, clearance = grid.cast_many(rays, count)

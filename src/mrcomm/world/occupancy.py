@@ -29,6 +29,7 @@ class OccupancyGrid:
     origin: tuple[float, float] = (0.0, 0.0)
     _free_distance: NDArray[np.float64] | None = field(default=None, repr=False, compare=False)
     _clearance_list: Any = field(default=None, repr=False, compare=False)
+    _occupied_list: Any = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if self.occupied.ndim != 2 or self.occupied.dtype != np.bool_:
@@ -136,7 +137,7 @@ class OccupancyGrid:
         # Cells visited, not metres: a diagonal step covers up to √2 cells' width; count
         # the gap in cells of the shorter kind (conservative: gaps merge sooner).
         gap_cells = max(1, math.ceil(min_gap / self.resolution))
-        return traversal.walls(self._clearances(), *ray, gap_cells)
+        return traversal.walls(self._occupied_cells(), *ray, gap_cells)
 
     def cast_many(
         self, segments: NDArray[np.float64], count_walls: bool, min_gap: float = 0.3
@@ -153,8 +154,8 @@ class OccupancyGrid:
         ox, oy = self.origin
         gap_cells = max(1, math.ceil(min_gap / self.resolution))
         traversal.cast(
-            self._clearances(), self.resolution, float(ox), float(oy), width, height,
-            segments, count_walls, gap_cells, walls, clearance,
+            self._clearances(), self._occupied_cells(), self.resolution, float(ox), float(oy),
+            width, height, segments, count_walls, gap_cells, walls, clearance,
         )  # fmt: skip
         return walls, clearance
 
@@ -193,6 +194,7 @@ class OccupancyGrid:
         """Build the lookup ray casts use (once per grid, ~0.1 s for an office map), so
         that the first cast inside a timed loop does not pay for it."""
         self._clearances()
+        self._occupied_cells()
 
     def _clearances(self) -> Any:
         """The distance field, flat, as the ray-cast loops read it fastest: a float
@@ -209,6 +211,17 @@ class OccupancyGrid:
                 values = [shared.setdefault(v, v) for v in field.tolist()]
             object.__setattr__(self, "_clearance_list", values)
         return self._clearance_list
+
+    def _occupied_cells(self) -> Any:
+        """The occupied cells, flat, as the wall-counting loops read them: one byte a cell
+        for the compiled loops (a long ray's reads stay in the caches), a list for the
+        plain ones; cached."""
+        if self._occupied_list is None:
+            flat = self.occupied.ravel()
+            compiled = traversal.KERNEL == "numba"
+            cells: Any = np.ascontiguousarray(flat) if compiled else flat.tolist()
+            object.__setattr__(self, "_occupied_list", cells)
+        return self._occupied_list
 
 
 class LineOfSightCache:

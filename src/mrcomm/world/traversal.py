@@ -3,7 +3,7 @@ segment, compiled when numba is there.
 
 :class:`~mrcomm.world.occupancy.OccupancyGrid` asks these functions for a segment's
 traversal (:func:`ray_setup`), the walls it crosses (:func:`walls_loop`), its clearance
-(:func:`nearest_loop`), or all of that for many segments at once (:func:`cast_loop`,
+(:func:`approach_loop`), or all of that for many segments at once (:func:`cast_loop`,
 what the radio's link model uses each step). They walk every cell a segment passes
 through, hundreds for a long ray across a large map, which made them most of a large
 team's time on the radio (S4: 17 of 36 s). With numba (the ``fast`` extra, in the
@@ -64,15 +64,15 @@ def ray_setup(
 
 
 def walls_loop(
-    clear: Cells, k: int, cells: int, step_x: int, t_max_x: float, t_dx: float,
+    occupied: Cells, k: int, cells: int, step_x: int, t_max_x: float, t_dx: float,
     step_y: int, t_max_y: float, t_dy: float, gap_cells: int,
 ) -> int:  # fmt: skip
-    """Runs of occupied cells (clearance 0) along the traversal, runs closer than
+    """Runs of occupied cells (``occupied`` true) along the traversal, runs closer than
     ``gap_cells`` free cells counting as one."""
     walls = 0
     free_run = gap_cells  # before the first wall: any run starts a wall
     for _ in range(cells):
-        if clear[k] == 0.0:
+        if occupied[k]:
             if free_run >= gap_cells:
                 walls += 1
             free_run = 0
@@ -87,35 +87,46 @@ def walls_loop(
     return walls
 
 
-def nearest_loop(
+def approach_loop(
     clear: Cells, k: int, cells: int, step_x: int, t_max_x: float, t_dx: float,
     step_y: int, t_max_y: float, t_dy: float,
-) -> float:  # fmt: skip
-    """The smallest clearance along the traversal, or -1 at the first occupied cell."""
+) -> tuple[float, int, int, float, float]:  # fmt: skip
+    """The smallest clearance along the traversal, or -1 at the first occupied cell;
+    with where the traversal stopped (the cell, the cells left from it on, the next x
+    and y crossings), from which :func:`walls_loop` goes on counting."""
     nearest = math.inf
-    for _ in range(cells):
+    left = cells
+    while left > 0:
         c = clear[k]
         if c < nearest:
             if c == 0.0:
-                return -1.0
+                return -1.0, k, left, t_max_x, t_max_y
             nearest = c
+        left -= 1
         if t_max_x < t_max_y:
             k += step_x
             t_max_x += t_dx
         else:
             k += step_y
             t_max_y += t_dy
-    return nearest
+    return nearest, k, left, t_max_x, t_max_y
 
 
 def cast_loop(
-    clear: Cells, res: float, ox: float, oy: float, width: int, height: int,
-    segments: np.ndarray, count_walls: bool, gap_cells: int,
+    clear: Cells, occupied: Cells, res: float, ox: float, oy: float, width: int,
+    height: int, segments: np.ndarray, count_walls: bool, gap_cells: int,
     walls_out: np.ndarray, clearance_out: np.ndarray,
 ) -> None:  # fmt: skip
     """For each segment (rows of x0, y0, x1, y1): the walls it crosses (0 in line of
     sight; 1 for any obstructed one unless ``count_walls``; 1 for an end off the map)
-    and its clearance (-1 when obstructed; see OccupancyGrid.ray_clearance)."""
+    and its clearance (-1 when obstructed; see OccupancyGrid.ray_clearance).
+
+    An obstructed ray's walls are counted on from its first occupied cell, where the
+    search for its clearance stopped (a count from the start would reach that cell
+    with no wall behind it and begin the first wall there: the same count). They are
+    read from ``occupied``, one byte a cell, not from the eight-byte clearances: on a
+    large map (S4: 3.8 million cells) the long rays' reads then stay in the caches,
+    which halved the casts' time."""
     diagonal = math.sqrt(2.0) * res
     for i in range(segments.shape[0]):
         k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy = _setup(
@@ -126,7 +137,9 @@ def cast_loop(
             walls_out[i] = 1
             clearance_out[i] = -1.0
             continue
-        near = _nearest(clear, k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy)
+        near, k, left, t_max_x, t_max_y = _approach(
+            clear, k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy
+        )
         if near >= 0.0:
             walls_out[i] = 0
             clearance_out[i] = max(0.0, near - diagonal)
@@ -134,7 +147,7 @@ def cast_loop(
         clearance_out[i] = -1.0
         if count_walls:
             walls_out[i] = _walls(
-                clear, k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy, gap_cells
+                occupied, k, left, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy, gap_cells
             )
         else:
             walls_out[i] = 1
@@ -144,7 +157,7 @@ def cast_loop(
 # functions (numba resolves these globals when it compiles cast_loop).
 _setup: Any = compiled(ray_setup)
 _walls: Any = compiled(walls_loop)
-_nearest: Any = compiled(nearest_loop)
+_approach: Any = compiled(approach_loop)
 _cast: Any = compiled(cast_loop)
 
 
@@ -158,7 +171,8 @@ def walls(*args: Any) -> int:
 
 
 def nearest(*args: Any) -> float:
-    return float(_nearest(*args))
+    """The smallest clearance along a traversal, or -1 when it is obstructed."""
+    return float(_approach(*args)[0])
 
 
 def cast(*args: Any) -> None:
