@@ -8,15 +8,19 @@ import pytest
 from mrcomm.messaging.messages import (
     TOPIC_ASSIGNMENT,
     TOPIC_POSE,
+    TOPIC_TASK_STATUS,
     TOPIC_UTILITY,
     Message,
     PoseMsg,
+    TaskState,
+    TaskStatus,
     UtilityMsg,
 )
 from mrcomm.net.delivery import DeliveryPolicy
 from mrcomm.net.inprocess import InProcessNetwork
 from mrcomm.net.links import LinkModel
 from mrcomm.net.network import AdHoc, AdHocParams, Wlan
+from mrcomm.net.radio.model import RadioNetwork, RadioParams
 from mrcomm.net.thresholds import DistanceThreshold, NoThreshold
 from mrcomm.seeding import stream
 from mrcomm.world.occupancy import OccupancyGrid
@@ -145,3 +149,45 @@ def test_virtual_node_is_always_connected_and_slt_warns_beyond_4_m() -> None:
     assert state.connected[:, 2].all() and state.connected[2, :].all()
     assert state.warning[0, 1] and state.warning[1, 0]
     assert not state.warning[:, 2].any() and not state.warning.diagonal().any()
+
+
+def _status(sender: str, seq: int) -> TaskStatus:
+    return TaskStatus(
+        sender=sender, incarnation=1, seq=seq, stamp=0.0, robot=sender, task_id="t1",
+        state=TaskState.SUCCESS,
+    )  # fmt: skip
+
+
+def test_a_mission_waits_for_a_status_in_flight_not_for_a_pose() -> None:
+    """Poses are sent on a timer for as long as a robot runs: one in flight must not hold
+    a mission's end (with a hundred robots one always is); a status must."""
+    net = _network(0.0)
+    a = net.endpoint("a")
+    a.publish(TOPIC_POSE, _pose("a", 1))
+    assert (net.pending(), net.awaited()) == (1, 0)
+    a.publish(TOPIC_TASK_STATUS, _status("a", 2))
+    assert (net.pending(), net.awaited()) == (2, 1)
+    net.deliver(0.1)
+    assert (net.pending(), net.awaited()) == (0, 0)
+
+
+def test_on_the_shared_channel_a_status_on_the_air_is_awaited_until_it_ends() -> None:
+    network = RadioNetwork(RadioParams(channel="shared"), seed=1)
+    net = InProcessNetwork(
+        IDS, policy=DeliveryPolicy(0.0), loss_rngs={i: stream(0, "loss", i) for i in IDS},
+        channel=network.channel(IDS),
+    )  # fmt: skip
+    power = np.full((3, 3), -50.0)
+    np.fill_diagonal(power, np.nan)
+    assert net.channel is not None
+    net.channel.set_links(power, np.ones((3, 3), dtype=np.bool_))
+    got: list[Message] = []
+    net.endpoint("b").subscribe(TOPIC_TASK_STATUS, got.append)
+    # One sender's queue: the pose goes first, then the status (no collision).
+    net.endpoint("a").publish(TOPIC_POSE, _pose("a", 1))
+    net.endpoint("a").publish(TOPIC_TASK_STATUS, _status("a", 2))
+    assert (net.pending(), net.awaited()) == (2, 1)  # submitted to the air
+    net.deliver(0.0)  # nothing has ended yet
+    assert net.awaited() == 1 and got == []
+    net.deliver(1.0)
+    assert (net.pending(), net.awaited()) == (0, 0) and len(got) == 1

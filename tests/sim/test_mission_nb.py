@@ -86,3 +86,24 @@ def test_timelines_cover_the_run_without_overlap(s1_resources) -> None:  # type:
         r = result.robots[robot]
         assert r["movement_time"] > 0
         assert r["idle_time"] >= 0
+
+
+def test_a_mission_ends_the_step_its_team_is_done_with_a_pose_still_in_flight(
+    s1_resources,  # type: ignore[no-untyped-def]
+) -> None:
+    """The end does not wait for a step without a pose in flight (poses never stop: with
+    a hundred robots one is in flight at every step, and S4 on the radio ran to its time
+    limit with every task done). S1 · WLAN · NB · seed 1 ends with a pose in flight, at
+    the first step where every robot is done, the assigner settled and no status is."""
+    from mrcomm.sim.mission import Mission
+
+    mission = Mission(make_config(None, scenario=S1_PATH, network="wlan", behaviour="nb", seed=1),
+                      s1_resources)  # fmt: skip
+    done_at = None
+    while not mission.finished:
+        mission.step()
+        team_done = all(e.done for e in mission.executors.values()) and mission.assigner.settled
+        if done_at is None and team_done and mission.network.awaited() == 0:
+            done_at = mission.now
+    assert mission.now == done_at
+    assert mission.network.pending() > 0  # a pose was in flight at the end

@@ -54,13 +54,17 @@ class Topic:
     lane: Lane
     #: An agent declares its publisher up front (live mode).
     agent_publishes: bool = True
+    #: Sent on a timer for as long as its sender runs (poses, presence, RSSI readings):
+    #: one is nearly always in flight, so a mission's end does not wait for them.
+    periodic: bool = False
 
 
 TOPICS: dict[str, Topic] = {
     t.name: t
     for t in (
         Topic(TOPIC_ASSIGNMENT, Assignment, lossy=False, exempt=True, lane=Lane.CONTROL),
-        Topic(TOPIC_POSE, PoseMsg, lossy=True, exempt=False, lane=Lane.BEST_EFFORT),
+        Topic(TOPIC_POSE, PoseMsg, lossy=True, exempt=False, lane=Lane.BEST_EFFORT,
+              periodic=True),
         Topic(TOPIC_TASK_STATUS, TaskStatus, lossy=True, exempt=False, lane=Lane.STATUS),
         # AON carries task statuses, so it is perturbed like them.
         Topic(TOPIC_AON, AonMsg, lossy=True, exempt=False, lane=Lane.STATUS),
@@ -75,15 +79,16 @@ TOPICS: dict[str, Topic] = {
         # Presence of agents that publish no pose (the task assigner), like a Zenoh
         # liveliness token: not subject to loss, but cut by range like everything else.
         Topic(TOPIC_HEARTBEAT, Heartbeat, lossy=False, exempt=False, lane=Lane.CONTROL,
-              agent_publishes=False),
+              agent_publishes=False, periodic=True),
         # Published by a robot's pulse process, never by an agent.
         Topic(TOPIC_RSSI, RssiMsg, lossy=False, exempt=False, lane=Lane.BEST_EFFORT,
-              agent_publishes=False),
+              agent_publishes=False, periodic=True),
     )
 }  # fmt: skip
 
 LOSSY_TOPICS = frozenset(t.name for t in TOPICS.values() if t.lossy)
 EXEMPT_TOPICS = frozenset(t.name for t in TOPICS.values() if t.exempt)
+PERIODIC_TOPICS = frozenset(t.name for t in TOPICS.values() if t.periodic)
 #: Every topic an agent may publish (their publishers are declared up front).
 AGENT_TOPICS = tuple(t.name for t in TOPICS.values() if t.agent_publishes)
 

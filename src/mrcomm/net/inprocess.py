@@ -39,6 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mrcomm.messaging.messages import Message
+from mrcomm.messaging.topics import PERIODIC_TOPICS
 from mrcomm.net.delivery import (
     DROPPED_QUEUE,
     RECEIVED,
@@ -137,6 +138,9 @@ class InProcessNetwork:
         # topic -> which endpoints have sent on it in a step batch (StepBatch.ever_sent)
         self._ever_sent: dict[str, NDArray[np.bool_]] = {}
         self._outbox: list[_Queued] = []
+        #: Frames of topics other than the periodic ones on the shared channel (submitted,
+        #: not yet ended or dropped): what :meth:`awaited` counts there.
+        self._awaited_on_air = 0
         n = len(self.ids)
         self._links = np.ones((n, n), dtype=bool)
         self._rows: list[list[bool]] | None = None  # the same matrix as lists, on demand
@@ -181,6 +185,14 @@ class InProcessNetwork:
         """Messages waiting for the next delivery (or on the shared channel)."""
         medium = self.channel.medium if self.channel is not None else None
         return len(self._outbox) + (medium.pending() if medium is not None else 0)
+
+    def awaited(self) -> int:
+        """Messages waiting (as :meth:`pending`) other than the periodic ones (poses,
+        presence, RSSI readings): what a mission whose agents are all done still waits
+        for. With a hundred robots publishing poses at staggered instants a pose is in
+        flight at the end of every step, so waiting for none would never end."""
+        queued = sum(1 for m in self._outbox if m[1] not in PERIODIC_TOPICS)
+        return queued + self._awaited_on_air
 
     def deliver(self, now: float) -> None:
         """Deliver everything published since the last call (with a radio: everything
@@ -400,6 +412,8 @@ class InProcessNetwork:
         if channel is None:
             self._outbox.append((sender, topic, message, 0.0, 0.0, 0, crossed, copy, None))
         elif channel.medium is not None:
+            if topic not in PERIODIC_TOPICS:
+                self._awaited_on_air += 1
             channel.medium.submit(
                 sender, self._now, channel.bits(message), (topic, message, crossed, copy)
             )
@@ -416,6 +430,8 @@ class InProcessNetwork:
         out: list[_Queued] = []
         for frame in frames:
             topic, message, crossed, copy = frame.token
+            if topic not in PERIODIC_TOPICS:
+                self._awaited_on_air -= 1
             if frame.dropped:
                 out.append((frame.sender, topic, message, frame.end, None, frame.bits,
                             crossed, copy, None))  # fmt: skip

@@ -157,7 +157,7 @@ class Mission:
         if (
             all(e.done for e in self.executors.values())
             and self.assigner.settled
-            and self.network.pending() == 0
+            and self.network.awaited() == 0
             and self._operator_settled()
         ):
             self.finished = True
