@@ -6,18 +6,22 @@ On a shared VM whose speed drifts by 10-30 % within minutes, runs one after the 
 moment meet the same drift, and swapping cores each round cancels a difference
 between the cores. Needs two cores (Linux, ``taskset``).
 
-Each child is ``bench_scale.start_case``'s (NB · WLAN · SPL 25 · seed 1, the simulated
-time given) with ``PYTHONPATH`` set to the tree's ``src``, on the tree's own bundled
-scenario file (this one's when it has none): a scenario's ``robot`` section may name
+Each child is ``bench_scale.start_case``'s (NB · WLAN · SPL 25 · seed 1 unless
+``--options`` gives other ``make_config`` options as JSON, the simulated time given)
+with ``PYTHONPATH`` set to the tree's ``src``, on the tree's own bundled scenario file
+(this one's when it has none): a scenario's ``robot`` section may name
 parameters an older tree does not know.
 
 Run: ``.venv/bin/python benchmarks/bench_pair.py /tmp/mrcomm-old . --scenario campus1000
---sim-time 20 --rounds 4``
+--sim-time 20 --rounds 4``; on the radio with the shared channel: ``--options
+'{"network": "radio", "behaviour": "lf", "threshold": "slt", "params": {"network":
+{"channel": "shared"}}}'``
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
 import sys
@@ -36,6 +40,9 @@ def main() -> None:
         "--sim-time", type=float, default=60.0, help="0: each mission to its end or limit"
     )
     parser.add_argument("--rounds", type=int, default=4)
+    parser.add_argument(
+        "--options", type=json.loads, default={}, help="make_config options (JSON object)"
+    )
     args = parser.parse_args()
     if (os.cpu_count() or 1) < 2:
         raise SystemExit("needs two cores")
@@ -45,12 +52,15 @@ def main() -> None:
     )
     first_path = first_own if first_own.exists() else scenario
     second_path = second_own if second_own.exists() else scenario
-    print(f"{args.scenario}, {args.sim_time:g} s simulated; load {os.getloadavg()}")
+    print(
+        f"{args.scenario} {json.dumps(args.options)}, {args.sim_time:g} s simulated; "
+        f"load {os.getloadavg()}"
+    )
     rounds: list[tuple[float, float]] = []
     for k in range(args.rounds):
         cores = (0, 1) if k % 2 == 0 else (1, 0)
-        a = start_case(first_path, args.sim_time, args.first, cores[0])
-        b = start_case(second_path, args.sim_time, args.second, cores[1])
+        a = start_case(first_path, args.sim_time, args.first, cores[0], args.options)
+        b = start_case(second_path, args.sim_time, args.second, cores[1], args.options)
         ra, rb = result_of(a), result_of(b)
         rounds.append((ra["cpu"], rb["cpu"]))
         print(

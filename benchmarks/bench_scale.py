@@ -50,8 +50,10 @@ scenario, sim_time = sys.argv[1], float(sys.argv[2])
 resources = ScenarioResources.load(scenario)
 # sim_time 0: the whole mission, to its end or the scenario's time limit.
 limit = {"max_time": sim_time} if sim_time > 0 else {}
-config = make_config(None, scenario=scenario, network="wlan", spl=25.0, behaviour="nb",
-                     threshold="none", seed=1, **limit)
+# The case: NB · WLAN · SPL 25 · seed 1 unless options (JSON, make_config's) say otherwise.
+options = {"network": "wlan", "spl": 25.0, "behaviour": "nb", "threshold": "none", "seed": 1}
+options.update(json.loads(sys.argv[3]) if len(sys.argv) > 3 else {})
+config = make_config(None, scenario=scenario, **options, **limit)
 mission = Mission(config, resources)
 wall0, cpu0 = time.perf_counter(), time.process_time()
 steps = 0
@@ -66,11 +68,15 @@ print(json.dumps({"sim": mission.now, "wall": wall, "cpu": cpu, "steps": steps,
 
 
 def start_case(
-    path: Path, sim_time: float, tree: Path | None = None, core: int = 0
+    path: Path,
+    sim_time: float,
+    tree: Path | None = None,
+    core: int = 0,
+    options: dict[str, object] | None = None,
 ) -> subprocess.Popen[str]:
     """One case in a fresh process pinned to ``core`` (Linux); ``tree``: run that
-    source tree's code instead."""
-    command = [sys.executable, "-c", CHILD, str(path), str(sim_time)]
+    source tree's code instead; ``options``: make_config's, over NB · WLAN · SPL 25."""
+    command = [sys.executable, "-c", CHILD, str(path), str(sim_time), json.dumps(options or {})]
     if sys.platform.startswith("linux"):
         command = ["taskset", "-c", str(core), *command]
     env = dict(os.environ)
