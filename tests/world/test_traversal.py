@@ -50,7 +50,7 @@ def test_compiled_and_plain_loops_agree_on_every_ray() -> None:
             assert traversal.walls_loop(occupied_list, *ray, gap) == traversal.walls(
                 occupied_array, *ray, gap
             )
-        assert traversal.approach_loop(as_list, *ray)[0] == traversal.nearest(as_array, *ray)
+        assert traversal.nearest_loop(as_list, *ray) == traversal.nearest(as_array, *ray)
     # Many at once, compiled, against one at a time through the grid.
     for count in (True, False):
         walls, clearance = grid.cast_many(rays, count)
