@@ -108,27 +108,6 @@ def nearest_loop(
     return nearest
 
 
-def first_occupied_loop(
-    occupied: Cells, k: int, cells: int, step_x: int, t_max_x: float, t_dx: float,
-    step_y: int, t_max_y: float, t_dy: float,
-) -> tuple[bool, int, int, float, float]:  # fmt: skip
-    """Whether the traversal meets an occupied cell, and where it stopped (the cell, the
-    cells left from it on, the next x and y crossings), from which :func:`walls_loop`
-    goes on counting."""
-    left = cells
-    while left > 0:
-        if occupied[k]:
-            return True, k, left, t_max_x, t_max_y
-        left -= 1
-        if t_max_x < t_max_y:
-            k += step_x
-            t_max_x += t_dx
-        else:
-            k += step_y
-            t_max_y += t_dy
-    return False, k, left, t_max_x, t_max_y
-
-
 def cast_loop(
     clear: Cells, occupied: Cells, res: float, ox: float, oy: float, width: int,
     height: int, segments: np.ndarray, count_walls: bool, gap_cells: int,
@@ -138,13 +117,12 @@ def cast_loop(
     sight; 1 for any obstructed one unless ``count_walls``; 1 for an end off the map)
     and its clearance (-1 when obstructed; see OccupancyGrid.ray_clearance).
 
-    Most of a large team's rays are obstructed (S4: 99 %): each is walked over
-    ``occupied``, one byte a cell, not over the eight-byte clearances — on a large map
-    (S4: 3.8 million cells) the long rays' reads then stay in the caches, which halved
-    the casts' time — and its walls are counted on from its first occupied cell (a
-    count from the start would reach that cell with no wall behind it and begin the
-    first wall there: the same count). Only a ray in line of sight is walked again
-    over the clearances, for the nearest."""
+    With ``count_walls`` (the radio) most rays are obstructed (S4: 99 %): each is first
+    walked over ``occupied`` for its walls, one byte a cell rather than the eight-byte
+    clearances — on a large map (S4: 3.8 million cells) the long rays' reads then stay
+    in the caches, which halved the casts' time — and only a ray with no wall is walked
+    again over the clearances, for the nearest. Without, the walk over the clearances
+    stops at the first occupied cell."""
     diagonal = math.sqrt(2.0) * res
     for i in range(segments.shape[0]):
         k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy = _setup(
@@ -155,21 +133,20 @@ def cast_loop(
             walls_out[i] = 1
             clearance_out[i] = -1.0
             continue
-        hit, at, left, x_next, y_next = _first_occupied(
-            occupied, k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy
-        )
-        if not hit:
+        walls = 1
+        if count_walls:
+            walls = _walls(
+                occupied, k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy, gap_cells
+            )
+        near = -1.0
+        if walls == 0 or not count_walls:
             near = _nearest(clear, k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy)
+        if near >= 0.0:
             walls_out[i] = 0
             clearance_out[i] = max(0.0, near - diagonal)
-            continue
-        clearance_out[i] = -1.0
-        if count_walls:
-            walls_out[i] = _walls(
-                occupied, at, left, step_x, x_next, t_dx, step_y, y_next, t_dy, gap_cells
-            )
         else:
-            walls_out[i] = 1
+            walls_out[i] = walls
+            clearance_out[i] = -1.0
 
 
 # What cast_loop calls: the compiled forms where numba is there, else the plain
@@ -177,7 +154,6 @@ def cast_loop(
 _setup: Any = compiled(ray_setup)
 _walls: Any = compiled(walls_loop)
 _nearest: Any = compiled(nearest_loop)
-_first_occupied: Any = compiled(first_occupied_loop)
 _cast: Any = compiled(cast_loop)
 
 
