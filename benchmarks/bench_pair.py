@@ -31,6 +31,17 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_scale import ROOT, SCENARIOS, result_of, start_case
 
 
+def _json_object(text: str) -> dict[str, object]:
+    """``--options``: a JSON object, or argparse's one-line error (exit status 2)."""
+    try:
+        value = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise argparse.ArgumentTypeError(f"not JSON: {error}") from None
+    if not isinstance(value, dict):
+        raise argparse.ArgumentTypeError("must be a JSON object of make_config options")
+    return value
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("first", type=Path, help="a source tree (e.g. a git worktree)")
@@ -41,7 +52,7 @@ def main() -> None:
     )
     parser.add_argument("--rounds", type=int, default=4)
     parser.add_argument(
-        "--options", type=json.loads, default={}, help="make_config options (JSON object)"
+        "--options", type=_json_object, default={}, help="make_config options (JSON object)"
     )
     args = parser.parse_args()
     if (os.cpu_count() or 1) < 2:

@@ -245,19 +245,18 @@ class SerriedExecutor(TaskExecutor):
         known = self.mates.get(leader)
         if known is None:
             return
+        pose = self.base.pose
         if self.base.status is not NavStatus.ACTIVE:
             # Stopped in the way of a mate with a goal — its leader, or a robot of
             # another group: make room (NB's rule). Groups that met at one spot jammed
             # there, each group's followers closing in on the spot the others drove to.
             # (Not for its own group's followers: the group would come apart.)
-            pose = self.base.pose
             group = self.group
             strangers = (m for r, m in self.mates.items() if r not in group)
             for mate in (known, *strangers):
                 if self.in_way_of(mate, pose):
                     self.step_aside(mate)
                     return
-        pose = self.base.pose
         close = math.hypot(known.x - pose.x, known.y - pose.y) <= self.serried.follow_distance
         # Close is not enough when its own link to the leader warns (a wall between
         # them, with a signal-strength threshold): it keeps closing in, or the leader

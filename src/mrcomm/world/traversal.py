@@ -133,19 +133,20 @@ def cast_loop(
             walls_out[i] = 1
             clearance_out[i] = -1.0
             continue
-        walls = 1
         if count_walls:
             walls = _walls(
                 occupied, k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy, gap_cells
             )
-        near = -1.0
-        if walls == 0 or not count_walls:
-            near = _nearest(clear, k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy)
+            if walls > 0:
+                walls_out[i] = walls
+                clearance_out[i] = -1.0
+                continue
+        near = _nearest(clear, k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy)
         if near >= 0.0:
             walls_out[i] = 0
             clearance_out[i] = max(0.0, near - diagonal)
         else:
-            walls_out[i] = walls
+            walls_out[i] = 1
             clearance_out[i] = -1.0
 
 
