@@ -20,13 +20,18 @@ The state, grouped in tuples so that the functions stay readable:
 * ``links`` (per sender and receiver, this step): received power in mW and dBm, who
   senses whom, who can hear whom.
 * ``store`` (per frame slot): sender, arrival at the MAC, bits, start, end, dropped, and
-  per receiver whether it was blocked, the interference it met (mW), the links of its
-  start step (who it keeps busy, who can hear it, its power in mW and dBm) and its
-  errors (alone and with the other frames).
+  per receiver whether it was blocked, the links of its start step (who it keeps busy,
+  who can hear it, its power in mW and dBm) and its errors (alone and with the other
+  frames).
+* ``chunks``: each ended frame's payload cut at the instants other frames started or
+  ended during it — per slot its first chunk and how many; per chunk its bits and the
+  power of the other frames on the air then (mW per receiver) — in a pool filled
+  during one call (:func:`advance` asks for a larger one when it could run short).
 * ``lists``: the frames on the air and the recently ended ones (in the order they
   started / ended: interference is summed in this order), the frames finished and the
-  slots released during this call, their counts, the frames submitted since the last
-  call and those waiting to arrive at their queues (in the order they will).
+  slots released during this call, their counts (and the chunks used in the pool), the
+  frames submitted since the last call and those waiting to arrive at their queues (in
+  the order they will).
 """
 
 from __future__ import annotations
@@ -37,11 +42,9 @@ from typing import Any
 import numpy as np
 
 from mrcomm.compiled import compiled
+from mrcomm.net.radio.chunks import SAME_TIME_S, chunked_error, cut
 from mrcomm.net.radio.draws import bounded, uniform
-from mrcomm.net.radio.reception import bit_error, per
-
-#: Two instants closer than this (s) are the same instant (slot boundaries are sums).
-SAME_TIME_S = 1e-12
+from mrcomm.net.radio.reception import bit_error, decibels, per
 
 #: ``settings``: slot, DIFS, EIFS, preamble airtime, seconds per bit, queue limit (s),
 #: noise floor (mW and dBm), preamble SINR threshold (dB; NaN: none), modulation (0
@@ -49,18 +52,8 @@ SAME_TIME_S = 1e-12
 SLOT, DIFS, EIFS, PREAMBLE, PER_BIT, MAX_QUEUE, NOISE_MW, NOISE_DBM, PREAMBLE_SNR = range(9)
 MODULATION, CW = 9, 10
 #: ``counts``: frames on the air, recently ended, finished and released during the call,
-#: submitted since the last call, arrived at no queue yet.
-ON_AIR, RECENT, FINISHED, RELEASED, FRESH, PENDING = range(6)
-
-
-@compiled
-def _db(x: float) -> float:
-    """10·log10(x) as numpy gives it (−inf at 0, NaN below)."""
-    if x > 0.0:
-        return 10.0 * math.log10(x)
-    if x == 0.0:
-        return -math.inf
-    return math.nan
+#: submitted since the last call, arrived at no queue yet; chunks used in the pool.
+ON_AIR, RECENT, FINISHED, RELEASED, FRESH, PENDING, CHUNKS = range(7)
 
 
 @compiled
@@ -205,7 +198,7 @@ def _start_frames(
     power_mw, power_dbm, senses, hears = links
     sender_of, _, bits, start, end = store[0], store[1], store[2], store[3], store[4]
     blocked, sensed_by, heard_by, frame_mw, frame_dbm = (
-        store[6], store[8], store[9], store[10], store[11]
+        store[6], store[7], store[8], store[9], store[10]
     )  # fmt: skip
     on_air, counts = lists[0], lists[4]
     n = busy.shape[0]
@@ -293,7 +286,7 @@ def _start_frames(
                 signal = frame_mw[f, r]
                 rest = noise + on_air_mw[r] - signal
                 ratio = signal / rest if rest != 0.0 else (math.inf if signal > 0 else math.nan)
-                mine = _db(ratio) >= threshold
+                mine = decibels(ratio) >= threshold
             blocked[f, r] = (busy_now or (heard_by[f, r] and not mine)) and radio[r] and radio[s]
             if mine:
                 lock_until[r] = end[f]
@@ -308,33 +301,32 @@ def _start_frames(
 
 
 @compiled
-def _sinr_error(power_dbm: float, interference_mw: float, bits: int, settings: Any) -> float:
-    """Probability that a frame of ``bits`` received at ``power_dbm`` is lost with
-    ``interference_mw`` from other frames on the air (its preamble already detected)."""
-    sinr_db = power_dbm - _db(settings[NOISE_MW] + interference_mw)
-    return per(bit_error(sinr_db, settings[MODULATION] == 1.0, math.nan, False), bits)
-
-
-@compiled
-def _error_above_half(f: int, settings: Any, store: Any, r: int) -> bool:
+def _error_above_half(f: int, settings: Any, store: Any, chunks: Any, r: int) -> bool:
     """Whether frame ``f`` is more likely lost than not at receiver ``r`` at its SINR
     (no fading): 802.11 then waits EIFS."""
-    interference, frame_dbm, bits = store[7], store[11], store[2]
+    frame_dbm = store[10]
+    first, many, chunk_bits, chunk_mw = chunks
     power = frame_dbm[f, r]
     received = -math.inf if math.isnan(power) else power
-    return bool(_sinr_error(received, interference[f, r], bits[f], settings) > 0.5)
+    lo, hi = first[f], first[f] + many[f]
+    lost = chunked_error(
+        received, chunk_bits[lo:hi], chunk_mw[lo:hi], r, settings[NOISE_MW],
+        settings[MODULATION] == 1.0,
+    )  # fmt: skip
+    return bool(lost > 0.5)
 
 
 @compiled
 def frame_errors(
-    power_dbm: Any, interference_mw: Any, blocked: Any, bits: int, settings: Any,
+    power_dbm: Any, chunk_bits: Any, chunk_mw: Any, blocked: Any, bits: int, settings: Any,
     alone: Any, shared: Any,
 ) -> None:  # fmt: skip
     """Probability that a frame of ``bits`` is lost at each receiver, without (``alone``)
-    and with (``shared``) the other frames on the air, at received powers ``power_dbm``
-    (NaN: a node without a position, never lost): 1 where it was ``blocked`` (and 0
-    alone). The preamble was judged when the frame started, so only the alone error
-    applies the preamble rule."""
+    and with (``shared``) the other frames on the air (its chunks: ``chunk_bits``, and
+    ``chunk_mw`` with a column per receiver), at received powers ``power_dbm`` (NaN: a
+    node without a position, never lost): 1 where it was ``blocked`` (and 0 alone). The
+    preamble was judged when the frame started, so only the alone error applies the
+    preamble rule."""
     dsss = settings[MODULATION] == 1.0
     threshold = settings[PREAMBLE_SNR]
     floor_dbm = settings[NOISE_DBM]
@@ -347,21 +339,32 @@ def frame_errors(
         else:
             lost = per(bit_error(power - floor_dbm, dsss, threshold, True), bits)
             alone[r] = lost
-            shared[r] = max(_sinr_error(power, interference_mw[r], bits, settings), lost)
+            with_others = chunked_error(
+                power, chunk_bits, chunk_mw, r, settings[NOISE_MW], dsss
+            )  # fmt: skip
+            shared[r] = max(with_others, lost)
 
 
 @compiled
 def _end_frames(
-    now: float, settings: Any, nodes: Any, store: Any, lists: Any, scratch: Any
-) -> None:
+    now: float, settings: Any, nodes: Any, store: Any, lists: Any, scratch: Any, chunks: Any
+) -> bool:
+    """End the frames on the air that end at ``now``; False (nothing done) when the
+    chunk pool might not hold their chunks: each has at most one more than twice the
+    frames it can overlap."""
     idle_since, ifs, busy, backoff, transmitting = nodes[1], nodes[2], nodes[4], nodes[5], nodes[7]
     sender_of, start, end = store[0], store[3], store[4]
-    blocked, interference, sensed_by, heard_by, frame_mw = (
-        store[6], store[7], store[8], store[9], store[10]
-    )  # fmt: skip
+    blocked, sensed_by, heard_by = store[6], store[7], store[8]
     on_air, recent, finished, released, counts = lists[:5]
     n = busy.shape[0]
     ending, window, sensed, longest = scratch[0], scratch[4], scratch[1], scratch[3]
+    ending_now = 0
+    for j in range(counts[ON_AIR]):
+        if end[on_air[j]] <= now + SAME_TIME_S:
+            ending_now += 1
+    room = ending_now * (2 * (counts[ON_AIR] + counts[RECENT]) + 1)
+    if counts[CHUNKS] + room > chunks[2].shape[0]:
+        return False
     # Split the frames on the air into those ending now and the rest (order kept).
     ended = 0
     kept = 0
@@ -374,7 +377,7 @@ def _end_frames(
             on_air[kept] = f
             kept += 1
     counts[ON_AIR] = kept
-    # Every frame that overlapped one is its interference (summed in this order).
+    # Every frame that overlapped one is its interference, chunk by chunk.
     size = 0
     for j in range(kept):
         window[size] = on_air[j]
@@ -385,15 +388,16 @@ def _end_frames(
     for j in range(ended):
         window[size] = ending[j]
         size += 1
+    first, many, chunk_bits, chunk_mw = chunks
     for k in range(ended):
         f = ending[k]
-        for r in range(n):
-            interference[f, r] = 0.0
-        for j in range(size):
-            g = window[j]
-            if g != f and start[g] < end[f] - SAME_TIME_S and end[g] > start[f] + SAME_TIME_S:
-                for r in range(n):
-                    interference[f, r] += frame_mw[g, r]
+        made = cut(
+            f, start[f] + settings[PREAMBLE], window, size, start, end, store[2], store[9],
+            chunk_bits, chunk_mw, counts[CHUNKS], scratch[10], scratch[11],
+        )  # fmt: skip
+        first[f] = counts[CHUNKS]
+        many[f] = made
+        counts[CHUNKS] += made
         finished[counts[FINISHED]] = f
         counts[FINISHED] += 1
     for r in range(n):
@@ -414,7 +418,7 @@ def _end_frames(
         # receiver more likely than not lost (the bus draws the real outcome).
         for r in range(n):
             if heard_by[f, r] and not blocked[f, r]:
-                lost = _error_above_half(f, settings, store, r)
+                lost = _error_above_half(f, settings, store, chunks, r)
                 ifs[r] = settings[EIFS] if lost else settings[DIFS]
     for r in range(n):
         if sensed[r] and busy[r] == 0 and not transmitting[r]:
@@ -432,21 +436,25 @@ def _end_frames(
             released[counts[RELEASED]] = f
             counts[RELEASED] += 1
     counts[RECENT] = kept
+    return True
 
 
 @compiled
 def advance(
-    now: float, settings: Any, nodes: Any, links: Any, store: Any, lists: Any, scratch: Any
-) -> None:
+    now: float, settings: Any, nodes: Any, links: Any, store: Any, lists: Any, scratch: Any,
+    chunks: Any,
+) -> bool:  # fmt: skip
     """Simulate the channel up to ``now``: the frames submitted since the last call get
     their arrival instants, frames reach their queues, start and end; each frame that
     finished gets its errors at this step's power (:func:`frame_errors`, without fast
-    fading)."""
+    fading). False when it stopped before ``now`` because the chunk pool could run short:
+    give it a larger pool (the chunks so far copied) and call again."""
     _arrive_within(now, nodes, store, lists, scratch)
     end = store[4]
     on_air, counts, pending = lists[0], lists[4], lists[6]
     starters = scratch[5]
     taken = 0
+    room = True
     while True:
         first_end = math.inf
         for j in range(counts[ON_AIR]):
@@ -461,25 +469,30 @@ def advance(
             _arrive(pending[taken], settings, nodes, store, lists)
             taken += 1
         elif first_end <= start:
-            _end_frames(first_end, settings, nodes, store, lists, scratch)
+            room = _end_frames(first_end, settings, nodes, store, lists, scratch, chunks)
+            if not room:
+                break
         else:
             _start_frames(start, starters, count, settings, nodes, links, store, lists, scratch)
-    for j in range(taken, counts[PENDING]):  # (arriving after now: none so far)
+    for j in range(taken, counts[PENDING]):  # (arriving after now or not yet reached)
         pending[j - taken] = pending[j]
     counts[PENDING] -= taken
     # The errors of the frames that finished, at this step's power.
     power_dbm = links[1]
-    sender_of, bits, dropped, blocked, interference, alone, shared = (
-        store[0], store[2], store[5], store[6], store[7], store[12], store[13]
+    sender_of, bits, dropped, blocked, alone, shared = (
+        store[0], store[2], store[5], store[6], store[11], store[12]
     )  # fmt: skip
+    first, many, chunk_bits, chunk_mw = chunks
     finished = lists[2]
     for j in range(counts[FINISHED]):
         f = finished[j]
         if not dropped[f]:
+            lo, hi = first[f], first[f] + many[f]
             frame_errors(
-                power_dbm[sender_of[f]], interference[f], blocked[f], bits[f], settings,
-                alone[f], shared[f],
+                power_dbm[sender_of[f]], chunk_bits[lo:hi], chunk_mw[lo:hi], blocked[f],
+                bits[f], settings, alone[f], shared[f],
             )  # fmt: skip
+    return room
 
 
 @compiled
@@ -536,4 +549,16 @@ def new_scratch(n: int, slots: int) -> tuple[Any, ...]:
         np.zeros(n, dtype=np.int64),  # where each sender's frames go in the next
         np.zeros(slots, dtype=np.int64),  # frames submitted, by sender
         np.zeros(slots),  # one sender's uniform draws
+        np.zeros(6 * slots),  # the instants a frame is cut at
+        np.zeros(3 * slots, dtype=np.int64),  # the frames overlapping it
+    )
+
+
+def new_chunks(slots: int, pool: int, n: int) -> tuple[Any, ...]:
+    """A chunk pool of ``pool`` chunks for ``slots`` frame slots and ``n`` receivers."""
+    return (
+        np.zeros(slots, dtype=np.int64),  # each frame's first chunk
+        np.zeros(slots, dtype=np.int64),  # and how many
+        np.zeros(pool),  # bits in each chunk
+        np.zeros((pool, n)),  # the other frames' power in it, mW per receiver
     )

@@ -22,17 +22,19 @@ senders share the air:
   preamble's SINR, against every
   frame on the air then, reaches the profile's ``preamble_snr_db`` (when it has one).
   Frames that start while it is locked or transmits, or after a preamble it could not
-  detect, are lost to it (collision; no capture). A frame it locked on is lost with the
-  packet error rate at its SINR: the noise floor plus the power of every other frame on
-  the air at any time during it (hidden terminals collide here). A receiver that
-  transmits at any time during the frame loses it.
+  detect, are lost to it (collision; no capture). A frame it locked on survives its
+  payload chunk by chunk, as ns-3 judges a frame: the payload is cut at the instants
+  other frames start or end during it, and each chunk's bits meet the packet error rate
+  at that chunk's SINR — the noise floor plus the power of the other frames on the air
+  then (hidden terminals collide here). A receiver that transmits at any time during the
+  frame loses it.
 * **Queue.** A frame older than ``max_queue_s`` is dropped when it reaches the head of
   the queue or when a newer one arrives behind it, so a queue holds at most
   ``max_queue_s`` of its sender's traffic.
 
 The bus submits each message with :meth:`SharedMedium.submit` and, at each delivery,
 takes the frames finished by then from :meth:`SharedMedium.advance` (in the order they
-ended) with, per receiver, whether it was blocked and the interference it had; the
+ended) with, per receiver, whether it was blocked and the interference it met; the
 packet error draws stay the bus's (one per message and receiver from the receiver's
 stream, as with the per-sender queue). The power matrix is the step's mean received
 power (:meth:`SharedMedium.set_power`); a frame keeps the links of the step it started
@@ -63,9 +65,10 @@ from mrcomm.net.radio.reception import rule_of
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
-#: Frame slots, queue places and backoff draws per node to begin with (each grows by
-#: doubling when needed).
+#: Frame slots, queue places, backoff draws per node and chunks in the pool to begin
+#: with (each grows by doubling when needed).
 _FIRST_SLOTS = 64
+_FIRST_CHUNKS = 256
 _FIRST_PLACES = 4
 _FIRST_DRAWS = 64
 #: 64-bit draws kept for rejections in the bounded draws beyond the most a call can use
@@ -83,8 +86,8 @@ class Frame:
     """One message on the shared channel, from its submission to the end of its
     transmission (or its drop from the queue)."""
 
-    __slots__ = ("alone", "bits", "blocked", "dropped", "end", "interference_mw", "sender",
-                 "shared", "start", "submitted", "token")  # fmt: skip
+    __slots__ = ("alone", "bits", "blocked", "chunk_bits", "chunk_mw", "dropped", "end",
+                 "sender", "shared", "start", "submitted", "token")  # fmt: skip
 
     def __init__(self, sender: int, submitted: float, bits: int, token: Any) -> None:
         self.sender = sender
@@ -97,8 +100,11 @@ class Frame:
         #: Receivers that could not receive it: transmitting during it, or locked on
         #: another frame when it started (empty for a dropped frame).
         self.blocked: BoolArray = _NO_RECEIVERS
-        #: Power of the other frames on the air during it, mW per receiver.
-        self.interference_mw: FloatArray = _NO_VALUES
+        #: Its payload cut at the instants other frames started or ended during it: the
+        #: bits of each chunk, and the power of the other frames on the air through it
+        #: (mW; a row per chunk, a column per receiver).
+        self.chunk_bits: FloatArray = _NO_VALUES
+        self.chunk_mw: FloatArray = _NO_VALUES.reshape(0, 0)
         #: Probability that it is lost at each receiver without and with the other
         #: frames, at the mean power of the step it ended in (1 where blocked).
         self.alone: FloatArray = _NO_VALUES
@@ -172,6 +178,7 @@ class SharedMedium:
         self._store: tuple[Any, ...] = ()
         self._lists: tuple[Any, ...] = ()
         self._scratch: tuple[Any, ...] = ()
+        self._chunks: tuple[Any, ...] = ()
         self._grow(_FIRST_SLOTS)
         self._clock = 0.0
         self._unfinished = 0
@@ -232,11 +239,12 @@ class SharedMedium:
         if short:
             self._draw_ahead(self._short[:short].tolist())
         counts = self._lists[4]
-        counts[air.FINISHED] = counts[air.RELEASED] = 0
-        air.advance(
+        counts[air.FINISHED] = counts[air.RELEASED] = counts[air.CHUNKS] = 0
+        while not air.advance(
             now, self._settings, self._nodes, self._links, self._store, self._lists,
-            self._scratch,
-        )  # fmt: skip
+            self._scratch, self._chunks,
+        ):  # fmt: skip
+            self._widen_pool()
         self._clock = max(self._clock, now)
         return self._collect()
 
@@ -248,8 +256,8 @@ class SharedMedium:
         received powers ``power_dbm`` (the step's with this packet's fast fading), by
         the rule the channel uses for frames without fading."""
         air.frame_errors(
-            power_dbm, frame.interference_mw[receivers], frame.blocked[receivers],
-            frame.bits, self._settings, alone, shared,
+            power_dbm, frame.chunk_bits, frame.chunk_mw[:, receivers],
+            frame.blocked[receivers], frame.bits, self._settings, alone, shared,
         )  # fmt: skip
 
     # -- between the loop and the frames ----------------------------------------------
@@ -291,9 +299,10 @@ class SharedMedium:
         released become free."""
         store, lists = self._store, self._lists
         counts = lists[4]
-        arrival, start, end, dropped, blocked, interference, alone, shared = (
-            store[1], store[3], store[4], store[5], store[6], store[7], store[12], store[13]
+        arrival, start, end, dropped, blocked, alone, shared = (
+            store[1], store[3], store[4], store[5], store[6], store[11], store[12]
         )  # fmt: skip
+        first, many, chunk_bits, chunk_mw = self._chunks
         finished: list[Frame] = []
         for slot in lists[2][: counts[air.FINISHED]].tolist():
             frame = self._frames[slot]
@@ -305,7 +314,9 @@ class SharedMedium:
             else:
                 frame.start = float(start[slot])
                 frame.blocked = blocked[slot].copy()
-                frame.interference_mw = interference[slot].copy()
+                lo, hi = first[slot], first[slot] + many[slot]
+                frame.chunk_bits = chunk_bits[lo:hi].copy()
+                frame.chunk_mw = chunk_mw[lo:hi].copy()
                 frame.alone = alone[slot].copy()
                 frame.shared = shared[slot].copy()
             finished.append(frame)
@@ -319,13 +330,13 @@ class SharedMedium:
         """Room for ``slots`` frames (the state of the ones there is kept)."""
         n, old = self.n, len(self._frames)
         kinds = (np.int64, np.float64, np.int64, np.float64, np.float64, np.bool_)
-        wide = (np.bool_, np.float64, np.bool_, np.bool_, *[np.float64] * 4)
+        wide = (np.bool_, np.bool_, np.bool_, *[np.float64] * 4)
         store = tuple(np.zeros(slots, dtype=k) for k in kinds) + tuple(
             np.zeros((slots, n), dtype=k) for k in wide
         )
         lists = (
             *(np.zeros(slots, dtype=np.int64) for _ in range(4)),
-            np.zeros(6, dtype=np.int64),
+            np.zeros(7, dtype=np.int64),
             *(np.zeros(slots, dtype=np.int64) for _ in range(2)),
         )
         if old:
@@ -333,6 +344,11 @@ class SharedMedium:
                 new[:old] = was
             for new, was in zip(lists, self._lists, strict=True):
                 new[: len(was)] = was
+        chunks = air.new_chunks(slots, self._chunks[2].shape[0] if old else _FIRST_CHUNKS, n)
+        if old:
+            for new, was in zip(chunks, self._chunks, strict=True):
+                new[: len(was)] = was
+        self._chunks = chunks
         scratch = air.new_scratch(n, slots)
         if self._scratch:
             scratch[3][0] = self._scratch[3][0]  # the longest airtime so far
@@ -340,3 +356,11 @@ class SharedMedium:
         self._frames.extend([None] * (slots - old))
         # Lowest slots first (a stack: pop from the end).
         self._free = list(range(slots - 1, old - 1, -1)) + self._free
+
+    def _widen_pool(self) -> None:
+        """Twice the chunks in the pool (the ones of this call kept)."""
+        first, many, chunk_bits, chunk_mw = self._chunks
+        wider = air.new_chunks(len(first), 2 * len(chunk_bits), self.n)
+        wider[2][: len(chunk_bits)] = chunk_bits
+        wider[3][: len(chunk_bits)] = chunk_mw
+        self._chunks = (first, many, wider[2], wider[3])

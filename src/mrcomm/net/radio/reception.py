@@ -25,6 +25,16 @@ DSSS_GAIN = 22.0
 
 
 @compiled
+def decibels(x: float) -> float:
+    """10·log10(x) as numpy gives it (−inf at 0, NaN below)."""
+    if x > 0.0:
+        return 10.0 * math.log10(x)
+    if x == 0.0:
+        return -math.inf
+    return math.nan
+
+
+@compiled
 def bit_error(snr_db: float, dsss: bool, preamble_snr_db: float, detect: bool) -> float:
     """BER at ``snr_db`` (dB): erfc(√SNR), or ½·exp(−22·SNR) with ``dsss``; 1 (nothing
     received) below ``preamble_snr_db`` (NaN: no such threshold) when ``detect``. The one
