@@ -6,7 +6,8 @@ traffic. A benchmark, not a dependency:
     python benchmarks/ns3_contention.py [--out DIR] [--figure PATH] [--seconds S] [--seeds 1 2 3]
 
 Three cases, each for 2, 5, 10, 20 and 50 senders, for each of ``--seeds`` (each seed
-its own start instants and draws on both sides; the outcomes pooled):
+its own start instants and draws on both sides; the outcomes pooled, and a bootstrap over
+the seeds gives the throughput difference its 95 % interval):
 
 * ``saturated``: every sender always has a frame waiting (a packet every 0.5 ms, more
   than the channel carries), all within range of each other (on a 5 m circle);
@@ -14,13 +15,19 @@ its own start instants and draws on both sides; the outcomes pooled):
   each sender's first at a uniform instant of the first 0.2 s), all in range;
 * ``hidden``: the senders in two groups that cannot hear each other (200 dB apart),
   saturated, and four listeners between them that hear both groups 10 dB weaker than
-  a group hears itself: every frame a listener hears may meet a hidden one.
+  a group hears itself: every frame a listener hears may meet a hidden one. Each sender
+  has a payload of its own, 100–200 bytes (drawn per seed). With one size for all
+  (``--hidden-sizes same``) every frame lasts the same and every gap is DIFS plus whole
+  slots, so the two groups keep their phase on the 20 µs slot lattice and it wanders
+  slowly: a listener receives only when one group starts in the other's gap, and a
+  10 s run at 10–50 senders is a lottery on both sides (at 50 senders, per seed, 0.1
+  to 42 kbit/s in either simulator).
 
 For each: the delivery ratio (frames received over frames sent times the receivers in
 range; in ``hidden``, at the listeners), the throughput (bits of payload received per
 second per receiver) and, for ``poses``, the mean delay from a packet's publication to
 its reception. Only what ends before the last publication counts, on both sides.
-Both sides broadcast (no acknowledgement, no retry) 150-byte payloads,
+Both sides broadcast (no acknowledgement, no retry) 150-byte payloads (but ``hidden``'s),
 214 bytes on the air with UDP, IP, LLC/SNAP, MAC header and FCS, at 802.11b's DSSS
 1 Mbit/s with the long preamble (192 µs): ns-3 3.44 with ``WIFI_STANDARD_80211b``,
 ``ConstantRateWifiManager`` at DsssRate1Mbps, ``AdhocWifiMac``, ``YansWifiPhy`` (noise
@@ -47,7 +54,6 @@ import numpy as np
 
 from mrcomm.net.radio.medium import SharedMedium
 from mrcomm.net.radio.profile import DEFAULT_PROFILE, RadioProfile, load_profile
-from mrcomm.net.radio.reception import ber, per
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from ns3_validation import INSTALL_HINT, _filtered_stderr, noise_figure_db
@@ -64,6 +70,8 @@ LISTENERS = 4
 APART_DB = 200.0
 #: How much weaker a listener hears each group than the group hears itself, dB.
 LISTENER_MARGIN_DB = 10.0
+#: The smallest and largest payload of a ``hidden`` sender, bytes.
+HIDDEN_PAYLOADS = (100, 200)
 
 _CPP = r"""
 #include "ns3/applications-module.h"
@@ -79,6 +87,7 @@ namespace mrcomm_contention {
 static std::vector<double> g_tx;
 static std::vector<double> g_rx;
 static std::vector<double> g_delay;
+static std::vector<double> g_bits;
 
 static void TxBegin(uint32_t node, ns3::Ptr<const ns3::Packet>, double) { g_tx[node] += 1; }
 
@@ -88,21 +97,24 @@ static void Received(uint32_t node, ns3::Ptr<const ns3::Packet> packet, const ns
   ns3::SeqTsHeader header;
   copy->RemoveHeader(header);
   g_rx[node] += 1;
+  g_bits[node] += 8.0 * packet->GetSize();
   g_delay[node] += (ns3::Simulator::Now() - header.GetTs()).GetSeconds();
 }
 
 // n nodes, the first `senders` of them sending; loss[a * n + b] dB from a to b.
-// Returns tx frames of each node, then received packets, then the sum of their delays.
+// Returns tx frames of each node, then received packets, the sum of their delays and
+// their payload bits.
 std::vector<double> Run(uint32_t n, uint32_t senders, const std::vector<double>& loss,
                         double txPowerDbm, double sensitivityDbm, double noiseFigureDb,
                         const std::vector<double>& starts, double interval, double stopS,
-                        uint32_t payloadBytes, uint32_t seed, uint64_t run) {
+                        const std::vector<double>& payloads, uint32_t seed, uint64_t run) {
   using namespace ns3;
   RngSeedManager::SetSeed(seed);
   RngSeedManager::SetRun(run);
   g_tx.assign(n, 0.0);
   g_rx.assign(n, 0.0);
   g_delay.assign(n, 0.0);
+  g_bits.assign(n, 0.0);
   {
     NodeContainer nodes;
     nodes.Create(n);
@@ -161,7 +173,7 @@ std::vector<double> Run(uint32_t n, uint32_t senders, const std::vector<double>&
       UdpClientHelper client(InetSocketAddress(Ipv4Address("255.255.255.255"), 9));
       client.SetAttribute("MaxPackets", UintegerValue(0));
       client.SetAttribute("Interval", TimeValue(Seconds(interval)));
-      client.SetAttribute("PacketSize", UintegerValue(payloadBytes));
+      client.SetAttribute("PacketSize", UintegerValue(static_cast<uint32_t>(payloads[i])));
       ApplicationContainer app = client.Install(nodes.Get(i));
       app.Start(Seconds(starts[i]));
       app.Stop(Seconds(stopS));
@@ -173,6 +185,7 @@ std::vector<double> Run(uint32_t n, uint32_t senders, const std::vector<double>&
   std::vector<double> out(g_tx);
   out.insert(out.end(), g_rx.begin(), g_rx.end());
   out.insert(out.end(), g_delay.begin(), g_delay.end());
+  out.insert(out.end(), g_bits.begin(), g_bits.end());
   return out;
 }
 }  // namespace mrcomm_contention
@@ -181,8 +194,9 @@ std::vector<double> Run(uint32_t n, uint32_t senders, const std::vector<double>&
 
 @dataclass(frozen=True)
 class Setup:
-    """One case's nodes: the first ``senders`` send; ``loss[a, b]`` dB from a to b;
-    ``receivers``: the nodes whose receptions are measured."""
+    """One case's nodes: the first ``senders`` send (each its ``payloads`` bytes);
+    ``loss[a, b]`` dB from a to b; ``receivers``: the nodes whose receptions are
+    measured."""
 
     case: str
     senders: int
@@ -190,11 +204,15 @@ class Setup:
     starts: list[float]
     interval: float
     receivers: list[int]
+    payloads: list[int]
 
 
-def setup(case: str, senders: int, profile: RadioProfile, seed: int) -> Setup:
+def setup(
+    case: str, senders: int, profile: RadioProfile, seed: int, hidden_sizes: str = "mixed"
+) -> Setup:
     """The nodes, powers and traffic of one case (see the module docstring)."""
     rng = np.random.default_rng(seed)
+    same = [PAYLOAD_BYTES] * senders
     if case == "hidden":
         n = senders + LISTENERS
         near = profile.reference_loss_db + 10 * profile.exponent * math.log10(5.0)  # 5 m
@@ -208,13 +226,19 @@ def setup(case: str, senders: int, profile: RadioProfile, seed: int) -> Setup:
                     loss[a, b] = near + LISTENER_MARGIN_DB
         np.fill_diagonal(loss, 0.0)
         starts = (rng.random(senders) * 0.01 + 0.1).tolist()
-        return Setup(case, senders, loss, starts, SATURATED_INTERVAL_S, list(range(senders, n)))
+        payloads = same
+        if hidden_sizes == "mixed":
+            payloads = rng.integers(HIDDEN_PAYLOADS[0], HIDDEN_PAYLOADS[1] + 1, senders).tolist()
+        listeners = list(range(senders, n))
+        return Setup(case, senders, loss, starts, SATURATED_INTERVAL_S, listeners, payloads)
     loss = _circle_loss(profile, senders)
     if case == "saturated":
         starts = (rng.random(senders) * 0.01 + 0.1).tolist()
-        return Setup(case, senders, loss, starts, SATURATED_INTERVAL_S, list(range(senders)))
+        return Setup(
+            case, senders, loss, starts, SATURATED_INTERVAL_S, list(range(senders)), same
+        )  # fmt: skip
     starts = (rng.random(senders) * POSE_INTERVAL_S + 0.1).tolist()
-    return Setup(case, senders, loss, starts, POSE_INTERVAL_S, list(range(senders)))
+    return Setup(case, senders, loss, starts, POSE_INTERVAL_S, list(range(senders)), same)
 
 
 def _circle_loss(profile: RadioProfile, n: int) -> np.ndarray:
@@ -229,7 +253,8 @@ def _circle_loss(profile: RadioProfile, n: int) -> np.ndarray:
 
 @dataclass
 class Outcome:
-    """Frames sent, received at the measured receivers, and delays."""
+    """Frames sent, received at the measured receivers (and their payload bits), and
+    delays."""
 
     sent: float
     expected: float  # frames sent times the measured receivers in range of each
@@ -238,6 +263,7 @@ class Outcome:
     seconds: float
     receivers: int
     cpu_s: float
+    bits: float
 
     @property
     def delivery(self) -> float:
@@ -245,8 +271,7 @@ class Outcome:
 
     @property
     def throughput_kbps(self) -> float:
-        bits = self.received * PAYLOAD_BYTES * 8
-        return bits / self.seconds / self.receivers / 1e3
+        return self.bits / self.seconds / self.receivers / 1e3
 
     @property
     def delay_ms(self) -> float:
@@ -260,7 +285,7 @@ def pooled(outcomes: Sequence[Outcome]) -> Outcome:
         sum(o.sent for o in outcomes), sum(o.expected for o in outcomes),
         sum(o.received for o in outcomes), sum(o.delay_sum for o in outcomes),
         sum(o.seconds for o in outcomes), outcomes[0].receivers,
-        sum(o.cpu_s for o in outcomes),
+        sum(o.cpu_s for o in outcomes), sum(o.bits for o in outcomes),
     )  # fmt: skip
 
 
@@ -278,21 +303,23 @@ def run_ns3(ns: Any, s: Setup, profile: RadioProfile, stop: float, seed: int) ->
             ns.cppyy.gbl.std.vector["double"](s.loss.ravel().tolist()),
             profile.tx_power_dbm, profile.sensitivity_dbm, noise_figure_db(profile),
             ns.cppyy.gbl.std.vector["double"](s.starts),
-            s.interval, stop, PAYLOAD_BYTES, seed, 1,
+            s.interval, stop, ns.cppyy.gbl.std.vector["double"](s.payloads), seed, 1,
         )
     )  # fmt: skip
     cpu = time.process_time() - start
-    tx, rx, delay = np.array(out[:n]), np.array(out[n : 2 * n]), np.array(out[2 * n :])
+    tx, rx, delay, bits = (np.array(out[k * n : (k + 1) * n]) for k in range(4))
     reach = _in_range(s, profile)[:, s.receivers].sum(axis=1)
     return Outcome(
         float(tx.sum()), float((tx * reach).sum()), float(rx[s.receivers].sum()),
         float(delay[s.receivers].sum()), stop - min(s.starts), len(s.receivers), cpu,
+        float(bits[s.receivers].sum()),
     )  # fmt: skip
 
 
 def run_model(s: Setup, profile: RadioProfile, stop: float, seed: int) -> Outcome:
     """The same traffic through :class:`SharedMedium`, each frame submitted at its
-    instant, with ns-3's reception rule for the outcome at each receiver."""
+    instant; each receiver's outcome drawn from the frame's error with the other frames
+    (``Frame.shared``, as the bus draws it)."""
     n = len(s.loss)
     start = time.process_time()
     rngs = [np.random.default_rng([seed, i]) for i in range(n)]
@@ -301,20 +328,18 @@ def run_model(s: Setup, profile: RadioProfile, stop: float, seed: int) -> Outcom
     power = profile.tx_power_dbm - s.loss
     np.fill_diagonal(power, np.nan)
     medium.set_power(power)
-    bits = (PAYLOAD_BYTES + OVERHEAD_BYTES) * 8
-    noise = profile.noise_floor_dbm
     # Publication instants of every sender, merged in time order.
     instants = sorted(
         (t, i) for i in range(s.senders) for t in np.arange(s.starts[i], stop, s.interval).tolist()
     )
     # A saturated sender keeps a bounded backlog (ns-3's queue holds 500 packets).
     cap = 500
-    sent = expected = received = delay = 0.0
+    sent = expected = received = delay = payload_bits = 0.0
     reach = _in_range(s, profile)[:, s.receivers]
     targets = np.array(s.receivers)
 
     def finish(frames: Sequence[Any]) -> None:
-        nonlocal sent, expected, received, delay
+        nonlocal sent, expected, received, delay, payload_bits
         for frame in frames:
             if frame.dropped:
                 continue
@@ -323,21 +348,22 @@ def run_model(s: Setup, profile: RadioProfile, stop: float, seed: int) -> Outcom
             for r in targets[reach[frame.sender]].tolist():
                 if frame.blocked[r]:
                     continue
-                sinr = power[frame.sender, r] - 10 * math.log10(
-                    10 ** (noise / 10) + frame.interference_mw[r]
-                )
-                if draws.random() >= per(ber(sinr + noise, noise, profile, False), bits):
+                if draws.random() >= frame.shared[r]:
                     received += 1
                     delay += frame.delay
+                    payload_bits += frame.bits - OVERHEAD_BYTES * 8
 
     for t, i in instants:
         finish(medium.advance(t))
         if medium.queued(i) < cap:
-            medium.submit(i, t, bits, None)
+            medium.submit(i, t, (s.payloads[i] + OVERHEAD_BYTES) * 8, None)
         finish(medium.advance(t))
     finish(medium.advance(stop))
     cpu = time.process_time() - start
-    return Outcome(sent, expected, received, delay, stop - min(s.starts), len(s.receivers), cpu)
+    return Outcome(
+        sent, expected, received, delay, stop - min(s.starts), len(s.receivers), cpu,
+        payload_bits,
+    )  # fmt: skip
 
 
 def contention_profile(name: str = DEFAULT_PROFILE) -> RadioProfile:
@@ -346,6 +372,12 @@ def contention_profile(name: str = DEFAULT_PROFILE) -> RadioProfile:
     # ns-3's MAC queue drops a packet older than 500 ms (WifiMacQueue MaxDelay).
     update = {"modulation": "dsss", "preamble_snr_db": 4.0, "max_queue_s": 0.5}
     return base.model_copy(update=update)
+
+
+#: One case's outcomes, seed by seed: (case, senders, ns-3's, the model's).
+Row = tuple[str, int, list[Outcome], list[Outcome]]
+#: The per-seed outcomes' columns in the CSV (the Outcome's fields).
+FIELDS = ("sent", "expected", "received", "delay_sum", "seconds", "receivers", "cpu_s", "bits")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -358,16 +390,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="seeds (each its own start instants and draws); the outcomes are pooled",
     )  # fmt: skip
     parser.add_argument("--senders", type=int, nargs="*", default=list(SENDERS))
+    parser.add_argument("--cases", nargs="+", choices=CASES, default=list(CASES))
+    parser.add_argument(
+        "--hidden-sizes", choices=("mixed", "same"), default="mixed",
+        help="hidden senders' payloads: 100-200 bytes each (mixed) or 150 bytes for all",
+    )  # fmt: skip
     parser.add_argument(
         "--replot", type=Path, default=None,
         help="draw --figure and print the table from a CSV this script wrote (no ns-3)",
     )  # fmt: skip
     args = parser.parse_args(argv)
     if args.replot is not None:
-        rows = read_rows(args.replot)
-        print(markdown(rows))
+        recorded = read_rows(args.replot)
+        print(markdown(recorded))
         if args.figure is not None:
-            figure(rows, args.figure)
+            figure(recorded, args.figure)
         return 0
     with _filtered_stderr():
         try:
@@ -378,93 +415,104 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(INSTALL_HINT, file=sys.stderr)
             return 2
     profile = contention_profile()
-    rows = []
-    for case in CASES:
+    rows: list[Row] = []
+    for case in args.cases:
         for senders in args.senders:
-            runs = []
+            theirs, ours = [], []
             for seed in args.seeds:
-                s = setup(case, senders, profile, seed)
+                s = setup(case, senders, profile, seed, args.hidden_sizes)
                 stop = min(s.starts) + args.seconds
                 with _filtered_stderr():
-                    ns3_side = run_ns3(ns, s, profile, stop, seed)
-                runs.append((ns3_side, run_model(s, profile, stop, seed)))
-            theirs = pooled([r[0] for r in runs])
-            ours = pooled([r[1] for r in runs])
+                    theirs.append(run_ns3(ns, s, profile, stop, seed))
+                ours.append(run_model(s, profile, stop, seed))
             rows.append((case, senders, theirs, ours))
+            a, b = pooled(theirs), pooled(ours)
             print(
-                f"{case:9s} {senders:3d}  delivery ns-3 {theirs.delivery:.3f} model "
-                f"{ours.delivery:.3f}  throughput {theirs.throughput_kbps:7.1f} "
-                f"{ours.throughput_kbps:7.1f} kbit/s  delay {theirs.delay_ms:7.2f} "
-                f"{ours.delay_ms:7.2f} ms  cpu {theirs.cpu_s:.1f} / {ours.cpu_s:.1f} s",
+                f"{case:9s} {senders:3d}  delivery ns-3 {a.delivery:.3f} model "
+                f"{b.delivery:.3f}  throughput {a.throughput_kbps:7.1f} "
+                f"{b.throughput_kbps:7.1f} kbit/s  delay {a.delay_ms:7.2f} "
+                f"{b.delay_ms:7.2f} ms  cpu {a.cpu_s:.1f} / {b.cpu_s:.1f} s",
                 flush=True,
             )
     args.out.mkdir(parents=True, exist_ok=True)
     path = args.out / "ns3_contention.csv"
     with path.open("w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["case", "senders", "side", "sent", "received", "delivery",
-                    "throughput_kbps", "delay_ms", "cpu_s"])  # fmt: skip
+        w.writerow(["case", "senders", "seed", "side", *FIELDS])
         for case, senders, theirs, ours in rows:
-            for side, o in (("ns-3", theirs), ("model", ours)):
-                w.writerow([case, senders, side, int(o.sent), int(o.received),
-                            f"{o.delivery:.4f}", f"{o.throughput_kbps:.2f}",
-                            f"{o.delay_ms:.3f}", f"{o.cpu_s:.2f}"])  # fmt: skip
+            for side, outcomes in (("ns-3", theirs), ("model", ours)):
+                for seed, o in zip(args.seeds, outcomes, strict=True):
+                    w.writerow([case, senders, seed, side, *(getattr(o, k) for k in FIELDS)])
     print(markdown(rows))
     if args.figure is not None:
         figure(rows, args.figure)
     return 0
 
 
-def read_rows(path: Path) -> list[tuple[str, int, Outcome, Outcome]]:
-    """The rows of a CSV written by :func:`main` (delivery, throughput and delay kept;
-    the outcomes rebuilt so that they give them back)."""
-    sides: dict[tuple[str, int], dict[str, Outcome]] = {}
+def read_rows(path: Path) -> list[Row]:
+    """The per-seed outcomes of a CSV written by :func:`main`."""
+    sides: dict[tuple[str, int], dict[str, list[Outcome]]] = {}
     with path.open() as f:
         for rec in csv.DictReader(f):
-            received = float(rec["received"])
-            delivery = float(rec["delivery"])
-            kbps = float(rec["throughput_kbps"])
+            values = [float(rec[k]) for k in FIELDS]
+            sent, expected, received, delay_sum, seconds, receivers, cpu_s, bits = values
             outcome = Outcome(
-                sent=float(rec["sent"]),
-                expected=received / delivery if delivery else math.inf,
-                received=received,
-                delay_sum=float(rec["delay_ms"]) * received / 1e3,
-                seconds=received * PAYLOAD_BYTES * 8 / (kbps * 1e3) if kbps else 1.0,
-                receivers=1,
-                cpu_s=float(rec["cpu_s"]),
-            )
-            sides.setdefault((rec["case"], int(rec["senders"])), {})[rec["side"]] = outcome
+                sent, expected, received, delay_sum, seconds, int(receivers), cpu_s, bits
+            )  # fmt: skip
+            key = (rec["case"], int(rec["senders"]))
+            sides.setdefault(key, {"ns-3": [], "model": []})[rec["side"]].append(outcome)
     return [(case, n, o["ns-3"], o["model"]) for (case, n), o in sides.items()]
 
 
-def markdown(rows: list[tuple[str, int, Outcome, Outcome]]) -> str:
+def throughput_interval(
+    theirs: list[Outcome], ours: list[Outcome], draws: int = 2000
+) -> tuple[float, float]:
+    """95 % interval of the pooled throughput's difference, % of ns-3's, by a bootstrap
+    over the seeds (each side's seeds drawn again with replacement, independently)."""
+    rng = np.random.default_rng(0)
+    k = len(theirs)
+    differences = []
+    for _ in range(draws):
+        a = pooled([theirs[i] for i in rng.integers(0, k, k)]).throughput_kbps
+        b = pooled([ours[i] for i in rng.integers(0, k, k)]).throughput_kbps
+        differences.append(100 * (b / a - 1) if a > 0 else math.nan)
+    low, high = np.nanpercentile(differences, [2.5, 97.5])
+    return float(low), float(high)
+
+
+def markdown(rows: list[Row]) -> str:
     lines = [
         "| case | senders | delivery ns-3 | delivery model | Δ | throughput ns-3 (kbit/s) "
-        "| throughput model | Δ % | delay ns-3 (ms) | delay model (ms) |",
+        "| throughput model | Δ % [95 % interval] | delay ns-3 (ms) | delay model (ms) |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for case, senders, theirs, ours in rows:
+    for case, senders, their_seeds, our_seeds in rows:
+        theirs, ours = pooled(their_seeds), pooled(our_seeds)
         dt = 100 * (ours.throughput_kbps / theirs.throughput_kbps - 1)
+        low, high = throughput_interval(their_seeds, our_seeds)
         lines.append(
             f"| {case} | {senders} | {theirs.delivery:.3f} | {ours.delivery:.3f} | "
             f"{ours.delivery - theirs.delivery:+.3f} | {theirs.throughput_kbps:.1f} | "
-            f"{ours.throughput_kbps:.1f} | {dt:+.1f} | {theirs.delay_ms:.2f} | "
-            f"{ours.delay_ms:.2f} |"
+            f"{ours.throughput_kbps:.1f} | {dt:+.1f} [{low:+.1f}, {high:+.1f}] | "
+            f"{theirs.delay_ms:.2f} | {ours.delay_ms:.2f} |"
         )
     return "\n".join(lines)
 
 
-def figure(rows: list[tuple[str, int, Outcome, Outcome]], path: Path) -> None:
+def figure(rows: list[Row], path: Path) -> None:
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
     for case, marker in zip(CASES, "osd", strict=True):
         mine = [r for r in rows if r[0] == case]
         n = [r[1] for r in mine]
-        for side, style in ((2, "-"), (3, "--")):
-            label = f"{case}, {'ns-3' if side == 2 else 'MRComm'}"
-            axes[0].plot(n, [r[side].delivery for r in mine], style, marker=marker, label=label)
-            axes[1].plot(n, [r[side].throughput_kbps for r in mine], style, marker=marker)
+        for name, style, outcomes in (
+            ("ns-3", "-", [pooled(r[2]) for r in mine]),
+            ("MRComm", "--", [pooled(r[3]) for r in mine]),
+        ):
+            label = f"{case}, {name}"
+            axes[0].plot(n, [o.delivery for o in outcomes], style, marker=marker, label=label)
+            axes[1].plot(n, [o.throughput_kbps for o in outcomes], style, marker=marker)
     axes[0].set(xscale="log", xlabel="senders", ylabel="delivery ratio", ylim=(0, 1.02))
     axes[1].set(xscale="log", xlabel="senders", ylabel="throughput per receiver (kbit/s)")
     counts = sorted({r[1] for r in rows})
