@@ -97,7 +97,7 @@ bench: $(STAMP)
 # pip package ns3 with cppyy, ~500 MB) go into the venv for this target only: not a dependency.
 ns3-validation: $(STAMP)
 	$(BIN)/pip install --quiet 'ns3==3.44.*'
-	MPLBACKEND=Agg $(BIN)/python benchmarks/ns3_validation.py --out benchmarks/results --figure docs/figures/ns3_validation.png
+	MPLBACKEND=Agg $(BIN)/python benchmarks/ns3_validation.py --packets 10000 --out benchmarks/results --figure docs/figures/ns3_validation.png
 	MPLBACKEND=Agg $(BIN)/python benchmarks/ns3_contention.py --seconds 10 --seeds 1 2 3 4 5 6 7 8 9 10 --out benchmarks/results --figure docs/figures/ns3_contention.png
 
 clean:

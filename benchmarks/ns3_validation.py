@@ -691,9 +691,25 @@ def markdown(
     return "\n".join(lines)
 
 
+#: The panel that also shows the model with ns-3's reception rule.
+RULE_PANEL = "dsss1-nist"
+
+
+def read_csv(path: Path) -> list[Row]:
+    """The rows of a CSV :func:`write_csv` wrote."""
+    with path.open() as f:
+        return [
+            Row(r["ns3_config"], int(r["walls"]), float(r["distance_m"]),
+                float(r["mean_power_dbm"]), float(r["model_delivery"]),
+                int(r["ns3_received"]), int(r["ns3_sent"]))
+            for r in csv.DictReader(f)
+        ]  # fmt: skip
+
+
 def plot(rows: Sequence[Row], profile: RadioProfile, path: Path) -> None:
     """One panel per ns-3 configuration: the model solid, ns-3 markers, a colour per
-    wall count."""
+    wall count; on the DSSS panel with ns-3's preamble threshold, dashed, the model
+    with ns-3's reception rule (``modulation: dsss``, ``preamble_snr_db: 4``)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -704,6 +720,8 @@ def plot(rows: Sequence[Row], profile: RadioProfile, path: Path) -> None:
     max_d = max(r.distance_m for r in rows)
     grid = np.linspace(1.0, max_d, 400)
     model = {w: delivery_ratio(profile, grid, w) for w in walls}
+    ns3_rule = profile.model_copy(update={"modulation": "dsss", "preamble_snr_db": 4.0})
+    with_rule = {w: delivery_ratio(ns3_rule, grid, w) for w in walls}
     markers = "osD^v<>"
     columns = min(3, len(keys))
     lines = math.ceil(len(keys) / columns)
@@ -719,6 +737,9 @@ def plot(rows: Sequence[Row], profile: RadioProfile, path: Path) -> None:
         for i, w in enumerate(walls):
             label = f"{w} wall{'' if w == 1 else 's'}"
             ax.plot(grid, model[w], "-", color=f"C{i}", lw=1.5, label=f"model, {label}")
+            if key == RULE_PANEL:
+                ax.plot(grid, with_rule[w], "--", color=f"C{i}", lw=1.0,
+                        label=f"model, ns-3's rule, {label}")  # fmt: skip
             points = series(rows, key, w)
             ax.plot(
                 [r.distance_m for r in points],
@@ -740,7 +761,7 @@ def plot(rows: Sequence[Row], profile: RadioProfile, path: Path) -> None:
         ax.set_xlabel("distance (m)")
     for ax in axes[:, 0]:
         ax.set_ylabel(f"delivery ratio ({POSE_BYTES}-byte message)")
-    axes.flat[0].legend(fontsize=7, loc="lower left", ncol=2)
+    axes.flat[0].legend(fontsize=6, loc="lower left", ncol=2)
     fig.suptitle(
         f"MRComm radio model ({profile.name}, solid) vs ns-3 3.44 (markers, "
         f"{rows[0].sent} packets per point)",
@@ -770,7 +791,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         choices=[c.key for c in CONFIGS],
         help="an ns-3 configuration to run (repeatable; default: all)",
     )
+    parser.add_argument(
+        "--replot", type=Path, help="draw --figure from a CSV this script wrote (no ns-3)"
+    )
     args = parser.parse_args(argv)
+    if args.replot is not None:
+        if args.figure is None:
+            parser.error("--replot needs --figure")
+        plot(read_csv(args.replot), load_profile(args.profile), args.figure)
+        return 0
     if args.packets < 1:
         parser.error("--packets must be at least 1")
     if args.max_distance < STEP_M:

@@ -126,8 +126,9 @@ def test_with_ns3s_reception_rule_the_model_follows_its_recorded_curves() -> Non
     """ns-3's rule — DSSS's spread DBPSK and a 4 dB preamble threshold — in a profile
     (modulation: dsss, preamble_snr_db: 4) brings the model onto ns-3's recorded
     single-link curves (benchmarks/results/ns3_validation.csv, DSSS 1 Mbit/s, Nist,
-    1,000 packets a point) within 0.06 at every distance and wall count, where the
-    default QPSK rule is off by up to 0.27."""
+    10,000 packets a point) within 0.03 at every distance and wall count (the goal is
+    0.05; ns-3's standard error is at most 0.005), where the default QPSK rule is off by
+    up to 0.26."""
     import csv
 
     recorded = SCRIPT.parent / "results" / "ns3_validation.csv"
@@ -139,5 +140,5 @@ def test_with_ns3s_reception_rule_the_model_follows_its_recorded_curves() -> Non
         mine = [r for r in rows if int(r["walls"]) == walls]
         distance = np.array([float(r["distance_m"]) for r in mine])
         theirs = np.array([float(r["ns3_delivery"]) for r in mine])
-        assert np.abs(delivery_ratio(dsss, distance, walls) - theirs).max() < 0.06, walls
+        assert np.abs(delivery_ratio(dsss, distance, walls) - theirs).max() < 0.03, walls
         assert np.abs(delivery_ratio(base, distance, walls) - theirs).max() > 0.2, walls
