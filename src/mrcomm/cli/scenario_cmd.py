@@ -57,7 +57,7 @@ def make(
     ] = False,
 ) -> None:
     """Generate a map, a scenario and a task file."""
-    from mrcomm.run.resources import checked_scenario
+    from mrcomm.run.resources import checked_scenario, planning_reach
     from mrcomm.world.generate.make import Request, make_scenario, parse_size
 
     width, height = parse_size(size)
@@ -67,7 +67,9 @@ def make(
     from mrcomm.cli.progress import ProgressLine
 
     with ProgressLine("scenario make", None, enabled=not quiet) as line:
-        path = make_scenario(request, out, checked_scenario, lambda s: line.update(None, s))
+        path = make_scenario(
+            request, out, checked_scenario, lambda s: line.update(None, s), planning_reach
+        )
     typer.echo(f"scenario {path} ({robots} robots, {tasks} tasks, {map_kind} {size} m)")
 
 

@@ -28,7 +28,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from mrcomm.errors import InputError
 from mrcomm.fileio import atomic_write_text
 from mrcomm.run.provenance import file_hash
-from mrcomm.run.resources import checked_scenario
+from mrcomm.run.resources import checked_scenario, planning_reach
 from mrcomm.world.generate.make import Request, make_scenario, parse_size
 from mrcomm.world.yamlfile import validation_error
 
@@ -92,7 +92,7 @@ def generated_scenarios(raw: dict[str, Any], schema: Path) -> list[Path]:
                     f"cannot make {folder.parent}: {err.strerror}", file=schema, field="scenario"
                 ) from None
             try:
-                make_scenario(request, folder, checked_scenario)
+                make_scenario(request, folder, checked_scenario, reach=planning_reach)
             except InputError as err:
                 raise InputError(f"team size {n}: {err.one_line()}", file=schema,
                                  field="scenario") from None  # fmt: skip

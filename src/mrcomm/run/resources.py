@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy import ndimage
 
 from mrcomm.errors import InputError
@@ -16,6 +17,7 @@ from mrcomm.net.signal.table import RssiTable
 from mrcomm.net.signal.trace import RssiTrace
 from mrcomm.robot.params import RobotParams
 from mrcomm.robot.planner import GridPlanner
+from mrcomm.world.occupancy import OccupancyGrid
 from mrcomm.world.passages import Passages, find_passages
 from mrcomm.world.scenario import Scenario, load_scenario
 
@@ -111,6 +113,35 @@ def check_planning_reach(scenario: Scenario, planner: GridPlanner) -> None:
                 file=scenario.path,
                 field="robot.planner_resolution",
             )
+
+
+def planning_reach(
+    grid: OccupancyGrid, settings: dict[str, float], points: NDArray[np.float64]
+) -> NDArray[np.bool_]:
+    """Which ``points`` (an (n, 2) array) lie in the largest region of the planning grid
+    that robots of this ``robot`` section plan on, judged as :func:`check_planning_reach`
+    judges a start or task (its planning cell, or the free one it snaps to): where the
+    scenario generator may place them so that the check passes."""
+    planner = GridPlanner(grid, RobotParams.from_mapping(dict(settings)))
+    blocked = planner.blocked
+    labels, _ = ndimage.label(~blocked, structure=np.ones((3, 3), dtype=bool))
+    labels = np.asarray(labels)
+    sizes = np.bincount(labels.ravel())
+    sizes[0] = 0
+    main = int(np.argmax(sizes))
+    ox, oy = planner.origin
+    iy = np.floor((points[:, 1] - oy) / planner.resolution).astype(np.intp)
+    ix = np.floor((points[:, 0] - ox) / planner.resolution).astype(np.intp)
+    hc, wc = planner.shape
+    inside = (iy >= 0) & (iy < hc) & (ix >= 0) & (ix < wc)
+    free = np.zeros(len(points), dtype=bool)
+    free[inside] = ~blocked[iy[inside], ix[inside]]
+    reached = np.zeros(len(points), dtype=bool)
+    reached[free] = labels[iy[free], ix[free]] == main
+    for k in np.flatnonzero(~free).tolist():  # (these snap to a free cell, as checked)
+        cell = planner.snap(float(points[k, 0]), float(points[k, 1]))
+        reached[k] = cell is not None and int(labels[cell]) == main
+    return reached
 
 
 def checked_scenario(path: Path) -> Scenario:

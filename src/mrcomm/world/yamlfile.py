@@ -5,7 +5,7 @@
   PyYAML would otherwise keep the last one silently) and within limits: at most
   :data:`MAX_YAML_BYTES` (refused unread), :data:`MAX_VALUES` values written out and
   nesting :data:`MAX_DEPTH` levels deep (refused while parsing, before anything is
-  built: no file takes more than ~2 s or ~200 MB), and :data:`MAX_NODES` values once
+  built: no file takes more than ~5 s or ~500 MB), and :data:`MAX_NODES` values once
   every alias is expanded (a few hundred bytes of nested aliases can stand for billions
   of values: the "billion laughs"). libyaml (PyYAML's C extension) parses.
 * :func:`validation_error` — the first error of a pydantic ``ValidationError`` as
@@ -25,13 +25,14 @@ import yaml
 from mrcomm.errors import InputError, did_you_mean
 
 #: Largest input file read (bytes): larger ones are refused before anything is parsed.
-#: The biggest bundled input is campus1000's tasks (260 kB).
+#: The biggest bundled input is campus1000's tasks (260 kB); the 10,000-robot campus's
+#: (docs/SCENARIOS.md) are 2.7 MB.
 MAX_YAML_BYTES = 8 * 1024 * 1024
 #: Most values (scalars, collections, aliases) a document may write out: counted while
-#: it is parsed, before any is built, so that no file takes more than ~2 s or ~200 MB to
-#: read or refuse (each value costs ~12 µs to parse and build; a 1,000-task list holds
-#: ~8,000).
-MAX_VALUES = 150_000
+#: it is parsed, before any is built, so that no file takes more than ~5 s or ~500 MB to
+#: read or refuse (each value costs ~12 µs to parse and build). A task holds 19 values:
+#: the 20,000 tasks of the 10,000-robot campus 380,001, its scenario 110,029.
+MAX_VALUES = 400_000
 #: Deepest nesting of collections.
 MAX_DEPTH = 64
 #: Most values a document may hold with its aliases expanded.

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 import yaml
+from numpy.typing import NDArray
 
 from mrcomm.errors import InputError
 from mrcomm.fileio import atomic_write_text, staged_directory
@@ -154,16 +155,23 @@ def assigner_spec(text: str, robots: int, base: tuple[float, float] | None) -> d
     return {"kind": "robot", "host": text}
 
 
+#: Which of the given points (an (n, 2) array) the robots can reach on the map, for a
+#: scenario whose ``robot`` section is the mapping: the robots' planning grid.
+Reach = Callable[[OccupancyGrid, dict[str, float], NDArray[np.float64]], NDArray[np.bool_]]
+
+
 def make_scenario(
     request: Request,
     out: Path,
     check: Callable[[Path], object] = load_scenario,
     progress: Callable[[str], None] | None = None,
+    reach: Reach | None = None,
 ) -> Path:
     """Generate and write the scenario into ``out`` (absent or empty); returns the
     scenario file's path. ``check`` loads it before it is moved into place (by default
     the loader: every start and task reachable on the map; callers that know the
-    robots pass a check of their planning grid too). ``progress`` is told each stage."""
+    robots pass a check of their planning grid too, and ``reach``, so that starts and
+    tasks are placed only where it will pass). ``progress`` is told each stage."""
     check_request(request)
     tell = progress or (lambda _: None)
     with staged_directory(out, "--out") as staging:
@@ -171,25 +179,29 @@ def make_scenario(
         # reads the map again (a 300 m campus holds ~1 GB while it is drawn).
         tell(f"drawing the {request.kind} map, placing {request.robots} starts and "
              f"{request.tasks} tasks")  # fmt: skip
-        _generate(request, staging)
+        _generate(request, staging, reach)
         tell("checking that every start and task can be reached")
         check(staging / f"{request.name}.yaml")  # reachability: on the map, and as asked
     return out / f"{request.name}.yaml"
 
 
-def _generate(request: Request, directory: Path) -> None:
+def _generate(request: Request, directory: Path, reach: Reach | None) -> None:
     """Draw the plan, then the starts, then the tasks (this order, from one generator:
-    the same seed gives the same files) and write them into ``directory``."""
+    the same seed gives the same files) and write them into ``directory``; with
+    ``reach``, only on the cells it says the robots reach."""
     rng = np.random.default_rng(request.seed)
     draw, _ = KINDS[request.kind]
     grid = OccupancyGrid(
         draw(request.width, request.height, request.resolution, rng), request.resolution
     )
     cells = drivable(grid, ROBOT_RADIUS)
+    usable = None
+    if reach is not None and len(cells):
+        usable = reach(grid, robot_section(request.width, request.height), cells)
     where = f"on a {request.width:g}x{request.height:g} m {request.kind}"
-    starts = place_starts(cells, request.robots, request.start, rng, where)
+    starts = place_starts(cells, request.robots, request.start, rng, where, usable)
     headings = rng.uniform(-math.pi, math.pi, size=len(starts))
-    tasks = place_tasks(cells, request.tasks, rng, where)
+    tasks = place_tasks(cells, request.tasks, rng, where, usable)
     centre = (request.width / 2, request.height / 2)
     nearest = int(np.argmin(squared_distance(cells, centre)))
     base = (_r(cells[nearest, 0]), _r(cells[nearest, 1]))

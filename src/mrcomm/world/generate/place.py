@@ -10,7 +10,9 @@ so the check passes by construction, and spaced apart.
 
 Spacing is checked with a hash grid of cells one spacing wide, so placing 1000 robots
 costs milliseconds. When the region cannot hold what was asked, the error says how many
-fit.
+fit. A caller that knows more (the robots' planning grid) passes which cells are
+``usable``: the others are passed over in the same order of draws, so a scenario whose
+points were all usable comes out the same.
 """
 
 from __future__ import annotations
@@ -97,20 +99,32 @@ def squared_distance(cells: NDArray[np.float64], p: Point) -> NDArray[np.float64
     return dx * dx + dy * dy
 
 
-def _in_order(cells: NDArray[np.float64], order: NDArray[np.intp]) -> Iterator[Point]:
-    """The cells in ``order``, lazily: a list of every cell as Python tuples would take
-    ~100 bytes a cell (close to 1 GB on a 300 m campus) while placement usually stops
-    after a small fraction of them."""
+Usable = NDArray[np.bool_] | None
+
+
+def _in_order(
+    cells: NDArray[np.float64], order: NDArray[np.intp], usable: Usable = None
+) -> Iterator[Point]:
+    """The cells in ``order`` (the ``usable`` ones), lazily: a list of every cell as
+    Python tuples would take ~100 bytes a cell (close to 1 GB on a 300 m campus) while
+    placement usually stops after a small fraction of them."""
+    if usable is not None:
+        order = order[usable[order]]
     for k in range(0, len(order), _CHUNK):
         yield from ((x, y) for x, y in cells[order[k : k + _CHUNK]].tolist())
 
 
-def _nearest_first(cells: NDArray[np.float64], centre: Point) -> Iterator[Point]:
-    return _in_order(cells, np.argsort(squared_distance(cells, centre), kind="stable"))
+def _nearest_first(
+    cells: NDArray[np.float64], centre: Point, usable: Usable = None
+) -> Iterator[Point]:
+    order = np.argsort(squared_distance(cells, centre), kind="stable")
+    return _in_order(cells, order, usable)
 
 
-def _shuffled(cells: NDArray[np.float64], rng: np.random.Generator) -> Iterator[Point]:
-    return _in_order(cells, rng.permutation(len(cells)))
+def _shuffled(
+    cells: NDArray[np.float64], rng: np.random.Generator, usable: Usable = None
+) -> Iterator[Point]:
+    return _in_order(cells, rng.permutation(len(cells)), usable)
 
 
 def depot_centres(cells: NDArray[np.float64], count: int, rng: np.random.Generator) -> list[Point]:
@@ -131,20 +145,23 @@ def place_starts(
     mode: str,
     rng: np.random.Generator,
     where: str = "on this map",
+    usable: Usable = None,
 ) -> list[Point]:
-    """``count`` start points by ``mode`` (see the module doc); ``where`` names the map
-    in the error message (e.g. "on a 40x30 m warehouse")."""
+    """``count`` start points by ``mode`` (see the module doc) among the ``usable``
+    cells; ``where`` names the map in the error message (e.g. "on a 40x30 m
+    warehouse")."""
     if len(cells) == 0:
         raise InputError(f"there is no region a robot can drive in {where}", field="--map")
     spacer = Spacer(START_SPACING)
     if mode == "scattered":
-        taken = _greedy(_shuffled(cells, rng), count, spacer)
+        taken = _greedy(_shuffled(cells, rng, usable), count, spacer)
     elif mode == "clustered":
         centre = cells[int(rng.integers(len(cells)))]
-        taken = _greedy(_nearest_first(cells, (float(centre[0]), float(centre[1]))), count, spacer)
+        point = (float(centre[0]), float(centre[1]))
+        taken = _greedy(_nearest_first(cells, point, usable), count, spacer)
     elif mode == "depots":
         depots = depot_centres(cells, max(2, min(8, count // 25 + 2)), rng)
-        queues = [_nearest_first(cells, c) for c in depots]
+        queues = [_nearest_first(cells, c, usable) for c in depots]
         taken = 0
         stalled = 0
         while taken < count and stalled < len(queues):
@@ -169,11 +186,16 @@ def place_starts(
 
 
 def place_tasks(
-    cells: NDArray[np.float64], count: int, rng: np.random.Generator, where: str = "on this map"
+    cells: NDArray[np.float64],
+    count: int,
+    rng: np.random.Generator,
+    where: str = "on this map",
+    usable: Usable = None,
 ) -> list[Point]:
-    """``count`` task locations drawn uniformly over the region, spaced apart."""
+    """``count`` task locations drawn uniformly over the region (its ``usable`` cells),
+    spaced apart."""
     spacer = Spacer(TASK_SPACING)
-    taken = _greedy(_shuffled(cells, rng), count, spacer)
+    taken = _greedy(_shuffled(cells, rng, usable), count, spacer)
     if taken < count:
         raise InputError(
             f"{count} tasks do not fit {where} (at most ~{taken} tasks {TASK_SPACING:g} m "
