@@ -19,9 +19,29 @@ from mrcomm.world.occupancy import OccupancyGrid
 
 def test_pair_layout_spreads_one_value_per_pair_symmetrically() -> None:
     layout = PairLayout(3)
-    assert layout.pairs == [(0, 1), (0, 2), (1, 2)]
+    first, second = layout.ends
+    assert list(zip(first.tolist(), second.tolist(), strict=True)) == [(0, 1), (0, 2), (1, 2)]
+    assert layout.count == 3
     m = layout.matrix([1.0, 2.0, 3.0], -1.0)
     np.testing.assert_array_equal(m, [[-1, 1, 2], [1, -1, 3], [2, 3, -1]])
+    # The order of a larger team's pairs is the nested loops' (a < b, row by row).
+    big = PairLayout(40)
+    expected = [(a, b) for a in range(40) for b in range(a + 1, 40)]
+    assert list(zip(*(e.tolist() for e in big.ends), strict=True)) == expected
+
+
+def test_a_large_team_without_rays_holds_nothing_per_pair() -> None:
+    """Beyond ARRAY_PAIRS pairs a link model that casts no rays takes its distances as
+    one matrix: no pair index, no per-pair cast state (a 10,000-robot team would hold
+    ~5 GB of it)."""
+    ids = tuple(f"r{i}" for i in range(20))  # 190 pairs
+    model = LinkModel(ids, _room(), AdHoc(AdHocParams()), DistanceThreshold(4.0))
+    assert model._first.size == 0 and model._cast_from.size == 0
+    assert model.layout._ends is None and model.layout._gather is None
+    xy = np.column_stack([np.linspace(0.5, 9.5, 20), np.full(20, 3.5)])
+    state = model.update(xy, 0.0)
+    assert state.distance[0, 19] == pytest.approx(9.0)
+    assert model.layout._gather is None
 
 
 def _room() -> OccupancyGrid:

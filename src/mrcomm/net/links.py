@@ -46,6 +46,7 @@ SPARSE_NEAR_M = 10.0
 #: numpy array (``sqrt(dx² + dy²)``, which can differ from Python's ``math.hypot`` in
 #: the last bit: a team this large is never one of the original robots' missions).
 ARRAY_PAIRS = 64
+_NO_NODES = np.zeros(0, dtype=np.int64)
 #: An end that moved at least this far (m) has moved.
 _MOVED = 1e-12
 
@@ -123,30 +124,32 @@ class LinkModel:
         self.threshold = threshold
         aliases = dict(aliases or {})
         self.evaluated_ids = tuple(node for node in ids if node not in aliases)
-        self._evaluated = [ids.index(node) for node in self.evaluated_ids]
+        index = {node: k for k, node in enumerate(ids)}
+        self._evaluated = [index[node] for node in self.evaluated_ids]
         n = len(self.evaluated_ids)
         self.layout = PairLayout(n)
         self._off_diagonal = ~np.eye(n, dtype=np.bool_)
         # Flat indices that expand an evaluated (n, n) matrix to all ids (aliases copy
         # their host's row and column) in one take.
-        rows = [self.evaluated_ids.index(aliases.get(node, node)) for node in ids]
-        self._expand = (
-            np.array([[i * n + j for j in rows] for i in rows], dtype=np.intp) if aliases else None
-        )
-        # Per pair: its ends at the last ray cast, what that cast found, and how far an
-        # end may move before the answer may change.
-        pairs = self.layout.pairs
-        self._first = np.array([a for a, _ in pairs], dtype=np.int64)
-        self._second = np.array([b for _, b in pairs], dtype=np.int64)
-        self._cast_from = np.full((len(pairs), 4), np.nan)  # NaN: never cast
-        self._cast_walls = np.zeros(len(pairs), dtype=np.int64)
-        self._cast_slack = np.zeros(len(pairs))
-        self._recast = np.zeros(len(pairs), dtype=np.int64)
-        self._segments = np.zeros((len(pairs), 4))
+        evaluated = {node: k for k, node in enumerate(self.evaluated_ids)}
+        rows = np.array([evaluated[aliases.get(node, node)] for node in ids], dtype=np.intp)
+        self._expand = rows[:, None] * n + rows[None, :] if aliases else None
         self._sight: tuple[tuple[bool, ...], BoolArray] | None = None
         self.casts = 0
         self._count_walls = network.needs_walls
         self._casts_rays = threshold.needs_line_of_sight or network.needs_walls
+        # Rays are cast pair by pair; without them a large team takes its distances as
+        # one matrix and holds nothing per pair (50 million pairs at 10,000 robots).
+        self._per_pair = self._casts_rays or self.layout.count < ARRAY_PAIRS
+        pairs = self.layout.count if self._per_pair else 0
+        self._first, self._second = self.layout.ends if self._per_pair else (_NO_NODES, _NO_NODES)
+        # Per pair: its ends at the last ray cast, what that cast found, and how far an
+        # end may move before the answer may change.
+        self._cast_from = np.full((pairs, 4), np.nan)  # NaN: never cast
+        self._cast_walls = np.zeros(pairs, dtype=np.int64)
+        self._cast_slack = np.zeros(pairs)
+        self._recast = np.zeros(pairs, dtype=np.int64)
+        self._segments = np.zeros((pairs, 4))
         if self._casts_rays:
             grid.prepare_ray_casts()
 
@@ -158,9 +161,7 @@ class LinkModel:
         if self._expand is not None:
             xy = [xy[i] for i in self._evaluated]
         pair_distance: list[float] | None = None
-        if not self._casts_rays and len(self.layout.pairs) >= ARRAY_PAIRS:
-            # Rays are cast pair by pair, in Python; without them the pairs are not
-            # needed one by one, and the whole matrix is a few array operations.
+        if not self._per_pair:
             distance = distance_matrix(np.array(xy, dtype=np.float64))
         else:  # (always so when rays are cast: ``at`` and ``distances`` serve below)
             at = np.array(xy, dtype=np.float64).reshape(-1, 2)

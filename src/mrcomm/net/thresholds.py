@@ -36,19 +36,35 @@ BoolArray = NDArray[np.bool_]
 
 
 class PairLayout:
-    """The unordered pairs (a < b) of ``n`` nodes, and how one value per pair spreads
-    into the symmetric (n, n) matrix in one gather."""
+    """The unordered pairs (a < b) of ``n`` nodes, in the row-major order of the upper
+    triangle, and how one value per pair spreads into the symmetric (n, n) matrix in one
+    gather. Both are built when first asked for: a large team whose links need no pair
+    one by one never holds them (50 million pairs at 10,000 robots)."""
 
     def __init__(self, n: int) -> None:
-        self.pairs = [(a, b) for a in range(n) for b in range(a + 1, n)]
-        # Index n*(n-1)/2 is the diagonal's value, appended by :meth:`matrix`.
-        gather = np.full((n, n), len(self.pairs), dtype=np.intp)
-        for k, (a, b) in enumerate(self.pairs):
-            gather[a, b] = gather[b, a] = k
-        self._gather = gather
+        self.n = n
+        self.count = n * (n - 1) // 2
+        self._ends: tuple[NDArray[np.int64], NDArray[np.int64]] | None = None
+        self._gather: NDArray[np.intp] | None = None
+
+    @property
+    def ends(self) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """Each pair's first and second node."""
+        if self._ends is None:
+            first, second = np.triu_indices(self.n, k=1)
+            self._ends = (first.astype(np.int64), second.astype(np.int64))
+        return self._ends
 
     def matrix(self, values: list[float], diagonal: float) -> FloatArray:
         """The (n, n) matrix whose (a, b) and (b, a) hold ``values[k]`` for pair k."""
+        if self._gather is None:
+            first, second = self.ends
+            # Index n*(n-1)/2 is the diagonal's value, appended below.
+            gather = np.full((self.n, self.n), self.count, dtype=np.intp)
+            order = np.arange(self.count, dtype=np.intp)
+            gather[first, second] = order
+            gather[second, first] = order
+            self._gather = gather
         return np.array([*values, diagonal])[self._gather]
 
 
