@@ -52,6 +52,7 @@ from typing import Any
 
 import numpy as np
 
+from mrcomm.analysis.inference import bootstrap_ci
 from mrcomm.net.radio.medium import SharedMedium
 from mrcomm.net.radio.profile import DEFAULT_PROFILE, RadioProfile, load_profile
 
@@ -464,20 +465,18 @@ def read_rows(path: Path) -> list[Row]:
     return [(case, n, o["ns-3"], o["model"]) for (case, n), o in sides.items()]
 
 
-def throughput_interval(
-    theirs: list[Outcome], ours: list[Outcome], draws: int = 2000
-) -> tuple[float, float]:
-    """95 % interval of the pooled throughput's difference, % of ns-3's, by a bootstrap
-    over the seeds (each side's seeds drawn again with replacement, independently)."""
-    rng = np.random.default_rng(0)
-    k = len(theirs)
-    differences = []
-    for _ in range(draws):
-        a = pooled([theirs[i] for i in rng.integers(0, k, k)]).throughput_kbps
-        b = pooled([ours[i] for i in rng.integers(0, k, k)]).throughput_kbps
-        differences.append(100 * (b / a - 1) if a > 0 else math.nan)
-    low, high = np.nanpercentile(differences, [2.5, 97.5])
-    return float(low), float(high)
+def throughput_interval(theirs: list[Outcome], ours: list[Outcome]) -> tuple[float, float]:
+    """95 % interval of the throughput's difference, % of ns-3's, by the project's
+    bootstrap over the seeds (each side's seeds resampled independently). Every seed
+    runs the same seconds with the same receivers, so the pooled throughput is the mean
+    of the seeds'."""
+    samples = [np.array([o.throughput_kbps for o in side]) for side in (theirs, ours)]
+
+    def difference(a: np.ndarray, b: np.ndarray, axis: int = -1) -> np.ndarray:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.asarray(100 * (b.mean(axis=axis) / a.mean(axis=axis) - 1))
+
+    return bootstrap_ci(samples, difference)
 
 
 def markdown(rows: list[Row]) -> str:
