@@ -402,7 +402,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     )  # fmt: skip
     args = parser.parse_args(argv)
     if args.replot is not None:
-        recorded = read_rows(args.replot)
+        try:
+            recorded = read_rows(args.replot)
+            if not recorded:
+                raise ValueError("no rows")
+        except (OSError, KeyError, ValueError) as error:
+            parser.error(f"--replot {args.replot}: not a CSV this script wrote ({error!r})")
         print(markdown(recorded))
         if args.figure is not None:
             figure(recorded, args.figure)

@@ -798,7 +798,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.replot is not None:
         if args.figure is None:
             parser.error("--replot needs --figure")
-        plot(read_csv(args.replot), load_profile(args.profile), args.figure)
+        try:
+            rows = read_csv(args.replot)
+            if not rows:
+                raise ValueError("no rows")
+        except (OSError, KeyError, ValueError) as error:
+            parser.error(f"--replot {args.replot}: not a CSV this script wrote ({error!r})")
+        plot(rows, load_profile(args.profile), args.figure)
         return 0
     if args.packets < 1:
         parser.error("--packets must be at least 1")
