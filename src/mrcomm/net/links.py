@@ -143,6 +143,11 @@ class LinkModel:
         self._per_pair = self._casts_rays or self.layout.count < ARRAY_PAIRS
         pairs = self.layout.count if self._per_pair else 0
         self._first, self._second = self.layout.ends if self._per_pair else (_NO_NODES, _NO_NODES)
+        # (A small team's pairs without rays, for the loop in Python: see update.)
+        python_pairs = self._per_pair and not self._casts_rays
+        self._pair_ends = (
+            list(zip(self._first.tolist(), self._second.tolist())) if python_pairs else []
+        )
         # Per pair: its ends at the last ray cast, what that cast found, and how far an
         # end may move before the answer may change.
         self._cast_from = np.full((pairs, 4), np.nan)  # NaN: never cast
@@ -163,7 +168,16 @@ class LinkModel:
         pair_distance: list[float] | None = None
         if not self._per_pair:
             distance = distance_matrix(np.array(xy, dtype=np.float64))
-        else:  # (always so when rays are cast: ``at`` and ``distances`` serve below)
+        elif not self._casts_rays:
+            # A few pairs (a team of up to 11 robots) in Python: the compiled loop would
+            # cost its first caller ~0.3 s of loading numba's machine code, twice a whole
+            # S1 mission, for a loop of a few microseconds. The same doubles either way.
+            hypot = math.hypot
+            pair_distance = [
+                hypot(xy[a][0] - xy[b][0], xy[a][1] - xy[b][1]) for a, b in self._pair_ends
+            ]
+            distance = self.layout.matrix(pair_distance, 0.0)
+        else:  # rays are cast: ``at`` and ``distances`` serve below
             at = np.array(xy, dtype=np.float64).reshape(-1, 2)
             distances = np.empty(len(self._first))
             pair_loops.pair_distances(at, self._first, self._second, distances)
