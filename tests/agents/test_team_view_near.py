@@ -12,7 +12,12 @@ import pytest
 from numpy.typing import NDArray
 
 from mrcomm.agents.collision import Mate
-from mrcomm.agents.team_view import NEAR_ARRAYS_FROM, TeamView
+from mrcomm.agents.team_view import (
+    NEAR_ARRAYS_FROM,
+    TeamView,
+    near_numbers,
+    near_numbers_numpy,
+)
 from mrcomm.messaging.messages import PoseMsg
 from mrcomm.ports import Received, StepBatch
 
@@ -137,3 +142,26 @@ def test_a_receivers_share_reads_as_its_messages() -> None:
     share = _received(step)
     assert len(share) == 2 and list(share) == [m for _, m in step]
     assert share[1] is step[1][1] and share[-1] is step[1][1] and share[:1] == [step[0][1]]
+
+
+@pytest.mark.parametrize("members", [5, 120, 1000])
+def test_the_compiled_query_finds_what_numpys_finds(members: int) -> None:
+    """The one-pass query (compiled where numba is there) and numpy's expression give
+    the same numbers in the same order: with mates never heard (NaN), mates exactly at
+    the edge of reach, and so many found that the pass sorts instead of inserting."""
+    rng = np.random.default_rng(members)
+    xs, ys = rng.uniform(0.0, 30.0, (2, members))
+    xs[rng.random(members) < 0.2] = np.nan  # never heard
+    ys[:3] = ys[3]
+    xs[:3] = xs[3] + np.array([-2.0, 2.0, 0.0])  # on the edge of a reach of 2
+    first = rng.permutation(members).astype(np.int32)
+    found_many = 0
+    for x, y, reach in [(xs[3], ys[3], 2.0), *rng.uniform(0.0, 30.0, (40, 3)).tolist()]:
+        if math.isnan(x):
+            continue
+        out = np.empty(members, dtype=np.intp)
+        count = near_numbers(xs, ys, first, x, y, reach, out)
+        expected = near_numbers_numpy(xs, ys, first, x, y, reach)
+        assert out[:count].tolist() == expected.tolist()
+        found_many = max(found_many, count)
+    assert found_many > 16 or members < 20  # the sorting branch ran

@@ -14,12 +14,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Collection, Iterator, Mapping, Sequence
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
 
 from mrcomm.agents.collision import Mate, MateState
+from mrcomm.compiled import KERNEL, compiled
 from mrcomm.messaging.messages import PoseMsg
 from mrcomm.ports import Received, StepBatch
 
@@ -97,13 +98,66 @@ class _MateTable:
         """The last pose messages of the mates whose last position is within ``reach``
         of (x, y) along both axes (the same test as ``-reach <= mate.x - x <= reach``,
         exactly), in the order they were first heard."""
-        inside = np.abs(self.xs - x) <= reach
-        inside &= np.abs(self.ys - y) <= reach
-        found = inside.nonzero()[0]  # np.flatnonzero's work, without its wrappers' 1 µs
-        if len(found) > 1:
-            found = found[self.first[found].argsort()]
+        if KERNEL == "numba":
+            found = np.empty(len(self.xs), dtype=np.intp)  # (per call: threads share tables' code)
+            found = found[: near_numbers(self.xs, self.ys, self.first, x, y, reach, found)]
+        else:
+            found = near_numbers_numpy(self.xs, self.ys, self.first, x, y, reach)
         near: list[PoseMsg] = self.pose[found].tolist()
         return near
+
+
+#: Found mates up to this many are put in order by insertion (the usual few), more by
+#: a sort.
+_INSERTION_UP_TO = 16
+
+
+@compiled
+def near_numbers(
+    xs: Any, ys: Any, first: Any, x: float, y: float, reach: float, out: Any
+) -> int:  # fmt: skip
+    """Into ``out``: the numbers k whose (xs[k], ys[k]) lie within ``reach`` of (x, y)
+    along both axes (NaN never does), ordered by ``first[k]``; how many. One pass, where
+    numpy's expression (:func:`near_numbers_numpy`) makes six arrays: ~1 µs a query for
+    100 mates instead of ~3.6 (S4 asks ~100 times a step)."""
+    count = 0
+    for k in range(xs.shape[0]):
+        if abs(xs[k] - x) <= reach and abs(ys[k] - y) <= reach:
+            out[count] = k
+            count += 1
+    if count > _INSERTION_UP_TO:
+        found = out[:count].copy()
+        order = np.argsort(first[found])
+        for j in range(count):
+            out[j] = found[order[j]]
+        return count
+    for i in range(1, count):
+        k = out[i]
+        rank = first[k]
+        j = i
+        while j > 0 and first[out[j - 1]] > rank:
+            out[j] = out[j - 1]
+            j -= 1
+        out[j] = k
+    return count
+
+
+def near_numbers_numpy(
+    xs: NDArray[np.float64],
+    ys: NDArray[np.float64],
+    first: NDArray[np.int32],
+    x: float,
+    y: float,
+    reach: float,
+) -> NDArray[np.intp]:
+    """:func:`near_numbers` as numpy expressions: what runs without numba (a loop in
+    Python would cost more)."""
+    inside = np.abs(xs - x) <= reach
+    inside &= np.abs(ys - y) <= reach
+    found = inside.nonzero()[0]  # np.flatnonzero's work, without its wrappers' 1 µs
+    if len(found) > 1:
+        found = found[first[found].argsort()]
+    return found
 
 
 class _TablePoses(Mapping[str, PoseMsg]):
