@@ -9,7 +9,7 @@ and compares the digests of their results (``tests.golden.golden.comparable``: t
 whole summary without wall time, the timelines, trajectories and RSSI series).
 
     git worktree add /tmp/mrcomm-old <commit>
-    .venv/bin/python benchmarks/same_results.py /tmp/mrcomm-old .
+    .venv/bin/python benchmarks/same_results.py /tmp/mrcomm-old . [--large]
 
 Exits 1 when any case differs.
 """
@@ -32,6 +32,22 @@ CASES: list[tuple[str, dict[str, object]]] = [
     ("s3", {"behaviour": "nb", "network": "wlan", "threshold": "none", "spl": 25, "seed": 1}),
     ("s3", {"behaviour": "lf", "network": "ah", "threshold": "slt", "spl": 25, "seed": 2}),
 ]
+
+#: With ``--large``: S4 (100 robots; the in-process bus keeps their latest poses), every
+#: way poses are delivered (step batches; one by one on the radio's queue channel; frames
+#: of the shared channel) and the behaviours that hear them otherwise (LF's AON lease,
+#: RPS's first positions), within time limits that keep the radio's runs short.
+LARGE_CASES: list[tuple[str, dict[str, object]]] = [
+    ("s4", {"behaviour": "nb", "network": "wlan", "threshold": "none", "spl": 25, "seed": 1}),
+    ("s4", {"behaviour": "lf", "network": "ah", "threshold": "slt", "spl": 25, "seed": 1,
+            "max_time": 600}),
+    ("s4", {"behaviour": "rps", "network": "ah", "threshold": "slt", "spl": 25, "seed": 2,
+            "max_time": 600}),
+    ("s4", {"behaviour": "lf", "network": "radio", "threshold": "slt", "spl": 0, "seed": 1,
+            "max_time": 60}),
+    ("s4", {"behaviour": "nb", "network": "radio", "threshold": "none", "spl": 0, "seed": 1,
+            "max_time": 60, "params": {"network": {"channel": "shared"}}}),
+]  # fmt: skip
 
 #: Runs in the child, in the tree's directory (``tests`` is importable from there).
 CHILD = """
@@ -65,15 +81,19 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("first", type=Path, help="a source tree (e.g. a git worktree)")
     parser.add_argument("second", type=Path, help="another source tree")
+    parser.add_argument(
+        "--large", action="store_true", help="also S4 (100 robots): see LARGE_CASES"
+    )
     args = parser.parse_args()
     differ = 0
     print("| scenario | case | simulated s | tasks | same result |")
     print("|---|---|---|---|---|")
-    for scenario, options in CASES:
+    for scenario, options in CASES + (LARGE_CASES if args.large else []):
         first, second = run(args.first, scenario, options), run(args.second, scenario, options)
         same = first["sha256"] == second["sha256"]
         differ += not same
-        case = " · ".join(str(v) for v in options.values())
+        case = " · ".join(str(v) for k, v in options.items() if k != "params")
+        case += " · shared channel" if "params" in options else ""
         times = (
             f"{first['sim_time_s']}" if same else f"{first['sim_time_s']} / {second['sim_time_s']}"
         )

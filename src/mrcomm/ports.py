@@ -7,7 +7,8 @@
   ``cancel()``, ``status``, ``pose``, odometry.
 
 A bus that delivers in steps may hand a :class:`BatchHandler` each receiver's messages
-of a step at once (:class:`Received`, a share of a :class:`StepBatch`).
+of a step at once (:class:`Received`, a share of a :class:`StepBatch`), and may keep
+the latest messages of a :class:`KeepLatest` subscriber itself.
 
 Agents are stepped with ``step(now)``: they never sleep, block or read a global clock.
 """
@@ -21,6 +22,7 @@ from typing import Protocol, overload
 import numpy as np
 from numpy.typing import NDArray
 
+from mrcomm.messaging.latest import LatestMessages
 from mrcomm.messaging.messages import Message
 from mrcomm.world.geometry import Pose
 
@@ -45,6 +47,28 @@ class BatchHandler:
         self.many((message,))
 
 
+class KeepLatest(BatchHandler):
+    """A batch handler whose receiver keeps only each sender's latest message and when it
+    arrived (a mate's pose). A bus that keeps a topic's latest messages for its
+    receivers itself (the in-process bus, for a large team: see
+    :mod:`mrcomm.messaging.latest`) hands the receiver its row of that store instead
+    (``attach(store, row)``, once, when subscribing) and writes there, never calling the
+    handler; any other bus calls it as a :class:`BatchHandler`. ``fields``: the float
+    fields of a message the receiver reads as columns."""
+
+    __slots__ = ("attach", "fields")
+
+    def __init__(
+        self,
+        many: Callable[[Sequence[Message]], None],
+        attach: Callable[[LatestMessages, int], None],
+        fields: tuple[str, ...],
+    ) -> None:
+        super().__init__(many)
+        self.attach = attach
+        self.fields = fields
+
+
 #: A receiver's share of at least this many messages is picked from the batch as an
 #: array (one call), a smaller one message by message (cheaper than numpy's overhead).
 PICK_FROM = 64
@@ -61,8 +85,6 @@ class StepBatch:
         "_columns",
         "_objects",
         "distinct",
-        "ever_count",
-        "ever_sent",
         "index",
         "members",
         "messages",
@@ -75,7 +97,6 @@ class StepBatch:
         senders: NDArray[np.intp],
         members: NDArray[np.object_],
         index: Mapping[str, int],
-        ever_sent: NDArray[np.bool_] | None = None,
     ) -> None:
         self.messages = messages
         self.senders = senders
@@ -85,11 +106,6 @@ class StepBatch:
         self.index = index
         #: No sender has two messages in the batch.
         self.distinct = len(set(senders.tolist())) == len(senders)
-        #: Which members have sent on the topic, in this batch or an earlier one, and
-        #: how many (None, -1: not kept). The bus's own array, read while the batch is
-        #: delivered: a receiver that has heard them all finds no new sender in it.
-        self.ever_sent = ever_sent
-        self.ever_count = -1 if ever_sent is None else int(np.count_nonzero(ever_sent))
         self._objects: NDArray[np.object_] | None = None
         self._columns: dict[str, NDArray[np.float64]] = {}
 

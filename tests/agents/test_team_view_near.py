@@ -1,6 +1,7 @@
-"""A large team's view of its mates kept as arrays (poses heard in the in-process bus's
-step batches) answers which mates are near exactly as the loop over its mates does:
-the same mates, in the order they were first heard, from the latest pose of each."""
+"""A large team's view of its mates read from the bus's store of latest poses
+(:class:`~mrcomm.messaging.latest.LatestMessages`, written for every receiver of a step
+at once) answers as the view that hears each pose itself does: the same mates, in the
+order they were first heard, from the latest pose of each."""
 
 from __future__ import annotations
 
@@ -9,21 +10,18 @@ from collections.abc import Collection
 
 import numpy as np
 import pytest
-from numpy.typing import NDArray
 
 from mrcomm.agents.collision import Mate
-from mrcomm.agents.team_view import (
-    NEAR_ARRAYS_FROM,
-    TeamView,
-    near_numbers,
-    near_numbers_numpy,
-)
+from mrcomm.agents.team_view import TeamView, near_numbers, near_numbers_numpy
+from mrcomm.messaging.latest import KEEP_LATEST_FROM, LatestMessages
 from mrcomm.messaging.messages import PoseMsg
 from mrcomm.ports import Received, StepBatch
 
 from .fakes import pose_of
 
-MEMBERS = NEAR_ARRAYS_FROM + 50
+MEMBERS = KEEP_LATEST_FROM + 50
+NAMES = np.array([f"robot_{s}" for s in range(MEMBERS)], dtype=object)
+INDEX = {name: number for number, name in enumerate(NAMES.tolist())}
 
 
 def _steps(seed: int) -> list[list[tuple[int, PoseMsg]]]:
@@ -42,18 +40,18 @@ def _steps(seed: int) -> list[list[tuple[int, PoseMsg]]]:
     return steps
 
 
-def _received(step: list[tuple[int, PoseMsg]], ever: NDArray[np.bool_] | None = None) -> Received:
-    """The step as the bus hands it over: a batch of everyone's poses (the receiver's
-    own included, as a batch has it) and the receiver's share of it, in order. ``ever``:
-    the bus's record of who has sent so far, updated with this batch (None: not kept)."""
-    own = pose_of("robot_0", 20.0, 20.0)
-    members = np.array([f"robot_{s}" for s in range(MEMBERS)], dtype=object)
-    index = {name: number for number, name in enumerate(members.tolist())}
-    senders = np.array([0, *(s for s, _ in step)], dtype=np.intp)
-    if ever is not None:
-        ever[senders] = True
-    batch = StepBatch([own, *(m for _, m in step)], senders, members, index, ever)
-    return Received(batch, np.arange(1, len(step) + 1))
+def _store() -> LatestMessages:
+    return LatestMessages(NAMES, INDEX, ("x", "y"))
+
+
+def _write(latest: LatestMessages, step: list[tuple[int, PoseMsg]], now: float) -> None:
+    """The step's poses, all reaching receiver 0, written as the bus writes a batch."""
+    messages = np.empty(len(step), dtype=object)
+    messages[:] = [m for _, m in step]
+    senders = np.array([s for s, _ in step], dtype=np.intp)
+    columns = {f: np.array([getattr(m, f) for _, m in step]) for f in ("x", "y")}
+    received = np.ones((len(step), 1), dtype=np.bool_)
+    latest.write_step(messages, senders, np.array([0]), received, columns, now)
 
 
 def _in_box(mates: Collection[Mate], x: float, y: float, reach: float) -> list[Mate]:
@@ -61,24 +59,21 @@ def _in_box(mates: Collection[Mate], x: float, y: float, reach: float) -> list[M
     return [m for m in mates if -reach <= m.x - x <= reach and -reach <= m.y - y <= reach]
 
 
-def test_without_a_table_every_known_mate_is_a_candidate() -> None:
+def test_without_a_store_every_known_mate_is_a_candidate() -> None:
     view = TeamView()
     view.hear_all([pose_of("robot_1", 0.0, 0.0), pose_of("robot_2", 90.0, 0.0)], 0.0, "")
     assert [m.robot for m in view.near(0.0, 0.0, 1.0, 0.0, None, 0.0)] == ["robot_1", "robot_2"]
 
 
-@pytest.mark.parametrize("kept", [False, True])
-def test_the_arrays_find_the_near_mates_the_loop_finds(kept: bool) -> None:
-    """Also when the bus keeps who has sent (a table that has heard them all then skips
-    looking for new mates: the order they were first heard in stays the loop's)."""
+def test_the_store_finds_the_near_mates_the_loop_finds() -> None:
     arrays, loop = TeamView(), TeamView()
+    latest = _store()
+    arrays.attach(latest, 0)
     rng = np.random.default_rng(7)
-    ever = np.zeros(MEMBERS, dtype=np.bool_) if kept else None
     checked = 0
     for now, step in enumerate(_steps(3)):
-        arrays.hear_all(_received(step, ever), float(now), "robot_0")
+        _write(latest, step, float(now))
         loop.hear_all([m for _, m in step], float(now), "robot_0")
-        assert arrays._table is not None and loop._table is None
         assert list(arrays.poses.items()) == list(loop.poses.items())
         assert len(arrays.poses) == len(loop.poses) and "robot_0" not in arrays.poses
         assert arrays.poses.get("robot_0") is None and arrays.poses.get("nobody") is None
@@ -97,8 +92,10 @@ def test_the_arrays_find_the_near_mates_the_loop_finds(kept: bool) -> None:
 def test_a_mate_on_the_edge_of_reach_is_near_in_both() -> None:
     """The arrays' test is the loop's exactly (a mate exactly ``reach`` away counts)."""
     arrays, loop = TeamView(), TeamView()
+    latest = _store()
+    arrays.attach(latest, 0)
     step = [(1, pose_of("robot_1", 10.0, 10.0)), (2, pose_of("robot_2", 12.5, 10.0))]
-    arrays.hear_all(_received(step), 0.0, "robot_0")
+    _write(latest, step, 0.0)
     loop.hear_all([m for _, m in step], 0.0, "robot_0")
     for view in (arrays, loop):
         assert [
@@ -111,35 +108,44 @@ def test_a_mate_on_the_edge_of_reach_is_near_in_both() -> None:
     assert [m.robot for m in arrays.near(10.0, 10.0, 2.4, 0.0, None, 0.0)] == ["robot_1"]
 
 
-def test_the_arrays_are_dropped_once_a_pose_arrives_otherwise() -> None:
-    """Poses heard one at a time (or a batch with a mate twice) would leave the arrays
-    behind: the view drops them for good and loops, with the same answers."""
+def test_a_view_on_the_store_hears_nothing_itself() -> None:
+    """Poses heard beside the store would leave the two apart: refused."""
     view = TeamView()
-    steps = _steps(5)
-    view.hear_all(_received(steps[0]), 0.0, "robot_0")
-    assert view._table is not None
-    heard = list(view.heard.items())
-    poses = list(view.poses.items())
-    view.hear(steps[1][0][1], 1.0)
-    assert view._table is None and isinstance(view.poses, dict)
-    late = steps[1][0][1]
-    assert list(view.poses.items())[: len(poses)] == [
-        (m, late if m == late.sender else p) for m, p in poses
-    ]
-    assert list(view.heard.items())[: len(heard)] == [
-        (m, 1.0 if m == steps[1][0][1].sender else t) for m, t in heard
-    ]
-    view.hear_all(_received(steps[2]), 2.0, "robot_0")
-    assert view._table is None
-    twice = [(1, pose_of("robot_1", 1.0, 1.0)), (1, pose_of("robot_1", 2.0, 2.0))]
-    fresh = TeamView()
-    fresh.hear_all(_received(twice), 0.0, "robot_0")
-    assert fresh._table is None and fresh.poses["robot_1"].x == 2.0
+    view.attach(_store(), 0)
+    with pytest.raises(RuntimeError, match="bus keeps"):
+        view.hear(pose_of("robot_1", 0.0, 0.0), 0.0)
+
+
+def test_a_step_written_at_once_is_each_pose_written_in_turn() -> None:
+    """Many receivers, each reached by its own share of a step's poses: the arrays (and
+    the order each receiver first heard its senders in) are those of writing every
+    pose to every receiver it reached, message by message."""
+    rng = np.random.default_rng(11)
+    at_once, in_turn = _store(), _store()
+    receivers = rng.choice(MEMBERS, size=40, replace=False).astype(np.intp)
+    for now, step in enumerate(_steps(5)):
+        senders = np.array([s for s, _ in step], dtype=np.intp)
+        received = rng.random((len(step), len(receivers))) < 0.7
+        received &= senders[:, None] != receivers[None, :]  # nobody hears itself
+        messages = np.empty(len(step), dtype=object)
+        messages[:] = [m for _, m in step]
+        columns = {f: np.array([getattr(m, f) for _, m in step]) for f in ("x", "y")}
+        at_once.write_step(messages, senders, receivers, received, columns, float(now))
+        for row, column in zip(*np.nonzero(received), strict=True):
+            in_turn.write(int(receivers[column]), int(senders[row]), step[row][1], float(now))
+    assert (at_once.message == in_turn.message).all()
+    assert (at_once.first == in_turn.first).all() and (at_once.heard_count > 0).any()
+    assert (at_once.heard_count == in_turn.heard_count).all()
+    for a, b in [(at_once.heard_at, in_turn.heard_at), *zip(
+        at_once.columns.values(), in_turn.columns.values(), strict=True
+    )]:  # fmt: skip
+        assert np.array_equal(a, b, equal_nan=True)
 
 
 def test_a_receivers_share_reads_as_its_messages() -> None:
     step = [(4, pose_of("robot_4", 1.0, 0.0)), (9, pose_of("robot_9", 2.0, 0.0))]
-    share = _received(step)
+    senders = np.array([s for s, _ in step], dtype=np.intp)
+    share = Received(StepBatch([m for _, m in step], senders, NAMES, INDEX), np.arange(2))
     assert len(share) == 2 and list(share) == [m for _, m in step]
     assert share[1] is step[1][1] and share[-1] is step[1][1] and share[:1] == [step[0][1]]
 

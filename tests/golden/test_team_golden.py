@@ -31,12 +31,14 @@ def test_team_run_is_identical_to_the_recorded_one(
 def test_a_team_view_on_arrays_gives_the_recorded_run(
     name: str, scenario: Path, options: dict[str, Any], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """A mate table (positions and heard times as arrays, kept by views in teams of at
-    least ``NEAR_ARRAYS_FROM`` members, e.g. 1000 robots) leaves every result as it was:
-    here with a table in every view, whatever the team's size, NB and LF."""
+    """The bus's store of latest poses (positions and heard times as arrays, kept for
+    teams of at least ``KEEP_LATEST_FROM`` endpoints, e.g. 1000 robots), read by each
+    view through its mate table, leaves every result as it was: here with the store
+    whatever the team's size, NB and LF."""
     from mrcomm.agents import team_view
+    from mrcomm.net import inprocess
 
-    monkeypatch.setattr(team_view, "NEAR_ARRAYS_FROM", 1)
+    monkeypatch.setattr(inprocess, "KEEP_LATEST_FROM", 1)
     calls = 0
     near = team_view._MateTable.near
 

@@ -9,10 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mrcomm.agents.team_view import TeamView
+from mrcomm.messaging.latest import KEEP_LATEST_FROM
 from mrcomm.messaging.messages import Message, PoseMsg
+from mrcomm.net import inprocess
 from mrcomm.net.delivery import DeliveryPolicy, LossStream
 from mrcomm.net.inprocess import InProcessNetwork
-from mrcomm.ports import BatchHandler
+from mrcomm.ports import BatchHandler, KeepLatest
 from mrcomm.run.config import make_config
 from mrcomm.sim.mission import Mission
 from tests.golden.golden import comparable
@@ -124,3 +127,54 @@ def test_a_batch_handler_gets_each_receivers_poses_of_a_step_in_one_call() -> No
             assert len(calls) <= 30 * len(many) < heard  # one call per receiver and step
         else:
             assert set(calls) == {1}  # one message at a time
+
+
+def _views(batch_from: int, keep_from: int, monkeypatch: pytest.MonkeyPatch) -> list[TeamView]:
+    """A team of KEEP_LATEST_FROM + 6 agents hearing each other's poses in team views
+    (subscribed as the runtime does) over a ragged link matrix at SPL 40; some steps
+    have an agent publish twice. The bus keeps the latest poses for teams of at least
+    ``keep_from`` endpoints."""
+    monkeypatch.setattr(inprocess, "KEEP_LATEST_FROM", keep_from)
+    ids = [f"r{i}" for i in range(KEEP_LATEST_FROM + 6)]
+    net = InProcessNetwork(
+        ids,
+        policy=DeliveryPolicy(40.0),
+        loss_rngs={a: np.random.default_rng(i) for i, a in enumerate(ids)},
+    )
+    net.batch_from = batch_from
+    views = [TeamView() for _ in ids]
+    now = [0.0]
+    for a, view in zip(ids, views, strict=True):
+
+        def hear(ms: Sequence[Message], view: TeamView = view, a: str = a) -> None:
+            view.hear_all(ms, now[0], a)  # type: ignore[arg-type]
+
+        net.endpoint(a).subscribe("pose", KeepLatest(hear, view.attach, ("x", "y")))
+    rng = np.random.default_rng(9)
+    for step in range(25):
+        now[0] = 0.1 * step
+        net.set_connected(rng.random((len(ids), len(ids))) < 0.7)
+        for k, a in enumerate(ids):
+            if (step + k) % 3 == 0:
+                net.endpoint(a).publish("pose", _pose(a, step * 1000 + k))
+        if step % 5 == 4:
+            net.endpoint(ids[1]).publish("pose", _pose(ids[1], step * 1000 + 999))
+        net.deliver(now[0])
+    return views
+
+
+def test_the_bus_keeps_the_poses_each_view_would_hear(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The bus's store of latest poses (written a step at a time, or message by message
+    when a sender has two in a step or messages go one at a time) gives every view the
+    poses, heard times and order of first hearing it gets hearing them itself."""
+    heard_itself = _views(batch_from=0, keep_from=10**6, monkeypatch=monkeypatch)
+    kept_in_steps = _views(batch_from=0, keep_from=1, monkeypatch=monkeypatch)
+    kept_one_by_one = _views(batch_from=10**6, keep_from=1, monkeypatch=monkeypatch)
+    assert all(v._table is None for v in heard_itself)
+    assert all(v._table is not None for v in kept_in_steps + kept_one_by_one)
+    for own, stepped, single in zip(heard_itself, kept_in_steps, kept_one_by_one, strict=True):
+        assert list(stepped.poses.items()) == list(own.poses.items())
+        assert list(single.poses.items()) == list(own.poses.items())
+        assert list(stepped.heard.items()) == list(own.heard.items())
+        assert list(single.heard.items()) == list(own.heard.items())
+    assert sum(len(v.poses) for v in heard_itself) > 1000

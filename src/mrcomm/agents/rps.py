@@ -54,8 +54,9 @@ from mrcomm.messaging.messages import (
     TaskState,
     TaskStatus,
 )
+from mrcomm.messaging.topics import TOPIC_POSE
 from mrcomm.metrics import labels as L
-from mrcomm.ports import NavStatus
+from mrcomm.ports import BatchHandler, NavStatus
 from mrcomm.specs import parameter
 
 
@@ -130,6 +131,8 @@ class RendezvousExecutor(TaskExecutor):
         #: Idle at the point: how often each mate now there has been given the statuses.
         self._shared_with: dict[str, int] = {}
         super().__init__(context, params)
+        # Where each mate was first heard: more than the team view keeps (its latest).
+        self.bus.subscribe(TOPIC_POSE, BatchHandler(self._note_first_heard))
 
     @property
     def rps(self) -> RpsParams:
@@ -149,8 +152,7 @@ class RendezvousExecutor(TaskExecutor):
             self._start = (pose.x, pose.y)
             self._left_point = self._now
 
-    def _on_poses(self, messages: Sequence[Message]) -> None:
-        super()._on_poses(messages)
+    def _note_first_heard(self, messages: Sequence[Message]) -> None:
         for message in messages:
             assert isinstance(message, PoseMsg)
             if message.sender != self.robot_id:

@@ -43,7 +43,7 @@ from mrcomm.messaging.messages import (
 )
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ACTIVITY
-from mrcomm.ports import BatchHandler, LinkSensor
+from mrcomm.ports import BatchHandler, KeepLatest, LinkSensor
 from mrcomm.world.geometry import Pose
 
 
@@ -113,7 +113,11 @@ class ExecutorRuntime:
                 after_state_change="_after_state_change",
             )
         bus.subscribe(TOPIC_ASSIGNMENT, self._on_assignment)
-        bus.subscribe(TOPIC_POSE, BatchHandler(self._on_poses))
+        # A mate's latest pose is all the view keeps: a bus may keep it for the view.
+        view = self.team_view
+        bus.subscribe(TOPIC_POSE, KeepLatest(self._on_poses, view.attach, ("x", "y")))
+        if self.statuses is not None:
+            bus.subscribe(TOPIC_POSE, BatchHandler(self.statuses.heard))  # AON's lease
         bus.subscribe(TOPIC_TASK_STATUS, self._on_status)
         self.paused = False  # by the operator
         self._new_tasks = False  # the operator gave tasks: plan again once idle
@@ -325,8 +329,6 @@ class ExecutorRuntime:
     def _on_poses(self, messages: Sequence[Message]) -> None:
         """Mates' poses that reached the robot, in order (one, or a step's batch)."""
         self.team_view.hear_all(cast("Sequence[PoseMsg]", messages), self._now, self.robot_id)
-        if self.statuses is not None:
-            self.statuses.heard(messages)  # liveliness for AON's lease
 
     def _on_heartbeat(self, message: Message) -> None:
         if self.statuses is not None:

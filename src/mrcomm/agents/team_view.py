@@ -21,76 +21,50 @@ from numpy.typing import NDArray
 
 from mrcomm.agents.collision import Mate, MateState
 from mrcomm.compiled import KERNEL, compiled
+from mrcomm.messaging.latest import NEVER, LatestMessages
 from mrcomm.messaging.messages import PoseMsg
-from mrcomm.ports import Received, StepBatch
-
-#: A team of at least this many members (as the bus counts them) keeps a mate table
-#: (:class:`_MateTable`) when its poses come in step batches, and :meth:`TeamView.near`
-#: answers from it: below it a loop over the mates costs less than the table's upkeep
-#: and numpy's per-call overhead (measured: the loop ~0.05 us per mate; the table ~9 us
-#: per query and ~6-15 us per batch heard, whatever the team's size). Measured side by
-#: side on the generated scenarios: with a table, S3 (30 robots) took 1.32 times as
-#: long and S4 (100 robots) 0.93 times (``benchmarks/bench_scale.py``).
-NEAR_ARRAYS_FROM = 64
-_NEVER = np.iinfo(np.int32).max
 
 
 class _MateTable:
-    """Each mate's last pose message, position and when it was heard, as arrays indexed
-    by the numbers the bus gives the team's endpoints, and the order mates were first
-    heard in (the order of :attr:`TeamView.poses`). Kept while every pose arrives in a
-    step batch (:class:`~mrcomm.ports.Received`), so that hearing a batch and finding
-    the mates near a point cost a few array operations, not a loop over the whole team
-    (hearing ~1,000 poses a round into a dict per receiver was the O(N²) left in a team
-    of 1,000). The endpoints' names and numbers are the bus's, shared by every view."""
+    """A receiver's row of the bus's store of latest poses (:class:`LatestMessages`):
+    each mate's last pose message, position and when it was heard, as arrays indexed
+    by the bus's endpoint numbers, and the order mates were first heard in (the order
+    of :attr:`TeamView.poses`). The bus writes a step's poses for the whole team at
+    once, so that hearing them and finding the mates near a point cost a few array
+    operations, not a loop over the whole team (hearing ~1,000 poses a round into a
+    dict per receiver was the O(N²) left in a team of 1,000). Read only."""
 
-    def __init__(self, batch: StepBatch, own: str) -> None:
-        members = len(batch.members)
-        self.own = batch.index.get(own, -1)  # the receiver's number (-1: none)
-        self.names = batch.members
-        self.number = batch.index
-        self.xs: NDArray[np.float64] = np.full(members, np.nan)
-        self.ys: NDArray[np.float64] = np.full(members, np.nan)
+    def __init__(self, latest: LatestMessages, row: int) -> None:
+        self._latest = latest
+        self._row = row
+        self.names = latest.members
+        self.number = latest.index
+        self.xs: NDArray[np.float64] = latest.columns["x"][row]  # (views of the rows)
+        self.ys: NDArray[np.float64] = latest.columns["y"][row]
         #: When each member's last pose arrived (NaN: never).
-        self.heard_at: NDArray[np.float64] = np.full(members, np.nan)
+        self.heard_at: NDArray[np.float64] = latest.heard_at[row]
         #: Each member's last pose message (None: never heard).
-        self.pose: NDArray[np.object_] = np.full(members, None, dtype=object)
-        #: The order members were first heard in (_NEVER: not yet).
-        self.first: NDArray[np.int32] = np.full(members, _NEVER, dtype=np.int32)
-        self.heard_count = 0  # mates heard so far
-        self._order: list[str] = []  # their names in that order (for heard_count mates)
+        self.pose: NDArray[np.object_] = latest.message[row]
+        #: The order members were first heard in (NEVER: not yet).
+        self.first: NDArray[np.int32] = latest.first[row]
+        self._order: list[str] = []  # the mates' names in that order, as last asked
 
-    def hear(self, received: Received, senders: NDArray[np.intp], now: float) -> None:
-        """Take a receiver's share of a batch with no sender twice (``senders``: their
-        numbers)."""
-        batch, rows = received.batch, received.rows
-        ever = batch.ever_sent
-        # Once every member that ever sent (but the receiver) has been heard, no sender
-        # is new: the check is skipped (3.5 us of a ~20 us share of 750 poses).
-        if ever is None or self.heard_count < batch.ever_count - int(
-            self.own >= 0 and ever[self.own]
-        ):
-            new = (self.first[senders] == _NEVER).nonzero()[0]  # the methods: no wrappers
-            if len(new):
-                first = np.arange(self.heard_count, self.heard_count + len(new))
-                self.first[senders[new]] = first
-                self.heard_count += len(new)
-        self.pose[senders] = batch.objects()[rows]
-        self.xs[senders] = batch.column("x")[rows]
-        self.ys[senders] = batch.column("y")[rows]
-        self.heard_at[senders] = now
+    @property
+    def heard_count(self) -> int:
+        """Mates heard so far."""
+        return int(self._latest.heard_count[self._row])
 
     def order(self) -> list[str]:
         """The mates heard, in the order they were first heard."""
         if len(self._order) != self.heard_count:
-            heard = np.flatnonzero(self.first != _NEVER)
+            heard = np.flatnonzero(self.first != NEVER)
             self._order = self.names[heard[np.argsort(self.first[heard])]].tolist()
         return self._order
 
     def heard(self, mate: str) -> float | None:
         """When ``mate``'s last pose arrived (None: never)."""
         number = self.number.get(mate)
-        if number is None or self.first[number] == _NEVER:
+        if number is None or self.first[number] == NEVER:
             return None
         return float(self.heard_at[number])
 
@@ -216,7 +190,7 @@ class TeamView:
     def __init__(self) -> None:
         #: Each mate's last pose message (a :class:`Mate` as collision avoidance reads
         #: it), mates in the order they were first heard; read-only (a dict, or read
-        #: from the mate table while there is one).
+        #: from the bus's store once attached).
         self._poses: dict[str, PoseMsg] = {}
         self.poses: Mapping[str, PoseMsg] = self._poses
         self._heard: dict[str, float] = {}
@@ -225,10 +199,17 @@ class TeamView:
         #: Mates whose process has gone, as the transport's liveliness says (live mode;
         #: always empty in simulation, where no process dies).
         self.departed: set[str] = set()
-        #: In a large team whose poses all come in step batches (the in-process bus),
-        #: the mates' positions and heard times as arrays; None otherwise (then the
-        #: heard times are a dict and :meth:`near` loops over the mates).
+        #: In a large team simulated in one process, the receiver's row of the bus's
+        #: store of latest poses (:meth:`attach`); None otherwise (then the heard times
+        #: are a dict and :meth:`near` loops over the mates).
         self._table: _MateTable | None = None
+
+    def attach(self, latest: LatestMessages, row: int) -> None:
+        """From now on the poses are those the bus keeps in ``latest`` for the
+        receiver of ``row`` (:class:`~mrcomm.ports.KeepLatest`): read, never heard here."""
+        self._table = _MateTable(latest, row)
+        self.poses = _TablePoses(self._table)
+        self.heard = _HeardTimes(self._table)
 
     def hear(self, message: PoseMsg, now: float) -> None:
         """A mate's pose arrived at ``now``."""
@@ -237,27 +218,9 @@ class TeamView:
     def hear_all(self, messages: Sequence[PoseMsg], now: float, own: str) -> None:
         """Poses that arrived together, in order (the robot's own, ``own``, left out):
         the same as hearing each in turn (the last of a mate's wins; mates keep the order
-        they were first heard in): two dict updates, or with a mate table a few array
-        writes."""
-        if isinstance(messages, Received) and messages.batch.distinct:
-            batch = messages.batch
-            # A table is made with the first poses: it then has every mate heard.
-            if not self.poses and len(batch.members) >= NEAR_ARRAYS_FROM:
-                self._table = _MateTable(batch, own)
-                self.poses = _TablePoses(self._table)
-                self.heard = _HeardTimes(self._table)
-            if self._table is not None:
-                # A bus's share of a step batch never holds the receiver's own messages.
-                self._table.hear(messages, batch.senders[messages.rows], now)
-                return
-        elif self._table is not None:
-            # The table stays in step with the poses only if every pose comes in a batch:
-            # dropped for good (it is only made with the first poses).
-            self._poses = dict(self.poses)
-            self.poses = self._poses
-            self._heard = dict(self.heard)
-            self.heard = self._heard
-            self._table = None
+        they were first heard in): two dict updates."""
+        if self._table is not None:
+            raise RuntimeError("this view reads the poses the bus keeps: none is heard here")
         latest = {message.sender: message for message in messages}
         latest.pop(own, None)
         self._poses.update(latest)
@@ -314,8 +277,8 @@ class TeamView:
         extrapolation: float,
     ) -> Collection[Mate]:
         """The mates of :meth:`known` (same arguments) that may lie within ``reach`` of
-        (x, y) along both axes, in the same order: with a mate table exactly those (a
-        few array operations), else all of them (a loop would cost as much as the
+        (x, y) along both axes, in the same order: attached to the bus's store exactly
+        those (one compiled pass), else all of them (a loop would cost as much as the
         caller's own). Callers test each mate themselves, so the answer is the same
         either way."""
         table = self._table

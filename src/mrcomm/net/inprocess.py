@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from mrcomm.messaging.latest import KEEP_LATEST_FROM, LatestMessages
 from mrcomm.messaging.messages import Message
 from mrcomm.messaging.topics import PERIODIC_TOPICS
 from mrcomm.net.delivery import (
@@ -51,7 +52,7 @@ from mrcomm.net.delivery import (
 from mrcomm.net.radio.channel import RadioChannel
 from mrcomm.net.radio.medium import Frame
 from mrcomm.net.relay import Relay
-from mrcomm.ports import BatchHandler, Handler, Received, StepBatch
+from mrcomm.ports import BatchHandler, Handler, KeepLatest, Received, StepBatch
 
 #: A message on its way: sender index, topic, message, due time, radio delay (None:
 #: lost to the sender's queue), bits on the air, links it crossed before this send (0:
@@ -83,14 +84,17 @@ class _Takers:
     batched: bool  # any receiver has one
     plain_columns: list[int]  # columns (of targets) of receivers with other handlers
     plain: list[list[Handler]]  # those receivers' other handlers
+    kept_columns: NDArray[np.intp]  # columns of receivers whose latest messages the bus keeps
 
     @classmethod
-    def of(cls, receivers: dict[int, list[Handler]]) -> _Takers:
+    def of(cls, receivers: dict[int, list[Handler]], latest: LatestMessages | None) -> _Takers:
         many = [[h.many for h in hs if isinstance(h, BatchHandler)] for hs in receivers.values()]
         others = [[h for h in hs if not isinstance(h, BatchHandler)] for hs in receivers.values()]
         columns = [column for column, hs in enumerate(others) if hs]
         plain = [others[column] for column in columns]
-        return cls(list(receivers), many, any(many), columns, plain)
+        targets = list(receivers)
+        kept = [] if latest is None else np.flatnonzero(latest.keeps[targets]).tolist()
+        return cls(targets, many, any(many), columns, plain, np.array(kept, dtype=np.intp))
 
 
 class InProcessEndpoint:
@@ -135,8 +139,8 @@ class InProcessNetwork:
         # topic -> receiver index -> handlers
         self._subs: dict[str, dict[int, list[Handler]]] = {}
         self._takers: dict[str, _Takers] = {}  # each topic's, made on its first batch
-        # topic -> which endpoints have sent on it in a step batch (StepBatch.ever_sent)
-        self._ever_sent: dict[str, NDArray[np.bool_]] = {}
+        # topic -> the latest messages the bus keeps for its KeepLatest receivers
+        self._latest: dict[str, LatestMessages] = {}
         self._outbox: list[_Queued] = []
         #: Frames of topics other than the periodic ones on the shared channel (submitted,
         #: not yet ended or dropped): what :meth:`awaited` counts there.
@@ -252,6 +256,7 @@ class InProcessNetwork:
                 position = end
                 continue
             counts = self._topic_counts(topic)
+            latest = self._latest.get(topic)
             links = self._connected()[sender]
             # Per message, not per receiver: lost to the sender's queue, and its delay.
             queued_out = delay is None and not exempt(topic)
@@ -298,6 +303,8 @@ class InProcessNetwork:
                             continue  # a duplicate copy
                         if relay.passes_on(receiver, hop):
                             copies.append((receiver, topic, message, hop))
+                    if latest is not None and latest.keeps[receiver]:
+                        latest.write(receiver, sender, message, now)
                     for handler in handlers:
                         handler(message)
         for relayer, topic, message, crossed in copies:
@@ -315,7 +322,7 @@ class InProcessNetwork:
         order, as one message at a time (see the module docstring)."""
         takers = self._takers.get(topic)
         if takers is None:
-            takers = self._takers[topic] = _Takers.of(receivers)
+            takers = self._takers[topic] = _Takers.of(receivers, self._latest.get(topic))
         targets = takers.targets
         columns = np.array(targets)
         rows = np.array(senders, dtype=np.intp)
@@ -369,15 +376,19 @@ class InProcessNetwork:
 
         Batch handlers (receiver-local, publishing nothing: see ports.BatchHandler) get
         each receiver's messages in one call; the others, which may publish, are called
-        message by message, in order, as one message at a time would call them."""
+        message by message, in order, as one message at a time would call them.
+        Receivers whose latest messages the bus keeps have them written there, for all
+        of them at once."""
+        batch = None
+        latest = self._latest.get(topic)
+        if latest is not None and len(takers.kept_columns):
+            batch = StepBatch(messages, rows, self._members, self._numbers)
+            self._keep_latest(latest, batch, takers, received)
         if takers.batched:
             if received_n is None:
                 received_n = received.sum(axis=0).tolist()
-            ever = self._ever_sent.get(topic)
-            if ever is None:
-                ever = self._ever_sent[topic] = np.zeros(len(self._members), dtype=np.bool_)
-            ever[rows] = True
-            batch = StepBatch(messages, rows, self._members, self._numbers, ever)
+            if batch is None:
+                batch = StepBatch(messages, rows, self._members, self._numbers)
             by_receiver = np.nonzero(received.T)[1]  # receiver by receiver
             end = 0
             for column, takes in enumerate(takers.many):
@@ -396,6 +407,24 @@ class InProcessNetwork:
             message = messages[row]
             for handler in handlers[column]:
                 handler(message)
+
+    def _keep_latest(
+        self, latest: LatestMessages, batch: StepBatch, takers: _Takers, received: NDArray[np.bool_]
+    ) -> None:
+        """Write a batch into the store of latest messages for the receivers kept there:
+        at once, or (a sender with two messages in the batch) message by message."""
+        kept = takers.kept_columns
+        receivers = np.array(takers.targets, dtype=np.intp)[kept]
+        received = received[:, kept]
+        if batch.distinct:
+            columns = {field: batch.column(field) for field in latest.fields}
+            latest.write_step(
+                batch.objects(), batch.senders, receivers, received, columns, self._now
+            )
+            return
+        senders = batch.senders.tolist()
+        for row, column in zip(*np.nonzero(received), strict=True):
+            latest.write(int(receivers[column]), senders[row], batch.messages[row], self._now)
 
     # -- endpoint plumbing ---------------------------------------------------------
     def _publish(self, sender: int, topic: str, message: Message) -> None:
@@ -453,7 +482,7 @@ class InProcessNetwork:
         decisions, counts and handler calls, in the same order, as one at a time."""
         takers = self._takers.get(topic)
         if takers is None:
-            takers = self._takers[topic] = _Takers.of(receivers)
+            takers = self._takers[topic] = _Takers.of(receivers, self._latest.get(topic))
         targets = np.array(takers.targets, dtype=np.intp)
         rows = np.array([f.sender for f in frames], dtype=np.intp)
         others = rows[:, None] != targets[None, :]
@@ -481,8 +510,20 @@ class InProcessNetwork:
         self._hand_over(topic, takers, rows, messages, received)
 
     def _subscribe(self, receiver: int, topic: str, handler: Handler) -> None:
-        self._subs.setdefault(topic, {}).setdefault(receiver, []).append(handler)
+        handlers = self._subs.setdefault(topic, {}).setdefault(receiver, [])
         self._takers.pop(topic, None)
+        if isinstance(handler, KeepLatest) and len(self.ids) >= KEEP_LATEST_FROM:
+            # Kept by the bus: the receiver reads its row; the handler is never called.
+            latest = self._latest.get(topic)
+            if latest is None:
+                latest = LatestMessages(self._members, self._numbers, handler.fields)
+                self._latest[topic] = latest
+            if latest.fields != handler.fields:
+                raise ValueError(f"{topic}: kept with fields {latest.fields}, not {handler.fields}")
+            latest.keeps[receiver] = True
+            handler.attach(latest, receiver)
+            return
+        handlers.append(handler)
 
     def _topic_counts(self, topic: str) -> list[TopicCounts | None]:
         """``topic``'s counts by receiver index (an entry made on a receiver's first

@@ -146,7 +146,9 @@ class LinkModel:
         # (A small team's pairs without rays, for the loop in Python: see update.)
         python_pairs = self._per_pair and not self._casts_rays
         self._pair_ends = (
-            list(zip(self._first.tolist(), self._second.tolist())) if python_pairs else []
+            list(zip(self._first.tolist(), self._second.tolist(), strict=True))
+            if python_pairs
+            else []
         )
         # Per pair: its ends at the last ray cast, what that cast found, and how far an
         # end may move before the answer may change.
