@@ -79,6 +79,9 @@ class SimBase:
             params = dataclasses.replace(params, max_v=params.max_v * factor)
         self.params = params
         self._x, self._y, self._th = float(start.x), float(start.y), wrap(float(start.theta))
+        #: The localisation estimate as last built (None: to build): it changes only
+        #: when the robot moves or is carried, and is read several times a step.
+        self._pose: Pose | None = None
         self._v = 0.0
         self._w = 0.0
         normals = NormalStream(rng)
@@ -189,8 +192,11 @@ class SimBase:
     @property
     def pose(self) -> Pose:
         """Localisation estimate (true pose plus a small, slowly varying error)."""
-        loc = self._loc
-        return Pose(self._x + loc.ex, self._y + loc.ey, wrap(self._th + loc.eth))
+        pose = self._pose
+        if pose is None:
+            loc = self._loc
+            pose = self._pose = Pose(self._x + loc.ex, self._y + loc.ey, wrap(self._th + loc.eth))
+        return pose
 
     @property
     def odometry_distance(self) -> float:
@@ -208,6 +214,7 @@ class SimBase:
         re-localisation); its odometer does not count the trip; a goal it was driving
         to is planned again from there."""
         self._x, self._y = float(x), float(y)
+        self._pose = None
         self._v = self._w = 0.0
         if self._goal is not None and self._status is NavStatus.ACTIVE:
             self.navigate_to(*self._goal)
@@ -315,6 +322,7 @@ class SimBase:
         if nth > math.pi or nth < -math.pi:
             nth = wrap(nth)  # keep the true heading in [-pi, pi)
         self._x, self._y, self._th = nx, ny, nth
+        self._pose = None
         self._v, self._w = v, w
         if v != 0.0 or w != 0.0:
             ds = v * dt
