@@ -13,6 +13,7 @@ import pytest
 
 from mrcomm.agents.collision import Mate
 from mrcomm.agents.team_view import TeamView, near_numbers, near_numbers_numpy
+from mrcomm.messaging import latest as latest_module
 from mrcomm.messaging.latest import KEEP_LATEST_FROM, LatestMessages
 from mrcomm.messaging.messages import PoseMsg
 from mrcomm.ports import Received, StepBatch
@@ -116,10 +117,15 @@ def test_a_view_on_the_store_hears_nothing_itself() -> None:
         view.hear(pose_of("robot_1", 0.0, 0.0), 0.0)
 
 
-def test_a_step_written_at_once_is_each_pose_written_in_turn() -> None:
+@pytest.mark.parametrize("block_entries", [1 << 20, 7])
+def test_a_step_written_at_once_is_each_pose_written_in_turn(
+    block_entries: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """Many receivers, each reached by its own share of a step's poses: the arrays (and
     the order each receiver first heard its senders in) are those of writing every
-    pose to every receiver it reached, message by message."""
+    pose to every receiver it reached, message by message; also when the receivers
+    are written a few at a time (as a team of thousands is)."""
+    monkeypatch.setattr(latest_module, "_BLOCK_ENTRIES", block_entries)
     rng = np.random.default_rng(11)
     at_once, in_turn = _store(), _store()
     receivers = rng.choice(MEMBERS, size=40, replace=False).astype(np.intp)

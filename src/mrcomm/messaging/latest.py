@@ -29,6 +29,9 @@ from mrcomm.messaging.messages import Message
 KEEP_LATEST_FROM = 64
 #: In :attr:`LatestMessages.first`: never heard.
 NEVER = np.iinfo(np.int32).max
+#: :meth:`LatestMessages.write_step` takes at most about this many (message, receiver)
+#: pairs at a time (its index arrays: ~40 bytes a pair).
+_BLOCK_ENTRIES = 1 << 20
 
 
 class LatestMessages:
@@ -78,7 +81,27 @@ class LatestMessages:
         """Messages delivered together at ``now``: ``received[m, c]`` says whether
         ``messages[m]`` (from ``senders[m]``) reached ``receivers[c]``; ``columns``: each
         field of every message. The same as :meth:`write` for each pair, message by
-        message, when no sender has two messages here (the caller's to check)."""
+        message, when no sender has two messages here (the caller's to check).
+
+        Receivers are written a block at a time (they do not touch each other's
+        entries), so that the index arrays stay small: 5,000 poses reaching 10,000
+        receivers at once would take ~3 GB of them."""
+        block = max(1, _BLOCK_ENTRIES // max(1, len(senders)))
+        for start in range(0, len(receivers), block):
+            self._write_block(
+                messages, senders, receivers[start : start + block],
+                received[:, start : start + block], columns, now,
+            )  # fmt: skip
+
+    def _write_block(
+        self,
+        messages: NDArray[np.object_],
+        senders: NDArray[np.intp],
+        receivers: NDArray[np.intp],
+        received: NDArray[np.bool_],
+        columns: Mapping[str, NDArray[np.float64]],
+        now: float,
+    ) -> None:
         heard_by, heard = np.nonzero(received.T)  # receiver by receiver, messages in order
         if not len(heard):
             return
