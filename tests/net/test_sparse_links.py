@@ -60,3 +60,33 @@ def test_small_teams_keep_every_pair() -> None:
         max_time=5,
     )
     assert len(run_mission(config).summary()["links"]) == 31 * 30
+
+
+def test_pair_sums_are_made_when_a_step_first_adds_to_them() -> None:
+    """A run whose links never warn, break or measure a signal (a WLAN) holds no
+    per-pair sums (3.2 GB of them for 10,000 robots), and its summaries read zeros;
+    the first step that warns makes them, counting its warnings as onsets."""
+    import numpy as np
+
+    from mrcomm.net.links import LinkRecorder, LinkState
+
+    ids = ("a", "b", "c")
+    recorder = LinkRecorder(ids, robots=3)
+    distance = np.array([[0.0, 3.0, 4.0], [3.0, 0.0, 5.0], [4.0, 5.0, 0.0]])
+    quiet = np.zeros((3, 3), dtype=np.bool_)
+    linked = np.ones((3, 3), dtype=np.bool_)
+    for step in range(3):
+        recorder.record(LinkState(ids, distance, None, None, quiet, linked), 0.1, 0.1 * step)
+    assert recorder._time_warning is None and recorder._time_disconnected is None
+    assert recorder._min_rssi is None
+    assert recorder.summaries()["a->b"] == {
+        "min_distance": 3.0, "max_distance": 3.0, "min_rssi": None, "time_in_warning": 0.0,
+        "warnings": 0, "time_disconnected": 0.0,
+    }  # fmt: skip
+    warned = quiet.copy()
+    warned[0, 1] = True
+    for step in range(3, 6):
+        recorder.record(LinkState(ids, distance, None, None, warned, linked), 0.1, 0.1 * step)
+    summary = recorder.summaries()["a->b"]
+    assert summary["warnings"] == 1 and summary["time_in_warning"] == pytest.approx(0.3)
+    assert recorder._time_disconnected is None

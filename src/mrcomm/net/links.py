@@ -320,13 +320,17 @@ class LinkRecorder:
         self._next_rssi = 0.0
         #: (time, from, to, rssi dBm) of robot pairs, sampled every ``rssi_period``.
         self.rssi_series: list[tuple[float, str, str, float]] = []
-        self.time_warning = np.zeros((n, n))
-        self.time_disconnected = np.zeros((n, n))
-        self.min_rssi = np.full((n, n), np.inf)
+        self._n = n
+        # Per ordered pair, made when a step first adds to them (a WLAN run never warns,
+        # disconnects or measures a signal: 3.2 GB of zeros and infinities for 10,000
+        # robots); None until then, read as zeros (infinities for the RSSI).
+        self._time_warning: NDArray[np.float64] | None = None
+        self._warning_onsets: NDArray[np.int64] | None = None
+        self._time_disconnected: NDArray[np.float64] | None = None
+        self._min_rssi: NDArray[np.float64] | None = None
         self.min_distance = np.full((n, n), np.inf)
         self.max_distance = np.zeros((n, n))
-        self.warning_onsets = np.zeros((n, n), dtype=np.int64)
-        self._prev_warning = np.zeros((n, n), dtype=np.bool_)
+        self._prev_warning: BoolArray | None = None  # None: no warning the last step
         # Link state per unordered robot pair (upper triangle): 0 connected, 1 warning,
         # 2 out of range; with when the current state began.
         self._pairs = np.triu_indices(robots, k=1)
@@ -348,12 +352,18 @@ class LinkRecorder:
         # change nothing (n² cells each, a million in a team of 1000).
         warned = bool(state.warning.any())
         if warned:
-            self.time_warning += dt * state.warning
-            self.warning_onsets += state.warning & ~self._prev_warning
-        self._prev_warning = state.warning
+            if self._time_warning is None or self._warning_onsets is None:
+                self._time_warning = np.zeros((self._n, self._n))
+                self._warning_onsets = np.zeros((self._n, self._n), dtype=np.int64)
+            self._time_warning += dt * state.warning
+            previous = self._prev_warning
+            self._warning_onsets += state.warning if previous is None else state.warning & ~previous
+        self._prev_warning = state.warning if warned else None
         disconnected = not state.connected.all()
         if disconnected:
-            self.time_disconnected += dt * ~state.connected
+            if self._time_disconnected is None:
+                self._time_disconnected = np.zeros((self._n, self._n))
+            self._time_disconnected += dt * ~state.connected
         np.fmin(self.min_distance, state.distance, out=self.min_distance)
         np.fmax(self.max_distance, state.distance, out=self.max_distance)
         if warned or disconnected or self._open_pairs:
@@ -364,7 +374,9 @@ class LinkRecorder:
             self.largest_group.append((now, self._largest_group(state.connected[:n, :n])))
         if state.rssi is None:
             return []
-        np.fmin(self.min_rssi, state.rssi, out=self.min_rssi)
+        if self._min_rssi is None:
+            self._min_rssi = np.full((self._n, self._n), np.inf)
+        np.fmin(self._min_rssi, state.rssi, out=self._min_rssi)
         if now < self._next_rssi:
             return []
         self._next_rssi += self.rssi_period
@@ -462,11 +474,14 @@ class LinkRecorder:
         :data:`SPARSE_NEAR_M` of each other or whose link ever warned; the rest of a
         robot's links are summed up by its closest and furthest mate."""
         kept = ~np.eye(len(self.ids), dtype=np.bool_)
+        onsets = self._warning_onsets
         if self.robots > SPARSE_FROM:
             n = self.robots
-            kept[:n, :n] &= (self.min_distance[:n, :n] <= SPARSE_NEAR_M) | (
-                self.warning_onsets[:n, :n] > 0
-            )
+            kept[:n, :n] &= self.min_distance[:n, :n] <= SPARSE_NEAR_M
+            if onsets is not None:
+                kept[:n, :n] |= (onsets[:n, :n] > 0) & ~np.eye(n, dtype=np.bool_)
+        time_warning, time_disconnected = self._time_warning, self._time_disconnected
+        min_rssi = self._min_rssi
         out: dict[str, dict[str, Any]] = {}
         ids = self.ids
         for i, j in np.argwhere(kept).tolist():  # row by row, as nested loops would
@@ -475,12 +490,17 @@ class LinkRecorder:
                 out[f"{a}->{b}"] = {
                     "min_distance": _finite(self.min_distance[i, j]),
                     "max_distance": _finite(self.max_distance[i, j]),
-                    "min_rssi": _finite(self.min_rssi[i, j]),
-                    "time_in_warning": round(float(self.time_warning[i, j]), 6),
-                    "warnings": int(self.warning_onsets[i, j]),
-                    "time_disconnected": round(float(self.time_disconnected[i, j]), 6),
+                    "min_rssi": None if min_rssi is None else _finite(min_rssi[i, j]),
+                    "time_in_warning": _sum(time_warning, i, j),
+                    "warnings": 0 if onsets is None else int(onsets[i, j]),
+                    "time_disconnected": _sum(time_disconnected, i, j),
                 }
         return out
+
+
+def _sum(sums: NDArray[np.float64] | None, i: int, j: int) -> float:
+    """A pair's time summed over the steps, s (6 decimals; 0 when nothing was added)."""
+    return 0.0 if sums is None else round(float(sums[i, j]), 6)
 
 
 def _finite(value: float) -> float | None:
