@@ -69,6 +69,25 @@ class KeepLatest(BatchHandler):
         self.fields = fields
 
 
+class Addressed:
+    """A handler of messages addressed to one agent by a field of theirs (an
+    assignment's ``robot``): it acts on those whose ``field`` is ``to`` and ignores the
+    rest, so a bus may leave it uncalled for the rest. The in-process bus does when
+    every plain handler of a topic is one (10,000 robots' assignments reaching 10,000
+    robots were 100 million calls that returned at once)."""
+
+    __slots__ = ("field", "handler", "to")
+
+    def __init__(self, handler: Handler, field: str, to: str) -> None:
+        self.handler = handler
+        self.field = field
+        self.to = to
+
+    def __call__(self, message: Message) -> None:
+        if getattr(message, self.field) == self.to:
+            self.handler(message)
+
+
 #: A receiver's share of at least this many messages is picked from the batch as an
 #: array (one call), a smaller one message by message (cheaper than numpy's overhead).
 PICK_FROM = 64

@@ -10,12 +10,13 @@ import numpy as np
 import pytest
 
 from mrcomm.agents.team_view import TeamView
+from mrcomm.messaging import latest as latest_module
 from mrcomm.messaging.latest import KEEP_LATEST_FROM
 from mrcomm.messaging.messages import Message, PoseMsg
 from mrcomm.net import inprocess
 from mrcomm.net.delivery import DeliveryPolicy, LossStream
 from mrcomm.net.inprocess import InProcessNetwork
-from mrcomm.ports import BatchHandler, KeepLatest
+from mrcomm.ports import Addressed, BatchHandler, KeepLatest
 from mrcomm.run.config import make_config
 from mrcomm.sim.mission import Mission
 from tests.golden.golden import comparable
@@ -108,10 +109,16 @@ def _per_agent(got: list[tuple[str, str, int]], agent: str) -> list[tuple[str, s
     return [entry for entry in got if entry[0] == agent]
 
 
-def test_a_batch_handler_gets_each_receivers_poses_of_a_step_in_one_call() -> None:
+@pytest.mark.parametrize("block_entries", [1 << 20, 13])
+def test_a_batch_handler_gets_each_receivers_poses_of_a_step_in_one_call(
+    block_entries: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """Half the agents take their poses in batches: each agent still gets the same poses
     in the same order; the plain handlers are called in the same order as before; a
-    batch handler is called once per step in the batched path, per pose otherwise."""
+    batch handler is called once per step in the batched path, per pose otherwise.
+    Also when a batch's receivers are decided and handed over a few at a time (as in a
+    team of thousands)."""
+    monkeypatch.setattr(latest_module, "_BLOCK_ENTRIES", block_entries)
     many = frozenset(f"r{i}" for i in range(0, 12, 2))
     single, counts, _ = _deliveries(batch_from=10**6)
     for batch_from in (0, 10**6):
@@ -163,10 +170,15 @@ def _views(batch_from: int, keep_from: int, monkeypatch: pytest.MonkeyPatch) -> 
     return views
 
 
-def test_the_bus_keeps_the_poses_each_view_would_hear(monkeypatch: pytest.MonkeyPatch) -> None:
+@pytest.mark.parametrize("block_entries", [1 << 20, 29])
+def test_the_bus_keeps_the_poses_each_view_would_hear(
+    block_entries: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """The bus's store of latest poses (written a step at a time, or message by message
     when a sender has two in a step or messages go one at a time) gives every view the
-    poses, heard times and order of first hearing it gets hearing them itself."""
+    poses, heard times and order of first hearing it gets hearing them itself; also a
+    few receivers at a time."""
+    monkeypatch.setattr(latest_module, "_BLOCK_ENTRIES", block_entries)
     heard_itself = _views(batch_from=0, keep_from=10**6, monkeypatch=monkeypatch)
     kept_in_steps = _views(batch_from=0, keep_from=1, monkeypatch=monkeypatch)
     kept_one_by_one = _views(batch_from=10**6, keep_from=1, monkeypatch=monkeypatch)
@@ -178,3 +190,44 @@ def test_the_bus_keeps_the_poses_each_view_would_hear(monkeypatch: pytest.Monkey
         assert list(stepped.heard.items()) == list(own.heard.items())
         assert list(single.heard.items()) == list(own.heard.items())
     assert sum(len(v.poses) for v in heard_itself) > 1000
+
+
+def test_addressed_handlers_are_called_only_for_their_own_messages() -> None:
+    """Handlers that act only on messages addressed to them (an assignment's robot; here
+    a pose's sender) act on the same messages in the same order whether the bus calls
+    them for every message (one at a time) or only for theirs (a batch): 12 agents,
+    each acting on one mate's poses, over a ragged link matrix at SPL 40."""
+
+    def run(batch_from: int) -> tuple[list[tuple[str, str, int]], int]:
+        ids = [f"r{i}" for i in range(12)]
+        net = InProcessNetwork(
+            ids,
+            policy=DeliveryPolicy(40.0),
+            loss_rngs={a: np.random.default_rng(i) for i, a in enumerate(ids)},
+        )
+        net.batch_from = batch_from
+        acted: list[tuple[str, str, int]] = []
+        calls = [0]
+
+        class Counted(Addressed):
+            def __call__(self, message: Message) -> None:
+                calls[0] += 1
+                super().__call__(message)
+
+        for i, a in enumerate(ids):
+            mate = ids[(i + 1) % len(ids)]
+            act = lambda m, a=a: acted.append((a, m.sender, round(m.x)))  # type: ignore[misc]  # noqa: E731
+            net.endpoint(a).subscribe("pose", Counted(act, "sender", mate))
+        rng = np.random.default_rng(9)
+        for step in range(30):
+            net.set_connected(rng.random((12, 12)) < 0.7)
+            for k, a in enumerate(ids):
+                if (step + k) % 2 == 0:
+                    net.endpoint(a).publish("pose", _pose(a, step * 100 + k))
+            net.deliver(0.1 * step)
+        return acted, calls[0]
+
+    one_by_one, every_call = run(batch_from=10**6)
+    batched, own_calls = run(batch_from=0)
+    assert batched == one_by_one and len(batched) > 50
+    assert own_calls == len(batched) < every_call / 5  # called only where it acts

@@ -43,7 +43,7 @@ from mrcomm.messaging.messages import (
 )
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ACTIVITY
-from mrcomm.ports import BatchHandler, KeepLatest, LinkSensor
+from mrcomm.ports import Addressed, BatchHandler, KeepLatest, LinkSensor
 from mrcomm.world.geometry import Pose
 
 
@@ -112,7 +112,8 @@ class ExecutorRuntime:
                 auto_transitions=False,
                 after_state_change="_after_state_change",
             )
-        bus.subscribe(TOPIC_ASSIGNMENT, self._on_assignment)
+        # Every robot's assignment reaches every robot: it acts on its own only.
+        bus.subscribe(TOPIC_ASSIGNMENT, Addressed(self._on_assignment, "robot", self.robot_id))
         # A mate's latest pose is all the view keeps: a bus may keep it for the view.
         view = self.team_view
         bus.subscribe(TOPIC_POSE, KeepLatest(self._on_poses, view.attach, ("x", "y")))

@@ -16,7 +16,7 @@ receivers themselves.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 
 import numpy as np
 from numpy.typing import NDArray
@@ -29,9 +29,20 @@ from mrcomm.messaging.messages import Message
 KEEP_LATEST_FROM = 64
 #: In :attr:`LatestMessages.first`: never heard.
 NEVER = np.iinfo(np.int32).max
-#: :meth:`LatestMessages.write_step` takes at most about this many (message, receiver)
-#: pairs at a time (its index arrays: ~40 bytes a pair).
+#: A step's (message, receiver) pairs are handled at most about this many at a time
+#: (:func:`bounded_blocks`): their masks, draws and index arrays take ~40 bytes a pair.
 _BLOCK_ENTRIES = 1 << 20
+
+
+def bounded_blocks(count: int, width: int) -> Iterator[slice]:
+    """Consecutive slices of ``count`` items (a step's receivers, or its messages), each
+    item ``width`` entries wide (the messages, or the receivers), with at most about
+    :data:`_BLOCK_ENTRIES` entries a slice: receivers independent of each other, taken a
+    block at a time, keep a large team's step arrays small (5,000 poses reaching 10,000
+    receivers at once took ~9 GB of them)."""
+    block = max(1, _BLOCK_ENTRIES // max(1, width))
+    for start in range(0, count, block):
+        yield slice(start, min(count, start + block))
 
 
 class LatestMessages:
@@ -83,15 +94,10 @@ class LatestMessages:
         field of every message. The same as :meth:`write` for each pair, message by
         message, when no sender has two messages here (the caller's to check).
 
-        Receivers are written a block at a time (they do not touch each other's
-        entries), so that the index arrays stay small: 5,000 poses reaching 10,000
-        receivers at once would take ~3 GB of them."""
-        block = max(1, _BLOCK_ENTRIES // max(1, len(senders)))
-        for start in range(0, len(receivers), block):
-            self._write_block(
-                messages, senders, receivers[start : start + block],
-                received[:, start : start + block], columns, now,
-            )  # fmt: skip
+        Receivers are written a block at a time (:func:`bounded_blocks`: they do not
+        touch each other's entries)."""
+        for block in bounded_blocks(len(receivers), len(senders)):
+            self._write_block(messages, senders, receivers[block], received[:, block], columns, now)
 
     def _write_block(
         self,

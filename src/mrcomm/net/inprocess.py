@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from mrcomm.messaging.latest import KEEP_LATEST_FROM, LatestMessages
+from mrcomm.messaging.latest import KEEP_LATEST_FROM, LatestMessages, bounded_blocks
 from mrcomm.messaging.messages import Message
 from mrcomm.messaging.topics import PERIODIC_TOPICS
 from mrcomm.net.delivery import (
@@ -52,7 +52,7 @@ from mrcomm.net.delivery import (
 from mrcomm.net.radio.channel import RadioChannel
 from mrcomm.net.radio.medium import Frame
 from mrcomm.net.relay import Relay
-from mrcomm.ports import BatchHandler, Handler, KeepLatest, Received, StepBatch
+from mrcomm.ports import Addressed, BatchHandler, Handler, KeepLatest, Received, StepBatch
 
 #: A message on its way: sender index, topic, message, due time, radio delay (None:
 #: lost to the sender's queue), bits on the air, links it crossed before this send (0:
@@ -85,6 +85,11 @@ class _Takers:
     plain_columns: list[int]  # columns (of targets) of receivers with other handlers
     plain: list[list[Handler]]  # those receivers' other handlers
     kept_columns: NDArray[np.intp]  # columns of receivers whose latest messages the bus keeps
+    #: When every plain handler is an Addressed one, on one field, each receiver's to one
+    #: addressee: that field, and the plain columns of each addressee (a message then
+    #: acts only at the columns it names).
+    addressed_by: str | None
+    addressed: dict[str, list[int]] | None
 
     @classmethod
     def of(cls, receivers: dict[int, list[Handler]], latest: LatestMessages | None) -> _Takers:
@@ -94,7 +99,17 @@ class _Takers:
         plain = [others[column] for column in columns]
         targets = list(receivers)
         kept = [] if latest is None else np.flatnonzero(latest.keeps[targets]).tolist()
-        return cls(targets, many, any(many), columns, plain, np.array(kept, dtype=np.intp))
+        # Addressed handlers only, on one field, one addressee per receiver: by addressee.
+        fields = {h.field if isinstance(h, Addressed) else None for hs in plain for h in hs}
+        addressees = [{h.to for h in hs if isinstance(h, Addressed)} for hs in plain]
+        addressed: dict[str, list[int]] | None = None
+        if len(fields) == 1 and None not in fields and all(len(to) == 1 for to in addressees):
+            addressed = {}
+            for k, to in enumerate(addressees):
+                addressed.setdefault(to.pop(), []).append(k)
+        kept_columns = np.array(kept, dtype=np.intp)
+        field = fields.pop() if addressed is not None else None
+        return cls(targets, many, any(many), columns, plain, kept_columns, field, addressed)
 
 
 class InProcessEndpoint:
@@ -324,8 +339,42 @@ class InProcessNetwork:
         if takers is None:
             takers = self._takers[topic] = _Takers.of(receivers, self._latest.get(topic))
         targets = takers.targets
-        columns = np.array(targets)
         rows = np.array(senders, dtype=np.intp)
+        # Receivers a block at a time (each decides alone, from its own stream, in
+        # target order): a large team's step keeps small arrays (bounded_blocks).
+        received = np.empty((len(rows), len(targets)), dtype=np.bool_)
+        decided: list[int] = []
+        reached_n: list[int] = []
+        received_n: list[int] = []
+        for block in bounded_blocks(len(targets), len(rows)):
+            part, decided_part, reached_part, received_part = self._decide_block(
+                topic, rows, targets[block]
+            )
+            received[:, block] = part
+            decided += decided_part
+            reached_n += reached_part
+            received_n += received_part
+        counts = self._topic_counts(topic)
+        for column, receiver in enumerate(targets):
+            if not decided[column]:
+                continue
+            entry = counts[receiver]
+            if entry is None:
+                entry = counts[receiver] = self._count(receiver, topic)
+            entry.add(
+                received=received_n[column],
+                dropped_loss=reached_n[column] - received_n[column],
+                dropped_range=decided[column] - reached_n[column],
+            )
+        self._hand_over(topic, takers, rows, messages, received, received_n)
+
+    def _decide_block(
+        self, topic: str, rows: NDArray[np.intp], targets: list[int]
+    ) -> tuple[NDArray[np.bool_], list[int], list[int], list[int]]:
+        """Which of a batch's messages (sent by ``rows``) reach each of ``targets``:
+        the mask (messages × targets) and, per target, how many messages it decided,
+        had in range and received."""
+        columns = np.array(targets)
         others = rows[:, None] != columns[None, :]  # a sender does not hear itself
         exempt = self.policy.exempt(topic)
         in_range = others if exempt else self._links[rows[:, None], columns[None, :]] & others
@@ -348,19 +397,7 @@ class InProcessNetwork:
                 received = kept.T
         # (A mask that lost nothing has the counts already taken.)
         received_n = reached_n if received is in_range else received.sum(axis=0).tolist()
-        counts = self._topic_counts(topic)
-        for column, receiver in enumerate(targets):
-            if not decided[column]:
-                continue
-            entry = counts[receiver]
-            if entry is None:
-                entry = counts[receiver] = self._count(receiver, topic)
-            entry.add(
-                received=received_n[column],
-                dropped_loss=reached_n[column] - received_n[column],
-                dropped_range=decided[column] - reached_n[column],
-            )
-        self._hand_over(topic, takers, rows, messages, received, received_n)
+        return received, decided, reached_n, received_n
 
     def _hand_over(
         self,
@@ -389,24 +426,37 @@ class InProcessNetwork:
                 received_n = received.sum(axis=0).tolist()
             if batch is None:
                 batch = StepBatch(messages, rows, self._members, self._numbers)
-            by_receiver = np.nonzero(received.T)[1]  # receiver by receiver
-            end = 0
-            for column, takes in enumerate(takers.many):
-                start, end = end, end + received_n[column]
-                if takes and end > start:
-                    heard = Received(batch, by_receiver[start:end])
-                    for take in takes:
-                        take(heard)
+            for block in bounded_blocks(len(takers.targets), len(rows)):
+                by_receiver = np.nonzero(received[:, block].T)[1]  # receiver by receiver
+                end = 0
+                for column in range(block.start, block.stop):
+                    start, end = end, end + received_n[column]
+                    takes = takers.many[column]
+                    if takes and end > start:
+                        heard = Received(batch, by_receiver[start:end])
+                        for take in takes:
+                            take(heard)
         handlers = takers.plain
         if not handlers:
             return
         if len(handlers) < len(takers.targets):
             received = received[:, takers.plain_columns]
-        heard_rows, heard_columns = np.nonzero(received)  # message by message, in order
-        for row, column in zip(heard_rows.tolist(), heard_columns.tolist(), strict=True):
-            message = messages[row]
-            for handler in handlers[column]:
-                handler(message)
+        field, addressed = takers.addressed_by, takers.addressed
+        if field is not None and addressed is not None:
+            # Each message acts only at the receivers it names: the other calls would
+            # return at once. The calls that act come in the same order.
+            for row, message in enumerate(messages):
+                for column in addressed.get(getattr(message, field), ()):
+                    if received[row, column]:
+                        for handler in handlers[column]:
+                            handler(message)
+            return
+        for block in bounded_blocks(len(messages), len(handlers)):  # messages, a block
+            heard_rows, heard_columns = np.nonzero(received[block])  # message by message
+            for row, column in zip(heard_rows.tolist(), heard_columns.tolist(), strict=True):
+                message = messages[block.start + row]
+                for handler in handlers[column]:
+                    handler(message)
 
     def _keep_latest(
         self, latest: LatestMessages, batch: StepBatch, takers: _Takers, received: NDArray[np.bool_]
