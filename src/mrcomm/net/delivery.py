@@ -85,6 +85,10 @@ def has_shared_counts(counts: Iterable[Mapping[str, float]]) -> bool:
 
 
 _UNIFORM_BATCH = 1024
+#: A refill holds at most this many draws (32 kB): a receiver of 10,000 robots' first
+#: poses takes ~10,000 at once, and four takes' worth for each of 10,000 receivers was
+#: 3.2 GB. A larger take is then served from several refills.
+_UNIFORM_MOST = 4096
 
 
 class LossStream:
@@ -106,7 +110,7 @@ class LossStream:
         # doubles one after the other; only this stream draws from it). A receiver in a
         # large team takes ~1,000 at a time: its batches hold four takes, so most takes
         # are a slice of one batch rather than a draw and a concatenation.
-        self._array = self._rng.random(max(_UNIFORM_BATCH, 4 * wanted))
+        self._array = self._rng.random(max(_UNIFORM_BATCH, min(4 * wanted, _UNIFORM_MOST)))
         self._buffer = None
         self._next = 0
 
