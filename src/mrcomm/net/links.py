@@ -33,7 +33,14 @@ from numpy.typing import NDArray
 
 from mrcomm.net import pair_loops
 from mrcomm.net.network import NetworkModel
-from mrcomm.net.thresholds import BoolArray, FloatArray, PairGeometry, PairLayout, Threshold
+from mrcomm.net.thresholds import (
+    BoolArray,
+    FloatArray,
+    PairGeometry,
+    PairLayout,
+    Threshold,
+    upper_pairs,
+)
 from mrcomm.world.occupancy import OccupancyGrid
 
 RSSI_PERIOD = 0.5  # s between recorded RSSI samples (the pulse rate, 2 Hz)
@@ -333,7 +340,7 @@ class LinkRecorder:
         self._prev_warning: BoolArray | None = None  # None: no warning the last step
         # Link state per unordered robot pair (upper triangle): 0 connected, 1 warning,
         # 2 out of range; with when the current state began.
-        self._pairs = np.triu_indices(robots, k=1)
+        self._pairs = upper_pairs(robots)
         self._pair_state = np.zeros(len(self._pairs[0]), dtype=np.int8)
         self._pair_since = np.zeros(len(self._pairs[0]))
         self._open_pairs = False  # any pair in warning or out of range

@@ -13,6 +13,7 @@ model of its parameters and a :class:`~mrcomm.specs.VariantSpec` naming both. Bu
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,6 +34,17 @@ if TYPE_CHECKING:
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
+
+
+@functools.lru_cache(maxsize=4)
+def upper_pairs(n: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """The unordered pairs of ``n`` nodes, (a, b) with a < b in row order, as two index
+    arrays: one read-only copy per size, shared by everything that walks a team's pairs
+    (the link recorder, the proximity record): 800 MB each for 10,000 robots."""
+    first, second = np.triu_indices(n, k=1)
+    first.flags.writeable = False
+    second.flags.writeable = False
+    return first, second
 
 
 class PairLayout:

@@ -32,6 +32,7 @@ import numpy as np
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.compute import TRUTH_COUNTS
 from mrcomm.metrics.timeline import Timeline
+from mrcomm.net.thresholds import upper_pairs
 from mrcomm.run.config import RunConfig
 
 #: How far apart in time a judgement and the truth may be and still match (s).
@@ -62,7 +63,7 @@ class ProximityRecorder:
     def __init__(self, robots: Sequence[str], radius: float) -> None:
         self.robots = tuple(robots)
         self.radius = radius
-        self._pairs = np.triu_indices(len(self.robots), k=1)
+        self._pairs = upper_pairs(len(self.robots))  # (shared with the link recorder)
         self._since: dict[int, float] = {}  # pair index -> start of its current interval
         self._closest: dict[int, float] = {}
         self._closed: list[Encounter] = []
