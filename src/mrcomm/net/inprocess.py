@@ -33,7 +33,6 @@ of the step's :class:`~mrcomm.ports.StepBatch`, whose arrays are made once for a
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -49,10 +48,11 @@ from mrcomm.net.delivery import (
     TopicCounts,
     add_outcomes,
 )
+from mrcomm.net.handover import Takers, hand_over
 from mrcomm.net.radio.channel import RadioChannel
 from mrcomm.net.radio.medium import Frame
 from mrcomm.net.relay import Relay
-from mrcomm.ports import Addressed, BatchHandler, Handler, KeepLatest, Received, StepBatch
+from mrcomm.ports import Handler, KeepLatest, StepBatch
 
 #: A message on its way: sender index, topic, message, due time, radio delay (None:
 #: lost to the sender's queue), bits on the air, links it crossed before this send (0:
@@ -71,45 +71,6 @@ PublishObserver = Callable[[float, str, str, Message], None]
 #: Messages on one topic are decided as a batch when they have at least this many
 #: receivers (below it, numpy's per-call cost exceeds what a batch saves).
 BATCH_FROM = 8
-
-
-@dataclass(frozen=True)
-class _Takers:
-    """A topic's receivers split by how they take a batch (made once, again after each
-    subscription): batch handlers get a receiver's messages in one call, the others one
-    message at a time."""
-
-    targets: list[int]  # receiver indices, in subscription order
-    many: list[list[Callable[[Sequence[Message]], None]]]  # each receiver's batch handlers
-    batched: bool  # any receiver has one
-    plain_columns: list[int]  # columns (of targets) of receivers with other handlers
-    plain: list[list[Handler]]  # those receivers' other handlers
-    kept_columns: NDArray[np.intp]  # columns of receivers whose latest messages the bus keeps
-    #: When every plain handler is an Addressed one, on one field, each receiver's to one
-    #: addressee: that field, and the plain columns of each addressee (a message then
-    #: acts only at the columns it names).
-    addressed_by: str | None
-    addressed: dict[str, list[int]] | None
-
-    @classmethod
-    def of(cls, receivers: dict[int, list[Handler]], latest: LatestMessages | None) -> _Takers:
-        many = [[h.many for h in hs if isinstance(h, BatchHandler)] for hs in receivers.values()]
-        others = [[h for h in hs if not isinstance(h, BatchHandler)] for hs in receivers.values()]
-        columns = [column for column, hs in enumerate(others) if hs]
-        plain = [others[column] for column in columns]
-        targets = list(receivers)
-        kept = [] if latest is None else np.flatnonzero(latest.keeps[targets]).tolist()
-        # Addressed handlers only, on one field, one addressee per receiver: by addressee.
-        fields = {h.field if isinstance(h, Addressed) else None for hs in plain for h in hs}
-        addressees = [{h.to for h in hs if isinstance(h, Addressed)} for hs in plain]
-        addressed: dict[str, list[int]] | None = None
-        if len(fields) == 1 and None not in fields and all(len(to) == 1 for to in addressees):
-            addressed = {}
-            for k, to in enumerate(addressees):
-                addressed.setdefault(to.pop(), []).append(k)
-        kept_columns = np.array(kept, dtype=np.intp)
-        field = fields.pop() if addressed is not None else None
-        return cls(targets, many, any(many), columns, plain, kept_columns, field, addressed)
 
 
 class InProcessEndpoint:
@@ -153,7 +114,7 @@ class InProcessNetwork:
         self._streams = [LossStream(loss_rngs[a]) for a in self.ids]
         # topic -> receiver index -> handlers
         self._subs: dict[str, dict[int, list[Handler]]] = {}
-        self._takers: dict[str, _Takers] = {}  # each topic's, made on its first batch
+        self._takers: dict[str, Takers] = {}  # each topic's, made on its first batch
         # topic -> the latest messages the bus keeps for its KeepLatest receivers
         self._latest: dict[str, LatestMessages] = {}
         self._outbox: list[_Queued] = []
@@ -337,7 +298,7 @@ class InProcessNetwork:
         order, as one message at a time (see the module docstring)."""
         takers = self._takers.get(topic)
         if takers is None:
-            takers = self._takers[topic] = _Takers.of(receivers, self._latest.get(topic))
+            takers = self._takers[topic] = Takers.of(receivers, self._latest.get(topic))
         targets = takers.targets
         rows = np.array(senders, dtype=np.intp)
         # Receivers a block at a time (each decides alone, from its own stream, in
@@ -402,79 +363,17 @@ class InProcessNetwork:
     def _hand_over(
         self,
         topic: str,
-        takers: _Takers,
+        takers: Takers,
         rows: NDArray[np.intp],
         messages: list[Message],
         received: NDArray[np.bool_],
         received_n: list[int] | None = None,
     ) -> None:
-        """Call the handlers of a batch's receivers: ``received[m, c]`` says whether the
-        receiver of column c (of ``takers.targets``) got message m (sent by ``rows[m]``).
-
-        Batch handlers (receiver-local, publishing nothing: see ports.BatchHandler) get
-        each receiver's messages in one call; the others, which may publish, are called
-        message by message, in order, as one message at a time would call them.
-        Receivers whose latest messages the bus keeps have them written there, for all
-        of them at once."""
-        batch = None
-        latest = self._latest.get(topic)
-        if latest is not None and len(takers.kept_columns):
-            batch = StepBatch(messages, rows, self._members, self._numbers)
-            self._keep_latest(latest, batch, takers, received)
-        if takers.batched:
-            if received_n is None:
-                received_n = received.sum(axis=0).tolist()
-            if batch is None:
-                batch = StepBatch(messages, rows, self._members, self._numbers)
-            for block in bounded_blocks(len(takers.targets), len(rows)):
-                by_receiver = np.nonzero(received[:, block].T)[1]  # receiver by receiver
-                end = 0
-                for column in range(block.start, block.stop):
-                    start, end = end, end + received_n[column]
-                    takes = takers.many[column]
-                    if takes and end > start:
-                        heard = Received(batch, by_receiver[start:end])
-                        for take in takes:
-                            take(heard)
-        handlers = takers.plain
-        if not handlers:
-            return
-        if len(handlers) < len(takers.targets):
-            received = received[:, takers.plain_columns]
-        field, addressed = takers.addressed_by, takers.addressed
-        if field is not None and addressed is not None:
-            # Each message acts only at the receivers it names: the other calls would
-            # return at once. The calls that act come in the same order.
-            for row, message in enumerate(messages):
-                for column in addressed.get(getattr(message, field), ()):
-                    if received[row, column]:
-                        for handler in handlers[column]:
-                            handler(message)
-            return
-        for block in bounded_blocks(len(messages), len(handlers)):  # messages, a block
-            heard_rows, heard_columns = np.nonzero(received[block])  # message by message
-            for row, column in zip(heard_rows.tolist(), heard_columns.tolist(), strict=True):
-                message = messages[block.start + row]
-                for handler in handlers[column]:
-                    handler(message)
-
-    def _keep_latest(
-        self, latest: LatestMessages, batch: StepBatch, takers: _Takers, received: NDArray[np.bool_]
-    ) -> None:
-        """Write a batch into the store of latest messages for the receivers kept there:
-        at once, or (a sender with two messages in the batch) message by message."""
-        kept = takers.kept_columns
-        receivers = np.array(takers.targets, dtype=np.intp)[kept]
-        received = received[:, kept]
-        if batch.distinct:
-            columns = {field: batch.column(field) for field in latest.fields}
-            latest.write_step(
-                batch.objects(), batch.senders, receivers, received, columns, self._now
-            )
-            return
-        senders = batch.senders.tolist()
-        for row, column in zip(*np.nonzero(received), strict=True):
-            latest.write(int(receivers[column]), senders[row], batch.messages[row], self._now)
+        """Hand a batch to its receivers (:func:`~mrcomm.net.handover.hand_over`):
+        ``received[m, c]`` says whether the receiver of column c (of
+        ``takers.targets``) got message m (sent by ``rows[m]``)."""
+        batch = StepBatch(messages, rows, self._members, self._numbers)
+        hand_over(takers, batch, received, received_n, self._latest.get(topic), self._now)
 
     # -- endpoint plumbing ---------------------------------------------------------
     def _publish(self, sender: int, topic: str, message: Message) -> None:
@@ -532,7 +431,7 @@ class InProcessNetwork:
         decisions, counts and handler calls, in the same order, as one at a time."""
         takers = self._takers.get(topic)
         if takers is None:
-            takers = self._takers[topic] = _Takers.of(receivers, self._latest.get(topic))
+            takers = self._takers[topic] = Takers.of(receivers, self._latest.get(topic))
         targets = np.array(takers.targets, dtype=np.intp)
         rows = np.array([f.sender for f in frames], dtype=np.intp)
         others = rows[:, None] != targets[None, :]
