@@ -34,6 +34,18 @@ def test_take_gives_the_draws_in_order() -> None:
     assert taken == singles
 
 
+def _network(ids: list[str], batch_from: int) -> InProcessNetwork:
+    """A team at SPL 40, each agent's loss stream seeded by its place; messages decided
+    as a batch from ``batch_from`` receivers."""
+    net = InProcessNetwork(
+        ids,
+        policy=DeliveryPolicy(40.0),
+        loss_rngs={a: np.random.default_rng(i) for i, a in enumerate(ids)},
+    )
+    net.batch_from = batch_from
+    return net
+
+
 def _pose(sender: str, k: int) -> PoseMsg:
     return PoseMsg(sender=sender, incarnation=1, seq=k, stamp=0.1 * k, x=float(k), y=0.0, theta=0.0)
 
@@ -45,12 +57,7 @@ def _deliveries(
     agents in ``taking_many`` subscribe with a BatchHandler (the sizes of its calls are
     returned too)."""
     ids = [f"r{i}" for i in range(12)]
-    net = InProcessNetwork(
-        ids,
-        policy=DeliveryPolicy(40.0),
-        loss_rngs={a: np.random.default_rng(i) for i, a in enumerate(ids)},
-    )
-    net.batch_from = batch_from
+    net = _network(ids, batch_from)
     got: list[tuple[str, str, int]] = []
     calls: list[int] = []
 
@@ -143,12 +150,7 @@ def _views(batch_from: int, keep_from: int, monkeypatch: pytest.MonkeyPatch) -> 
     ``keep_from`` endpoints."""
     monkeypatch.setattr(inprocess, "KEEP_LATEST_FROM", keep_from)
     ids = [f"r{i}" for i in range(KEEP_LATEST_FROM + 6)]
-    net = InProcessNetwork(
-        ids,
-        policy=DeliveryPolicy(40.0),
-        loss_rngs={a: np.random.default_rng(i) for i, a in enumerate(ids)},
-    )
-    net.batch_from = batch_from
+    net = _network(ids, batch_from)
     views = [TeamView() for _ in ids]
     now = [0.0]
     for a, view in zip(ids, views, strict=True):
@@ -200,12 +202,7 @@ def test_addressed_handlers_are_called_only_for_their_own_messages() -> None:
 
     def run(batch_from: int) -> tuple[list[tuple[str, str, int]], int]:
         ids = [f"r{i}" for i in range(12)]
-        net = InProcessNetwork(
-            ids,
-            policy=DeliveryPolicy(40.0),
-            loss_rngs={a: np.random.default_rng(i) for i, a in enumerate(ids)},
-        )
-        net.batch_from = batch_from
+        net = _network(ids, batch_from)
         acted: list[tuple[str, str, int]] = []
         calls = [0]
 
