@@ -102,8 +102,8 @@ class StepBatch:
 
     __slots__ = (
         "_columns",
+        "_distinct",
         "_objects",
-        "distinct",
         "index",
         "members",
         "messages",
@@ -123,10 +123,16 @@ class StepBatch:
         #: shared by all its batches).
         self.members = members
         self.index = index
-        #: No sender has two messages in the batch.
-        self.distinct = len(set(senders.tolist())) == len(senders)
+        self._distinct: bool | None = None
         self._objects: NDArray[np.object_] | None = None
         self._columns: dict[str, NDArray[np.float64]] = {}
+
+    @property
+    def distinct(self) -> bool:
+        """No sender has two messages in the batch (found when first asked)."""
+        if self._distinct is None:
+            self._distinct = len(set(self.senders.tolist())) == len(self.senders)
+        return self._distinct
 
     def objects(self) -> NDArray[np.object_]:
         """The messages as an array (picking a receiver's share is then one call)."""

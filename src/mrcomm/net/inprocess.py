@@ -303,18 +303,20 @@ class InProcessNetwork:
         rows = np.array(senders, dtype=np.intp)
         # Receivers a block at a time (each decides alone, from its own stream, in
         # target order): a large team's step keeps small arrays (bounded_blocks).
-        received = np.empty((len(rows), len(targets)), dtype=np.bool_)
-        decided: list[int] = []
-        reached_n: list[int] = []
-        received_n: list[int] = []
-        for block in bounded_blocks(len(targets), len(rows)):
-            part, decided_part, reached_part, received_part = self._decide_block(
-                topic, rows, targets[block]
-            )
-            received[:, block] = part
-            decided += decided_part
-            reached_n += reached_part
-            received_n += received_part
+        blocks = list(bounded_blocks(len(targets), len(rows)))
+        if len(blocks) == 1:  # (every team but the largest: no copy)
+            received, decided, reached_n, received_n = self._decide_block(topic, rows, targets)
+        else:
+            received = np.empty((len(rows), len(targets)), dtype=np.bool_)
+            decided, reached_n, received_n = [], [], []
+            for block in blocks:
+                part, decided_part, reached_part, received_part = self._decide_block(
+                    topic, rows, targets[block]
+                )
+                received[:, block] = part
+                decided += decided_part
+                reached_n += reached_part
+                received_n += received_part
         counts = self._topic_counts(topic)
         for column, receiver in enumerate(targets):
             if not decided[column]:
