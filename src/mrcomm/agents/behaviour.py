@@ -44,7 +44,7 @@ may change without notice.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
@@ -104,7 +104,7 @@ class BehaviourView(Protocol):
 
     robot_id: str
     params: ExecutorParams
-    team: tuple[str, ...]
+    team: Sequence[str]
     team_view: TeamView
     agenda: list[TaskSpec]
     completed: list[str]

@@ -26,6 +26,7 @@ from mrcomm.agents.collision import Mate
 from mrcomm.agents.commands import CommandInbox, command_team
 from mrcomm.agents.executor_params import ExecutorParams
 from mrcomm.agents.machine_table import StateEntry, build_table, quiet_rebinding
+from mrcomm.agents.mates import Mates
 from mrcomm.agents.team_view import TeamView
 from mrcomm.messaging.aon import AonEndpoint
 from mrcomm.messaging.messages import (
@@ -93,7 +94,7 @@ class ExecutorRuntime:
         self.statuses: AonStatuses | None = (
             self.Statuses(self, context) if self.Statuses is not None else None
         )
-        self.team: tuple[str, ...] = ()
+        self.team: Sequence[str] = ()
         self.agenda: list[TaskSpec] = []
         self.completed: list[str] = []
         self.known_done: set[str] = set()  # task ids any robot reported complete
@@ -319,7 +320,7 @@ class ExecutorRuntime:
         if message.robot != self.robot_id or self._t0 is not None:
             return
         self.agenda = list(message.tasks)
-        self.team = tuple(r for r in message.team if r != self.robot_id)
+        self.team = Mates(message.team, self.robot_id)
         self._assigner_id = message.sender
         self._t0 = self._now
         self.timeline.event(L.ASSIGNMENT_RECEIVED, self._now, tasks=len(self.agenda))
