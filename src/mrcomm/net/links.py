@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 
 from mrcomm.net import pair_loops
 from mrcomm.net.network import NetworkModel
+from mrcomm.net.pair_extent import PairExtent, row_blocks
 from mrcomm.net.thresholds import (
     BoolArray,
     FloatArray,
@@ -322,7 +323,6 @@ class LinkRecorder:
         n = len(ids)
         self._skip = skip or set()
         self.robots = robots
-        self._off_robots = ~np.eye(robots, dtype=np.bool_)
         self.rssi_period = rssi_period
         self._next_rssi = 0.0
         #: (time, from, to, rssi dBm) of robot pairs, sampled every ``rssi_period``.
@@ -335,14 +335,13 @@ class LinkRecorder:
         self._warning_onsets: NDArray[np.int64] | None = None
         self._time_disconnected: NDArray[np.float64] | None = None
         self._min_rssi: NDArray[np.float64] | None = None
-        self.min_distance = np.full((n, n), np.inf)
-        self.max_distance = np.zeros((n, n))
+        self._extent = PairExtent(n)  # each pair's least and greatest distance
         self._prev_warning: BoolArray | None = None  # None: no warning the last step
         # Link state per unordered robot pair (upper triangle): 0 connected, 1 warning,
-        # 2 out of range; with when the current state began.
-        self._pairs = upper_pairs(robots)
-        self._pair_state = np.zeros(len(self._pairs[0]), dtype=np.int8)
-        self._pair_since = np.zeros(len(self._pairs[0]))
+        # 2 out of range; with when the current state began. Made when a link first
+        # warns or breaks (never in a WLAN: 1.25 GB with its pair index at 10,000 robots).
+        self._pair_state = np.zeros(0, dtype=np.int8)
+        self._pair_since = np.zeros(0)
         self._open_pairs = False  # any pair in warning or out of range
         self._closed: list[tuple[str, str, str, float, float]] = []
         self._next_group = 0.0
@@ -371,8 +370,7 @@ class LinkRecorder:
             if self._time_disconnected is None:
                 self._time_disconnected = np.zeros((self._n, self._n))
             self._time_disconnected += dt * ~state.connected
-        np.fmin(self.min_distance, state.distance, out=self.min_distance)
-        np.fmax(self.max_distance, state.distance, out=self.max_distance)
+        self._extent.add(state.distance)
         if warned or disconnected or self._open_pairs:
             self._track_pair_states(state, now)
         n = self.robots
@@ -401,9 +399,12 @@ class LinkRecorder:
     def _track_pair_states(self, state: LinkState, start: float) -> None:
         """Close the intervals of pairs whose state changed with the step that began at
         ``start`` (the step's states hold from its start)."""
-        i, j = self._pairs
+        i, j = upper_pairs(self.robots)
         if len(i) == 0:
             return
+        if len(self._pair_state) != len(i):
+            self._pair_state = np.zeros(len(i), dtype=np.int8)
+            self._pair_since = np.zeros(len(i))
         out = ~state.connected[i, j] | ~state.connected[j, i]
         warn = state.warning[i, j] | state.warning[j, i]
         codes = np.where(out, 2, np.where(warn, 1, 0)).astype(np.int8)
@@ -416,7 +417,8 @@ class LinkRecorder:
     def _close(self, k: int, end: float) -> None:
         code = int(self._pair_state[k])
         if code and end > self._pair_since[k]:
-            a, b = self.ids[self._pairs[0][k]], self.ids[self._pairs[1][k]]
+            first, second = upper_pairs(self.robots)
+            a, b = self.ids[first[k]], self.ids[second[k]]
             since = round(float(self._pair_since[k]), 6)
             self._closed.append((a, b, PAIR_STATES[code], since, round(end, 6)))
 
@@ -424,11 +426,15 @@ class LinkRecorder:
         """(robot a, robot b, "warning" | "out of range", start s, end s) of every robot
         pair's link, in time order, the open ones closed at ``end``."""
         closed = list(self._closed)
-        for k in np.flatnonzero(self._pair_state).tolist():
-            a, b = self.ids[self._pairs[0][k]], self.ids[self._pairs[1][k]]
-            since = round(float(self._pair_since[k]), 6)
-            if end > since:
-                closed.append((a, b, PAIR_STATES[int(self._pair_state[k])], since, round(end, 6)))
+        still_open = np.flatnonzero(self._pair_state).tolist()
+        if still_open:
+            first, second = upper_pairs(self.robots)
+            for k in still_open:
+                a, b = self.ids[first[k]], self.ids[second[k]]
+                since = round(float(self._pair_since[k]), 6)
+                if end > since:
+                    state = PAIR_STATES[int(self._pair_state[k])]
+                    closed.append((a, b, state, since, round(end, 6)))
         return sorted(closed, key=lambda row: (row[3], row[0], row[1]))
 
     def _largest_group(self, connected: BoolArray) -> int:
@@ -457,15 +463,19 @@ class LinkRecorder:
         of its pairs' minimum distances, which is the least over the steps of its
         closest mate in each, exactly (a minimum of minima), kept for free."""
         n = self.robots
-        return np.where(self._off_robots, self.min_distance[:n, :n], np.inf).min(
-            axis=1, initial=np.inf
-        )
+        least = [
+            self._extent.least_rows(a, b, n).min(axis=1, initial=np.inf) for a, b in row_blocks(n)
+        ]
+        return np.concatenate([np.zeros(0), *least])
 
     @property
     def max_separation(self) -> NDArray[np.float64]:
         """Each robot's furthest team mate over the run, m (0 without one)."""
         n = self.robots
-        return np.where(self._off_robots, self.max_distance[:n, :n], 0.0).max(axis=1, initial=0.0)
+        greatest = [
+            self._extent.greatest_rows(a, b, n).max(axis=1, initial=0.0) for a, b in row_blocks(n)
+        ]
+        return np.concatenate([np.zeros(0), *greatest])
 
     def separations(self) -> list[tuple[float | None, float | None]]:
         """Each robot's closest and furthest team mate over the run, m (6 decimals; None
@@ -484,7 +494,8 @@ class LinkRecorder:
         onsets = self._warning_onsets
         if self.robots > SPARSE_FROM:
             n = self.robots
-            kept[:n, :n] &= self.min_distance[:n, :n] <= SPARSE_NEAR_M
+            for first, end in row_blocks(n):
+                kept[first:end, :n] &= self._extent.least_rows(first, end, n) <= SPARSE_NEAR_M
             if onsets is not None:
                 kept[:n, :n] |= (onsets[:n, :n] > 0) & ~np.eye(n, dtype=np.bool_)
         time_warning, time_disconnected = self._time_warning, self._time_disconnected
@@ -495,8 +506,8 @@ class LinkRecorder:
             a, b = ids[i], ids[j]
             if (a, b) not in self._skip:
                 out[f"{a}->{b}"] = {
-                    "min_distance": _finite(self.min_distance[i, j]),
-                    "max_distance": _finite(self.max_distance[i, j]),
+                    "min_distance": _finite(self._extent.least(i, j)),
+                    "max_distance": _finite(self._extent.greatest(i, j)),
                     "min_rssi": None if min_rssi is None else _finite(min_rssi[i, j]),
                     "time_in_warning": _sum(time_warning, i, j),
                     "warnings": 0 if onsets is None else int(onsets[i, j]),

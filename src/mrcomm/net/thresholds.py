@@ -39,8 +39,8 @@ BoolArray = NDArray[np.bool_]
 @functools.lru_cache(maxsize=4)
 def upper_pairs(n: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
     """The unordered pairs of ``n`` nodes, (a, b) with a < b in row order, as two index
-    arrays: one read-only copy per size, shared by everything that walks a team's pairs
-    (the link recorder, the proximity record): 800 MB each for 10,000 robots."""
+    arrays: one read-only copy per size, for whatever walks a team's pairs (the link
+    recorder's pair states): 800 MB for 10,000 robots, so made only when first needed."""
     first, second = np.triu_indices(n, k=1)
     first.flags.writeable = False
     second.flags.writeable = False
