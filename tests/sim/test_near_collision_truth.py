@@ -93,3 +93,42 @@ def test_under_heavy_loss_old_poses_cause_false_alarms_that_aged_knowledge_remov
     assert original["mission"]["near_collisions_false"] >= 10
     assert aged["mission"]["near_collisions_false"] <= 1
     assert aged["mission"]["near_collisions_confirmed"] >= 10
+
+
+def test_a_large_team_s_close_pairs_are_those_of_every_pair_gathered() -> None:
+    """The recorder reads the distance matrix's upper triangle a block of rows at a
+    time; its encounters are those of gathering every pair in team order at once."""
+    from mrcomm.net.links import distance_matrix
+    from mrcomm.run.proximity import PROXIMITY_ROWS
+
+    n = 2 * PROXIMITY_ROWS + 37
+    robots = tuple(f"r{k}" for k in range(n))
+    rng = np.random.default_rng(3)
+    at = rng.uniform(0.0, 30.0, size=(n + 1, 2))  # and a last node that is not a robot
+    recorder = ProximityRecorder(robots, radius=0.5)
+    first, second = np.triu_indices(n, k=1)
+    since: dict[int, float] = {}
+    closest: dict[int, float] = {}
+    expected: list[tuple[str, str, float, float, float]] = []
+    for step in range(12):
+        now = round(0.1 * step, 1)
+        at[:n] += rng.normal(0.0, 0.3, size=(n, 2))
+        distance = distance_matrix(at)
+        recorder.record(distance, now)
+        d = distance[first, second]
+        near = np.flatnonzero(d <= 0.5).tolist()
+        for k in [k for k in since if k not in set(near)]:
+            expected.append(
+                (robots[first[k]], robots[second[k]], since.pop(k), now, round(closest.pop(k), 4))
+            )
+        for k in near:
+            if k not in since:
+                since[k], closest[k] = now, float(d[k])
+            closest[k] = min(closest[k], float(d[k]))
+    expected += [
+        (robots[first[k]], robots[second[k]], s, 1.2, round(closest[k], 4))
+        for k, s in since.items()
+    ]
+    expected.sort(key=lambda e: (e[2], e[0], e[1]))
+    assert len(expected) > 50
+    assert recorder.encounters(end=1.2) == expected
