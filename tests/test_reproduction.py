@@ -158,3 +158,20 @@ def test_followers_driving_to_the_leaders_pose_keep_the_hold_time_flat_under_los
     short_0, _ = means({}, 0.0)
     short_75, _ = means({}, 75.0)
     assert short_75 > 1.6 * short_0
+
+
+def test_the_hold_diagnostic_finds_slt_holds_only_beyond_its_warning_distance(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """scripts/reproduction_holds.py (quoted in "SSD against SLT"): with SLT a leader
+    holds only for followers beyond SLT's 4 m warning distance."""
+    from mrcomm.run.resources import ScenarioResources
+    from tests.scripts import load_script
+
+    monkeypatch.chdir(ROOT)
+    script = load_script(ROOT / "scripts" / "reproduction_holds.py", "reproduction_holds")
+    script.holds("slt", 0.0, 1, ScenarioResources.load(script.SCENARIO))
+    out = capsys.readouterr().out
+    held = float(re.search(r"holds ([\d.]+) s", out).group(1))  # type: ignore[union-attr]
+    bins = [float(b) for b in re.findall(r"'(\d+\.\d)': ", out)]
+    assert held > 0 and bins and min(bins) >= 4.0
