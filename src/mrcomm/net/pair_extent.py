@@ -1,12 +1,17 @@
-"""The least and greatest distance each pair of nodes has had over a run, in one array.
+"""The least and greatest distance each pair of nodes has had over a run.
 
 The link recorder reports, per ordered pair, the closest and furthest its two ends came,
 and per robot its closest and furthest mate. A step's distance matrix is symmetric (the
 distance from a to b is the one from b to a, bit for bit: every producer fills one
 triangle and mirrors it), so the least distance of (a, b) equals that of (b, a), and so
 does the greatest. One (n, n) array therefore holds both: the least above the diagonal,
-the greatest below it. At 10,000 robots that is 0.8 GB where two matrices held 1.6 GB,
-and a step updates each cell once where two matrices updated every cell twice.
+the greatest below it. At 10,000 robots that is 0.8 GB where two matrices held 1.6 GB.
+
+A step updates the array a block of rows at a time, each cell once. The squares of a
+block's rows and columns straddle the diagonal; their lower halves hold least distances
+too (updated with the rest of the block's rows in one operation), and the greatest
+distances of the pairs inside a square are kept beside, in an (n, block) array: three
+array operations per block, none masked.
 """
 
 from __future__ import annotations
@@ -16,9 +21,10 @@ from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 
-#: Rows updated or read per array operation: a block's scratch is this many rows of the
-#: team, whatever its size.
-ROW_BLOCK = 64
+#: Rows updated or read per array operation. A team of up to this many nodes is one
+#: block: a step updates two whole arrays, as fast as the two matrices did (S4's 101
+#: nodes included); a larger one pays ~0.4 ms a step at 1,000 nodes for strided rows.
+ROW_BLOCK = 128
 
 
 class PairExtent:
@@ -27,26 +33,36 @@ class PairExtent:
 
     def __init__(self, n: int) -> None:
         self.n = n
-        # Above the diagonal the least (from inf), below it the greatest (from 0).
+        # Above the diagonal and in the blocks' squares the least (from inf); below the
+        # diagonal outside the squares the greatest (from 0).
         self._extent = np.full((n, n), np.inf)
-        for a, b in row_blocks(n):
-            self._extent[a:b, :a] = 0.0
-            self._extent[a:b, a:b][~_UPPER[: b - a, : b - a]] = 0.0
-        self._dirty = False
+        for a, _ in row_blocks(n):
+            self._extent[a : a + ROW_BLOCK, :a] = 0.0
+        # Row i, column j - a: the greatest distance of the pair (i, j) of one block
+        # starting at a.
+        self._square_greatest = np.zeros((n, min(n, ROW_BLOCK)))
+        # Per block: its rows, and the views of the two arrays each step updates (made
+        # once: a team of one block, up to 128 nodes, then updates two whole arrays).
+        self._views = [
+            (
+                a,
+                b,
+                self._extent[a:b, a:],
+                self._extent[a:b, :a] if a > 0 else None,
+                self._square_greatest[a:b, : b - a],
+            )
+            for a, b in row_blocks(n)
+        ]
 
     def add(self, distance: FloatArray) -> None:
         """Widen every pair's extent by one step's symmetric (n, n) ``distance``."""
-        extent = self._extent
-        n = self.n
-        for a, b in row_blocks(n):
-            if b < n:  # right of the block's square: above the diagonal
-                np.fmin(extent[a:b, b:], distance[a:b, b:], out=extent[a:b, b:])
-            if a > 0:  # left of it: below the diagonal
-                np.fmax(extent[a:b, :a], distance[a:b, :a], out=extent[a:b, :a])
-            square, step = extent[a:b, a:b], distance[a:b, a:b]
-            least = np.fmin(square, step)
-            np.fmax(square, step, out=square)
-            np.copyto(square, least, where=_UPPER[: b - a, : b - a])
+        whole = len(self._views) == 1
+        for a, b, right, left, square in self._views:
+            rows = distance if whole else distance[a:b]
+            np.fmin(right, rows if whole else rows[:, a:], out=right)
+            if left is not None:
+                np.fmax(left, rows[:, :a], out=left)
+            np.fmax(square, rows if whole else rows[:, a:b], out=square)
 
     def least(self, i: int, j: int) -> float:
         """The closest nodes ``i`` and ``j`` have been (inf: never both placed)."""
@@ -54,7 +70,11 @@ class PairExtent:
 
     def greatest(self, i: int, j: int) -> float:
         """The furthest nodes ``i`` and ``j`` have been (0: never both placed)."""
-        return float(self._extent[max(i, j), min(i, j)]) if i != j else 0.0
+        if i == j:
+            return 0.0
+        if i // ROW_BLOCK == j // ROW_BLOCK:
+            return float(self._square_greatest[i, j % ROW_BLOCK])
+        return float(self._extent[max(i, j), min(i, j)])
 
     def least_rows(self, a: int, b: int, columns: int) -> FloatArray:
         """Rows ``a:b`` of the (n, n) matrix of least distances, its first ``columns``
@@ -64,7 +84,15 @@ class PairExtent:
     def greatest_rows(self, a: int, b: int, columns: int) -> FloatArray:
         """Rows ``a:b`` of the (n, n) matrix of greatest distances, its first
         ``columns`` columns, 0 on the diagonal."""
-        return self._rows(a, b, columns, upper=False, diagonal=0.0)
+        rows = self._rows(a, b, columns, upper=False, diagonal=0.0)
+        for first, end in row_blocks(self.n):  # the pairs inside a square: kept beside
+            top, bottom, right = max(a, first), min(b, end), min(end, columns)
+            if top < bottom and first < right:
+                rows[top - a : bottom - a, first:right] = self._square_greatest[
+                    top:bottom, : right - first
+                ]
+        rows[np.arange(a, b)[:, None] == np.arange(columns)[None, :]] = 0.0
+        return rows
 
     def _rows(self, a: int, b: int, columns: int, *, upper: bool, diagonal: float) -> FloatArray:
         # Cell (i, j) of the full matrix is stored at (i, j) on its own side of the
@@ -80,7 +108,3 @@ class PairExtent:
 def row_blocks(n: int) -> list[tuple[int, int]]:
     """(first, end) of each block of :data:`ROW_BLOCK` rows of ``n``."""
     return [(a, min(n, a + ROW_BLOCK)) for a in range(0, n, ROW_BLOCK)]
-
-
-#: Within a block's square on the diagonal, the cells above the diagonal.
-_UPPER = np.triu(np.ones((ROW_BLOCK, ROW_BLOCK), dtype=np.bool_), k=1)
