@@ -84,11 +84,11 @@ def test_array_distances_match_the_pairs() -> None:
     assert np.isnan(results[0][3, 0]) and results[0][3, 3] == 0.0
 
 
-@pytest.mark.parametrize("n", [1, 2, 3, 63, 64, 65, 130, 201])
+@pytest.mark.parametrize("n", [1, 2, 3, 31, 32, 33, 63, 64, 65, 130, 201])
 def test_distance_matrix_is_the_whole_matrix_bit_for_bit(n: int) -> None:
-    # The triangle computed a block at a time and mirrored is exactly the whole matrix
-    # (rows of blocks of DISTANCE_BLOCK; a node without a position is NaN), and within
-    # one unit in the last place of hypot.
+    # Blocks of DISTANCE_BLOCK rows make exactly the whole matrix (a node without a
+    # position is NaN), symmetric bit for bit, and within one unit in the last place of
+    # hypot.
     rng = np.random.default_rng(n)
     at = rng.normal(0.0, 100.0, (n, 2))
     if n > 2:
@@ -100,6 +100,7 @@ def test_distance_matrix_is_the_whole_matrix_bit_for_bit(n: int) -> None:
     np.fill_diagonal(whole, 0.0)
     got = links_module.distance_matrix(at)
     assert got.tobytes() == whole.tobytes()
+    assert got.tobytes() == got.T.copy().tobytes()  # symmetric: PairExtent relies on it
     hypot = np.hypot(dx, dy)
     np.fill_diagonal(hypot, 0.0)
     ulp = np.spacing(np.where(np.isnan(hypot), 1.0, hypot))
