@@ -1,10 +1,10 @@
 """Where an LF leader's hold time comes from on S1: the links that warn while it holds.
 
-For each threshold (SLT, SSD) this runs LF missions on S1 · AH with the original robots'
-profile (data/experiments/reproduction-original.yaml), and at every step a leader holds
-looks at its links that warn in the link model: how far the follower is, whether the two
-see each other, and what the follower is doing. docs/REPRODUCTION.md ("SSD against SLT")
-quotes its output.
+For each threshold (SLT, SSD) this runs the LF · AH configuration of the original robots'
+profile (data/experiments/reproduction-original.yaml: S1 and its parameters), and at
+every step a leader holds looks at its links that warn in the link model: how far the
+follower is, whether the two see each other, and what the follower is doing.
+docs/REPRODUCTION.md ("SSD against SLT") quotes its output.
 
 Usage: ``python scripts/reproduction_holds.py [--spl 0] [--seeds 8]``
 """
@@ -14,26 +14,35 @@ from __future__ import annotations
 import argparse
 import collections
 
+from mrcomm.experiment.schema import Configuration, load_experiment
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.timeline import ACTIVITY
-from mrcomm.run.config import make_config
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.sim.mission import Mission
 
-SCENARIO = "data/scenarios/s1.yaml"
-#: The original robots' profile (reproduction-original.yaml's params).
-PROFILE = {"behaviour": {"judge_poses": "on_receipt", "lf": {"follow_distance": 0.65}}}
+#: The original robots' profile: its LF configurations on AH are the ones studied.
+PROFILE = "data/experiments/reproduction-original.yaml"
 
 
-def holds(threshold: str, spl: float, seeds: int, resources: ScenarioResources) -> None:
+def profile_configuration(threshold: str, spl: float) -> Configuration:
+    """The profile's LF · AH configuration with ``threshold`` and ``spl``."""
+    for configuration in load_experiment(PROFILE).configurations:
+        config = configuration.config
+        if (config.behaviour, config.network, config.threshold, config.spl) == (
+            "lf", "ah", threshold, spl,
+        ):  # fmt: skip
+            return configuration
+    raise SystemExit(f"{PROFILE}: no LF · AH · {threshold} · SPL {spl:g} configuration")
+
+
+def holds(threshold: str, spl: float, seeds: int) -> None:
     distance: collections.Counter[float] = collections.Counter()
     follower: collections.Counter[tuple[str, str]] = collections.Counter()
     hold_steps = 0
+    base = profile_configuration(threshold, spl).config
+    resources = ScenarioResources.load(base.scenario)
     for seed in range(1, seeds + 1):
-        config = make_config(
-            None, scenario=SCENARIO, network="ah", spl=spl, behaviour="lf",
-            threshold=threshold, seed=seed, params=PROFILE,
-        )  # fmt: skip
+        config = base.model_copy(update={"seed": seed})
         mission = Mission(config, resources)
         robots = mission.robot_ids
         while not mission.finished and mission.now < config.max_time:
@@ -51,7 +60,7 @@ def holds(threshold: str, spl: float, seeds: int, resources: ScenarioResources) 
                     seen = "-" if sight is None else "in sight" if sight[i, j] else "obstructed"
                     follower[(seen, str(mission.timelines[mate].state(ACTIVITY)))] += 1
     total = sum(distance.values()) or 1
-    print(f"{threshold}: the leader holds {hold_steps * config.dt / seeds:.1f} s a mission")
+    print(f"{threshold}: the leader holds {hold_steps * base.dt / max(seeds, 1):.1f} s a mission")
     shares = {
         f"{d:.1f}": round(c / total, 3) for d, c in sorted(distance.items()) if c / total > 0.01
     }
@@ -65,9 +74,8 @@ def main() -> None:
     parser.add_argument("--spl", type=float, default=0.0, help="simulated packet loss, %%")
     parser.add_argument("--seeds", type=int, default=8, help="missions per threshold")
     args = parser.parse_args()
-    resources = ScenarioResources.load(SCENARIO)
     for threshold in ("slt", "ssd"):
-        holds(threshold, args.spl, args.seeds, resources)
+        holds(threshold, args.spl, args.seeds)
 
 
 if __name__ == "__main__":

@@ -165,12 +165,11 @@ def test_the_hold_diagnostic_finds_slt_holds_only_beyond_its_warning_distance(
 ) -> None:
     """scripts/reproduction_holds.py (quoted in "SSD against SLT"): with SLT a leader
     holds only for followers beyond SLT's 4 m warning distance."""
-    from mrcomm.run.resources import ScenarioResources
     from tests.scripts import load_script
 
     monkeypatch.chdir(ROOT)
     script = load_script(ROOT / "scripts" / "reproduction_holds.py", "reproduction_holds")
-    script.holds("slt", 0.0, 1, ScenarioResources.load(script.SCENARIO))
+    script.holds("slt", 0.0, 1)
     out = capsys.readouterr().out
     held = float(re.search(r"holds ([\d.]+) s", out).group(1))  # type: ignore[union-attr]
     bins = [float(b) for b in re.findall(r"'(\d+\.\d)': ", out)]

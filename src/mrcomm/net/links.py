@@ -80,8 +80,7 @@ def distance_matrix(at: FloatArray) -> FloatArray:
     n = len(at)
     out = np.empty((n, n))
     x, y = at[:, 0], at[:, 1]
-    for a in range(0, n, DISTANCE_BLOCK):
-        b = min(n, a + DISTANCE_BLOCK)
+    for a, b in row_blocks(n, DISTANCE_BLOCK):
         dx = x[a:b, None] - x[None, :]
         dy = y[a:b, None] - y[None, :]
         dx *= dx

@@ -105,6 +105,7 @@ class PairExtent:
         return rows
 
 
-def row_blocks(n: int) -> list[tuple[int, int]]:
-    """(first, end) of each block of :data:`ROW_BLOCK` rows of ``n``."""
-    return [(a, min(n, a + ROW_BLOCK)) for a in range(0, n, ROW_BLOCK)]
+def row_blocks(n: int, size: int = ROW_BLOCK) -> list[tuple[int, int]]:
+    """(first, end) of each block of ``size`` rows of ``n`` (the last may be shorter):
+    how an (n, n) matrix is walked a bounded number of rows per array operation."""
+    return [(a, min(n, a + size)) for a in range(0, n, size)]

@@ -32,6 +32,7 @@ import numpy as np
 from mrcomm.metrics import labels as L
 from mrcomm.metrics.compute import TRUTH_COUNTS
 from mrcomm.metrics.timeline import Timeline
+from mrcomm.net.pair_extent import row_blocks
 from mrcomm.run.config import RunConfig
 
 #: How far apart in time a judgement and the truth may be and still match (s).
@@ -93,8 +94,7 @@ class ProximityRecorder:
         10,000 robots a step gathering all 50 million pairs into one array took 0.4 GB."""
         n = len(self.robots)
         near: dict[tuple[int, int], float] = {}
-        for a in range(0, n, PROXIMITY_ROWS):
-            b = min(n, a + PROXIMITY_ROWS)
+        for a, b in row_blocks(n, PROXIMITY_ROWS):
             block = distance[a:b, :n]
             hits = block <= self.radius
             if np.count_nonzero(hits) == b - a:
