@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import sys
 
 from mrcomm.experiment.schema import Configuration, load_experiment
 from mrcomm.metrics import labels as L
@@ -32,7 +33,8 @@ def profile_configuration(threshold: str, spl: float) -> Configuration:
             "lf", "ah", threshold, spl,
         ):  # fmt: skip
             return configuration
-    raise SystemExit(f"{PROFILE}: no LF · AH · {threshold} · SPL {spl:g} configuration")
+    print(f"{PROFILE}: no LF · AH · {threshold} · SPL {spl:g} configuration", file=sys.stderr)
+    raise SystemExit(2)
 
 
 def holds(threshold: str, spl: float, seeds: int) -> None:
