@@ -72,6 +72,7 @@ from collections import Counter
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from mrcomm.messaging.aon_lease import SilentMembers
 from mrcomm.messaging.aon_state import (
     AonStats,
     FinishReport,
@@ -173,10 +174,10 @@ class AonEndpoint:
         self._dirty: set[MessageId] = set()  # our own bits changed: publish soon
         self._replies: set[MessageId] = set()  # a peer asked and we know more
         self._now: float | None = None
-        self._last_heard: dict[str, float] = {}
+        #: When each member was last heard, and who has been silent past the lease.
+        self._silence = SilentMembers(lease, self._team.bit) if lease is not None else None
         self._heard: set[str] = set()  # publishers heard since the last step
         self._expired_bits = 0
-        self._oldest_heard = -math.inf  # a lower bound of the times in _last_heard
         #: Unfinished messages each member brought in (see :data:`MAX_INTRODUCED`).
         self._introduced: Counter[str] = Counter()
         self._introducer: dict[MessageId, str] = {}
@@ -238,8 +239,9 @@ class AonEndpoint:
 
     def heard_from(self, member: str, now: float) -> None:
         """Record that ``member`` is alive (any traffic from it, e.g. a pose)."""
-        if member in self._team.bit and member != self.owner:
-            self._last_heard[member] = max(self._last_heard.get(member, now), now)
+        silence = self._silence
+        if silence is not None and member in self._team.bit and member != self.owner:
+            silence.heard_at_least(member, now)
 
     def pending_ids(self) -> tuple[MessageId, ...]:
         """Messages held here that have not been reported finished yet."""
@@ -416,22 +418,10 @@ class AonEndpoint:
             self._on_finished(msg_id, report)
 
     def _check_lease(self, now: float) -> None:
-        assert self._lease is not None
-        # Times heard only grow (and a member first heard now is heard last), so the
-        # oldest found by the last full look is a lower bound: while it is within the
-        # lease nobody is silent, and the team of 100 is not looked through each step.
-        if now - self._oldest_heard <= self._lease:
-            self._expired_bits = 0
-            return
-        expired = 0
-        oldest = math.inf
-        for member, heard in self._last_heard.items():
-            if now - heard > self._lease:
-                expired |= self._team.bit[member]
-            oldest = min(oldest, heard)
-        self._oldest_heard = oldest if self._last_heard else -math.inf
+        assert self._silence is not None
         # A member heard again un-pauses the messages it blocked; their overdue re-send
         # then goes out at once, bringing it up to date.
+        expired = self._silence.update(now)
         self._expired_bits = expired
         if not expired:
             return
@@ -528,12 +518,14 @@ class AonEndpoint:
                     st.known_at = now
                     st.next_ask = now + self._resend
                     st.restart_at = now + self._failsafe
-            for member in self._team.members:
-                if member != self.owner:
-                    self._last_heard.setdefault(member, now)
+            if self._silence is not None:
+                for member in self._team.members:
+                    if member != self.owner:
+                        self._silence.heard_first(member, now)
         self._now = now
-        for member in self._heard:
-            self._last_heard[member] = now
+        if self._silence is not None:
+            for member in self._heard:
+                self._silence.heard(member, now)
         self._heard.clear()
 
     def _time(self) -> float:

@@ -353,10 +353,15 @@ class SimBase:
 
     # --------------------------------------------------------- navigation
     def make_plan(self, x: float, y: float) -> tuple[Point, ...] | None:
-        """Base port: the route to (x, y) from the localised pose, without moving."""
+        """Base port: the route to (x, y) from the localised pose, without moving.
+        Searched through the robot's memo: an agent that looks at a route and then
+        drives it (LF's direct hop, the passage queue) does not search twice."""
         loc = self._loc
         path = self.planner.plan(
-            (self._x + loc.ex, self._y + loc.ey), (float(x), float(y)), weights=self._weights
+            (self._x + loc.ex, self._y + loc.ey),
+            (float(x), float(y)),
+            weights=self._weights,
+            memo=self._plan_memo,
         )
         return None if path is None else path.waypoints
 
