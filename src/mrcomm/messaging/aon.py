@@ -102,6 +102,16 @@ FinishFn = Callable[[MessageId, FinishReport], None]
 # delivered before the first step); fixed up at the first step.
 _UNSET = -math.inf
 
+
+def is_paused(st: MsgState, full: int, expired: int) -> bool:
+    """Reported with left-out members that are still silent (``expired``: their bits),
+    and no member heard again lacks it: re-sending is futile. (A left-out member heard
+    again is brought up to date even while another is still away.)"""
+    if st.reported_left_out is None:
+        return False
+    return (full & ~st.recv & expired) != 0 and (full & ~st.have & ~expired) == 0
+
+
 #: Unfinished messages a member may bring into this endpoint (those it was first to
 #: publish here, whoever their origin); the endpoint holds at most this many per member.
 MAX_INTRODUCED = 256
@@ -225,15 +235,24 @@ class AonEndpoint:
         self._clock(now)
         if self._lease is not None:
             self._check_lease(now)
+        # One pass: a message is restarted when its fail-safe time has come, and due
+        # when restarted or its re-send time has come; neither while paused. Whether it
+        # is paused is asked once, and only of one that would be restarted or due: a
+        # team whose left-out messages wait for silent members holds many of them, every
+        # one past both times.
+        due = False
+        full, expired = self._team.full, self._expired_bits
         for st in self._states.values():
-            if now >= st.restart_at and not self._paused(st):
+            restart = now >= st.restart_at
+            if not (restart or st.restart or now >= st.next_ask):
+                continue
+            if is_paused(st, full, expired):
+                continue
+            if restart:
                 st.restart = True
                 st.restart_at = now + self._failsafe
                 self.stats.restarts += 1
-        due = any(
-            (now >= st.next_ask or st.restart) and not self._paused(st)
-            for st in self._states.values()
-        )
+            due = True
         if due or self._dirty or self._replies:
             self._publish(now)
 
@@ -438,15 +457,6 @@ class AonEndpoint:
                 st.reported_left_out = left_out
                 self._report(msg_id, st, left_out, now, late=False)
 
-    def _paused(self, st: MsgState) -> bool:
-        """Reported with left-out members that are still silent, and no member heard
-        again lacks it: re-sending is futile. (A left-out member heard again is brought
-        up to date even while another is still away.)"""
-        if st.reported_left_out is None:
-            return False
-        full, expired = self._team.full, self._expired_bits
-        return (full & ~st.recv & expired) != 0 and (full & ~st.have & ~expired) == 0
-
     # ------------------------------------------------------------------ sending
 
     def _publish(self, now: float) -> None:
@@ -459,7 +469,7 @@ class AonEndpoint:
         asked = False
         replies = 0
         for msg_id, st in self._states.items():
-            paused = self._paused(st)
+            paused = is_paused(st, full, self._expired_bits)
             if paused and msg_id not in self._dirty and msg_id not in self._replies:
                 continue
             ask = not paused and (now >= st.next_ask or st.restart)
