@@ -718,3 +718,43 @@ def test_a_measured_link_that_warns_beside_the_leader_does_not_hold_it() -> None
         h.hear(msgspec.structs.replace(message, stamp=h.now))
         state = h.step(times=3)
         assert (state == "leader_holding") is holds, (behind, state)
+
+
+class _LineOfSightBand(DistanceSensor):
+    """A warning like SSD's line-of-sight curve in Table 5.1 (2.6-3.6 m and beyond
+    6.1 m): in warning between 2.6 and 3.6 m and beyond 5.5 m (so that ``lead``'s mate
+    at 6 m warns), clear between: a signal that is not monotonic in distance."""
+
+    def __init__(self) -> None:
+        super().__init__(5.5)
+
+    def warning_between(self, ax: float, ay: float, bx: float, by: float) -> bool:
+        d = math.hypot(bx - ax, by - ay)
+        return 2.6 < d < 3.6 or d > 5.5
+
+
+def test_a_leader_judging_its_furthest_follower_holds_only_for_that_one() -> None:
+    """hold_judges "furthest" (the original's "too far from the furthest follower",
+    thesis line 1631): a nearer follower in warning does not hold the leader while the
+    furthest one is clear; the furthest in warning does. "each" (the default) holds for
+    any follower in warning."""
+    cases = [  # (judges, robot_2 behind, robot_3 behind, holds)
+        ("each", 3.0, 5.0, True),
+        ("furthest", 3.0, 5.0, False),
+        ("furthest", 3.0, 6.5, True),
+        ("furthest", 1.0, 2.0, False),
+        ("each", 1.0, 2.0, False),
+    ]
+    for judges, second, third, holds in cases:
+        h = Harness(
+            LeaderFollowerExecutor,
+            link_sensor=_LineOfSightBand(),
+            params=LfParams(hold_judges=judges),
+        )
+        lead(h)
+        for robot, behind in (("robot_2", second), ("robot_3", third)):
+            x = h.base.pose.x - behind
+            message = pose_of(robot, x, 0.0, 0.0, role=L.ROLE_FOLLOWER, leader="robot_1")
+            h.hear(msgspec.structs.replace(message, stamp=h.now))
+        state = h.step(times=2)
+        assert (state == "leader_holding") is holds, (judges, second, third, state)

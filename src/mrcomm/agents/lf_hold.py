@@ -7,10 +7,13 @@ Algorithm 5 read literally: beyond the communication limit). A follower is judge
 its last pose put it, or with ``hold_prediction`` where it should be by now
 (:func:`mrcomm.agents.lf_route.predicted_follower`); with ``chain_hops`` > 1 its link
 may go through mates. ``hold_grace`` lets a follower stay in warning that long before the
-leader holds. With a measured signal (ESD) a follower within ``refollow_distance`` never
-holds its leader: the two directions of a measured link differ, and a follower that
-measures no warning waits there while the leader's reading of it may warn (shadowing, a
-wall, the weaker direction): the two would wait for each other for ever. A signal
+leader holds. ``hold_judges`` "furthest" judges only the follower furthest from the
+leader (the original's "too far from the furthest follower robot(s)", thesis line 1631),
+where the default judges each. With a measured signal (ESD) a follower within
+``refollow_distance`` never holds its leader: the two directions of a measured link
+differ, and a follower that measures no warning waits there while the leader's reading
+of it may warn (shadowing, a wall, the weaker direction): the two would wait for each
+other for ever. A signal
 judged from positions (SLT, SSD) is the same both ways: such a follower sees the
 warning too and comes closer.
 """
@@ -56,6 +59,7 @@ class LeaderHold:
     def _judge(self, leader: LeaderFollowerExecutor) -> bool:
         pose = leader.base.pose
         lf = leader.lf
+        furthest: tuple[float, str, float, float] | None = None  # hold_judges "furthest"
         for mate in leader.team:
             known = leader.mates.get(mate)
             if known is None or leader.team_view.age(mate, leader._now) > lf.lost_timeout:
@@ -64,8 +68,16 @@ class LeaderHold:
                 continue
             age = max(0.0, leader._now - known.stamp)
             x, y = predicted_follower(known, pose, age, lf.hold_prediction, lf.follow_distance)
+            if lf.hold_judges == "furthest":
+                distance = math.hypot(x - pose.x, y - pose.y)
+                if furthest is None or distance > furthest[0]:
+                    furthest = (distance, mate, x, y)
+                continue
             if self._too_far(leader, mate, pose, x, y):
                 return True
+        if furthest is not None:
+            _, mate, x, y = furthest
+            return self._too_far(leader, mate, pose, x, y)
         return False
 
     @staticmethod

@@ -5,7 +5,7 @@ machine from these tables."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import field_validator
 
@@ -175,6 +175,14 @@ class LfParams(ExecutorParams):
         "lines 1541, 1606), while the warning threshold started role assignment",
         "m",
         gt=0,
+    )
+    hold_judges: Literal["each", "furthest"] = parameter(
+        "each",
+        "which followers a leader judges for a hold: each follower (a follower in warning "
+        "holds the leader), or only the furthest one from it, the original's \"too far "
+        "from the furthest follower robot(s)\" (thesis line 1631; Algorithm 5 judges one "
+        "networkPerturbation); with a threshold that is not monotonic in distance (SSD's "
+        "line-of-sight curve) a nearer follower in warning then does not hold the leader",
     )
     chain_hops: int = parameter(
         1,
