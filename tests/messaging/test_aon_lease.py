@@ -74,3 +74,40 @@ def test_heard_at_least_keeps_the_later_time() -> None:
     assert silence.update(3.6) == 1
     silence.heard_at_least("a", 3.6)
     assert silence.update(3.7) == 0
+
+
+def test_the_paused_messages_are_those_is_paused_names_at_every_tick() -> None:
+    """An endpoint's split of its messages into paused and active, kept up to date where
+    bits, reports and silent members change, is the one asking every message gives —
+    through lossy exchanges, members cut off past the lease and coming back."""
+    from mrcomm.messaging.aon_lease import is_paused
+    from tests.messaging.aon_team import AonTeam
+    from tests.messaging.fakenet import Cut, FakeNet
+
+    def check(team: AonTeam) -> None:
+        for endpoint in team.endpoints.values():
+            states = endpoint._states
+            full, expired = endpoint._team.full, endpoint._expired_bits
+            paused = {m for m, st in states.items() if is_paused(st, full, expired)}
+            assert endpoint._pauses.paused == paused
+            assert set(endpoint._pauses.active) == set(states) - paused
+            assert all(endpoint._pauses.active[m] is states[m] for m in endpoint._pauses.active)
+
+    seen_paused = 0
+    for seed in range(6):
+        members = [f"r{i}" for i in range(5)]
+        cuts = [Cut("r3", None, 2.0, 40.0 + 10 * seed), Cut("r4", None, 0.0, 25.0)]
+        net = FakeNet(members, seed=seed, loss=0.3, cuts=cuts)
+        team = AonTeam(net, lease=5.0, beacons=True)
+        net.tick()
+        for k, sender in enumerate(["r0", "r1", "r2", "r0", "r1"]):
+            team.send(sender)
+            for _ in range(10 + 7 * k):
+                net.tick()
+                check(team)
+        while net.now < 120.0 and not team.all_done():
+            net.tick()
+            check(team)
+            seen_paused += sum(len(e._pauses.paused) for e in team.endpoints.values())
+        assert team.all_done() and not team.violations
+    assert seen_paused > 0  # the exchanges did pause messages

@@ -72,7 +72,7 @@ from collections import Counter
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from mrcomm.messaging.aon_lease import SilentMembers
+from mrcomm.messaging.aon_lease import PausedMessages, SilentMembers
 from mrcomm.messaging.aon_state import (
     AonStats,
     FinishReport,
@@ -101,15 +101,6 @@ FinishFn = Callable[[MessageId, FinishReport], None]
 # Placeholder time for state created before the endpoint first saw a clock (a message
 # delivered before the first step); fixed up at the first step.
 _UNSET = -math.inf
-
-
-def is_paused(st: MsgState, full: int, expired: int) -> bool:
-    """Reported with left-out members that are still silent (``expired``: their bits),
-    and no member heard again lacks it: re-sending is futile. (A left-out member heard
-    again is brought up to date even while another is still away.)"""
-    if st.reported_left_out is None:
-        return False
-    return (full & ~st.recv & expired) != 0 and (full & ~st.have & ~expired) == 0
 
 
 #: Unfinished messages a member may bring into this endpoint (those it was first to
@@ -188,6 +179,8 @@ class AonEndpoint:
         self._silence = SilentMembers(lease, self._team.bit) if lease is not None else None
         self._heard: set[str] = set()  # publishers heard since the last step
         self._expired_bits = 0
+        #: The messages held, paused (waiting on silent members) or active.
+        self._pauses = PausedMessages(self._team.full)
         #: Unfinished messages each member brought in (see :data:`MAX_INTRODUCED`).
         self._introduced: Counter[str] = Counter()
         self._introducer: dict[MessageId, str] = {}
@@ -219,6 +212,7 @@ class AonEndpoint:
             restart_at=now + self._failsafe,
         )
         self._states[msg_id] = st
+        self._pauses.add(msg_id, st)
         self._dirty.add(msg_id)
         self._advance(msg_id, st)
         self._publish(now)
@@ -235,18 +229,14 @@ class AonEndpoint:
         self._clock(now)
         if self._lease is not None:
             self._check_lease(now)
-        # One pass: a message is restarted when its fail-safe time has come, and due
-        # when restarted or its re-send time has come; neither while paused. Whether it
-        # is paused is asked once, and only of one that would be restarted or due: a
-        # team whose left-out messages wait for silent members holds many of them, every
-        # one past both times.
+        # One pass over the messages not paused (the order changes nothing: each is
+        # restarted on its own, and any one due makes a publication): a message is
+        # restarted when its fail-safe time has come, and due when restarted or its
+        # re-send time has come.
         due = False
-        full, expired = self._team.full, self._expired_bits
-        for st in self._states.values():
+        for st in self._pauses.active.values():
             restart = now >= st.restart_at
             if not (restart or st.restart or now >= st.next_ask):
-                continue
-            if is_paused(st, full, expired):
                 continue
             if restart:
                 st.restart = True
@@ -325,6 +315,7 @@ class AonEndpoint:
             new_have, new_recv = st.have | have, st.recv | recv
             if (new_have, new_recv) != (st.have, st.recv):
                 st.have, st.recv = new_have, new_recv
+                self._pauses.judge(msg_id, st, self._expired_bits)
                 # Progress: postpone our own re-send.
                 st.next_ask = self._time() + self._resend
             if entry.ask and (st.have & ~have or st.recv & ~recv):
@@ -357,6 +348,7 @@ class AonEndpoint:
             restart_at=now + self._failsafe,
         )
         self._states[msg_id] = st
+        self._pauses.add(msg_id, st)
         self._dirty.add(msg_id)  # stage 2: acknowledge
         self.stats.deliveries += 1
         self._on_deliver(entry.payload, msg_id)
@@ -387,6 +379,7 @@ class AonEndpoint:
         full = self._team.full
         if st.have == full and not st.recv & self._self_bit:
             st.recv |= self._self_bit  # stage 3
+            self._pauses.judge(msg_id, st, self._expired_bits)
             self._dirty.add(msg_id)
         if st.recv == full:
             self._finish(msg_id, st)  # stage 4
@@ -394,6 +387,7 @@ class AonEndpoint:
     def _finish(self, msg_id: MessageId, st: MsgState) -> None:
         now = self._time()
         del self._states[msg_id]
+        self._pauses.remove(msg_id)
         introducer = self._introducer.pop(msg_id, None)
         if introducer is not None:
             self._introduced[introducer] -= 1
@@ -441,7 +435,9 @@ class AonEndpoint:
         # A member heard again un-pauses the messages it blocked; their overdue re-send
         # then goes out at once, bringing it up to date.
         expired = self._silence.update(now)
-        self._expired_bits = expired
+        if expired != self._expired_bits:
+            self._expired_bits = expired
+            self._pauses.judge_all(self._states, expired)
         if not expired:
             return
         full = self._team.full
@@ -455,6 +451,7 @@ class AonEndpoint:
             if blockers & expired and not missing & ~expired:
                 left_out = self._team.names(missing)
                 st.reported_left_out = left_out
+                self._pauses.judge(msg_id, st, expired)
                 self._report(msg_id, st, left_out, now, late=False)
 
     # ------------------------------------------------------------------ sending
@@ -469,7 +466,7 @@ class AonEndpoint:
         asked = False
         replies = 0
         for msg_id, st in self._states.items():
-            paused = is_paused(st, full, self._expired_bits)
+            paused = msg_id in self._pauses.paused
             if paused and msg_id not in self._dirty and msg_id not in self._replies:
                 continue
             ask = not paused and (now >= st.next_ask or st.restart)

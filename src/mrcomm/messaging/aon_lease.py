@@ -1,5 +1,6 @@
-"""Which members of an AON team have been silent longer than the lease: kept up to
-date as members are heard, instead of looking through the whole team every step.
+"""Which members of an AON team have been silent longer than the lease, and which
+messages wait on them: kept up to date as members are heard and messages progress,
+instead of looking through the whole team and every message every step.
 
 An endpoint asks every step. Looking through its team each time cost a team of 100
 (S4) 100 comparisons per robot per step as soon as one member was out of reach for
@@ -15,6 +16,8 @@ time — at a cost of a few heap operations per member and lease period.
 from __future__ import annotations
 
 import heapq
+
+from mrcomm.messaging.aon_state import MessageId, MsgState
 
 
 class SilentMembers:
@@ -81,3 +84,52 @@ class SilentMembers:
             else:
                 heapq.heappush(fresh, (last, member))
         return self.bitmap
+
+
+def is_paused(st: MsgState, full: int, expired: int) -> bool:
+    """Reported with left-out members that are still silent (``expired``: their bits),
+    and no member heard again lacks it: re-sending is futile. (A left-out member heard
+    again is brought up to date even while another is still away.)"""
+    if st.reported_left_out is None:
+        return False
+    return (full & ~st.recv & expired) != 0 and (full & ~st.have & ~expired) == 0
+
+
+class PausedMessages:
+    """An endpoint's messages split into the paused ones (:func:`is_paused`) and the
+    rest (``active``), judged again only where the answer can change: a message's bits
+    or its left-out report, or the silent members. An endpoint's step then looks at the
+    active messages only; a team whose left-out messages wait for silent members holds
+    many, each past its re-send and fail-safe times (S4: 5 % of an LF mission asking
+    each of them every step)."""
+
+    __slots__ = ("_full", "active", "paused")
+
+    def __init__(self, full: int) -> None:
+        self._full = full
+        self.active: dict[MessageId, MsgState] = {}
+        self.paused: set[MessageId] = set()
+
+    def add(self, msg_id: MessageId, st: MsgState) -> None:
+        """A message new to the endpoint (not reported yet: never paused)."""
+        self.active[msg_id] = st
+
+    def remove(self, msg_id: MessageId) -> None:
+        self.active.pop(msg_id, None)
+        self.paused.discard(msg_id)
+
+    def judge(self, msg_id: MessageId, st: MsgState, expired: int) -> None:
+        """``st``'s bits or report changed (``expired``: the silent members' bits)."""
+        if is_paused(st, self._full, expired):
+            self.active.pop(msg_id, None)
+            self.paused.add(msg_id)
+        elif msg_id in self.paused:
+            self.paused.discard(msg_id)
+            self.active[msg_id] = st
+
+    def judge_all(self, states: dict[MessageId, MsgState], expired: int) -> None:
+        """The silent members changed: every reported message again (the others are
+        never paused)."""
+        for msg_id, st in states.items():
+            if st.reported_left_out is not None:
+                self.judge(msg_id, st, expired)
