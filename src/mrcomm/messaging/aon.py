@@ -102,7 +102,6 @@ FinishFn = Callable[[MessageId, FinishReport], None]
 # delivered before the first step); fixed up at the first step.
 _UNSET = -math.inf
 
-
 #: Unfinished messages a member may bring into this endpoint (those it was first to
 #: publish here, whoever their origin); the endpoint holds at most this many per member.
 MAX_INTRODUCED = 256
