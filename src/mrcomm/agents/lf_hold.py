@@ -13,9 +13,8 @@ where the default judges each. With a measured signal (ESD) a follower within
 ``refollow_distance`` never holds its leader: the two directions of a measured link
 differ, and a follower that measures no warning waits there while the leader's reading
 of it may warn (shadowing, a wall, the weaker direction): the two would wait for each
-other for ever. A signal
-judged from positions (SLT, SSD) is the same both ways: such a follower sees the
-warning too and comes closer.
+other for ever. A signal judged from positions (SLT, SSD) is the same both ways: such a
+follower sees the warning too and comes closer.
 """
 
 from __future__ import annotations
