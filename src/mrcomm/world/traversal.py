@@ -154,9 +154,7 @@ def cast_loop(
             clearance_out[i] = -1.0
             continue
         if count_walls:
-            walls = _walls(
-                occupied, k, cells, step_x, t_x0, t_dx, step_y, t_y0, t_dy, gap_cells
-            )
+            walls = _walls(occupied, k, cells, step_x, t_x0, t_dx, step_y, t_y0, t_dy, gap_cells)
             if walls > 0:
                 walls_out[i] = walls
                 clearance_out[i] = -1.0
