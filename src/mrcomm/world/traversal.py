@@ -77,9 +77,10 @@ def walls_loop(
     Added up, each next crossing waits for the addition before it, a chain of dependent
     floating-point additions the processor cannot overlap; from the count, the next
     crossing is ready as soon as the count is: S4's replayed casts take about 0.6 of
-    the time (``benchmarks/bench_casts.py``; less inside a whole mission). It is also one rounding per crossing instead of one that accumulates: the
-    two differ only on a segment through a grid corner to within about 1e-10 of a cell,
-    where either order of the two crossings is the traversal's."""
+    the time (``benchmarks/bench_casts.py``; less inside a whole mission). It is also
+    one rounding per crossing instead of one that accumulates: the two differ only on a
+    segment through a grid corner to within about 1e-10 of a cell, where either order
+    of the two crossings is the traversal's."""
     walls = 0
     free_run = gap_cells  # before the first wall: any run starts a wall
     nx = ny = 0  # grid lines crossed so far, in x and in y
