@@ -25,15 +25,19 @@ from mrcomm.sim.mission import Mission
 PROFILE = "data/experiments/reproduction-original.yaml"
 
 
-def profile_configuration(threshold: str, spl: float) -> Configuration:
-    """The profile's LF · AH configuration with ``threshold`` and ``spl``."""
+def profile_configuration(
+    threshold: str, spl: float, behaviour: str = "lf", network: str = "ah"
+) -> Configuration:
+    """The profile's configuration with ``behaviour`` (LF), ``network`` (AH),
+    ``threshold`` and ``spl``."""
     for configuration in load_experiment(PROFILE).configurations:
         config = configuration.config
         if (config.behaviour, config.network, config.threshold, config.spl) == (
-            "lf", "ah", threshold, spl,
+            behaviour, network, threshold, spl,
         ):  # fmt: skip
             return configuration
-    print(f"{PROFILE}: no LF · AH · {threshold} · SPL {spl:g} configuration", file=sys.stderr)
+    name = f"{behaviour.upper()} · {network.upper()} · {threshold} · SPL {spl:g}"
+    print(f"{PROFILE}: no {name} configuration", file=sys.stderr)
     raise SystemExit(2)
 
 

@@ -174,3 +174,20 @@ def test_the_hold_diagnostic_finds_slt_holds_only_beyond_its_warning_distance(
     held = float(re.search(r"holds ([\d.]+) s", out).group(1))  # type: ignore[union-attr]
     bins = [float(b) for b in re.findall(r"'(\d+\.\d)': ", out)]
     assert held > 0 and bins and min(bins) >= 4.0
+
+
+def test_the_separation_as_heard_is_the_true_one_when_every_pose_arrives(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """scripts/reproduction_separation.py (quoted in "What is left"): with every pose
+    arriving (5 a second), the separation a robot heard is within a pose's travel of the
+    true one; a robot out of AH's range hears its mates' old poses, further off."""
+    from tests.scripts import load_script
+
+    monkeypatch.chdir(ROOT)
+    load_script(ROOT / "scripts" / "reproduction_holds.py", "reproduction_holds")
+    script = load_script(ROOT / "scripts" / "reproduction_separation.py", "reproduction_separation")
+    true_max, heard_max = script.separations("lf", "wlan", 0.0, 1)
+    assert 3.0 < true_max < 8.0 and abs(heard_max - true_max) < 0.3
+    true_max, heard_max = script.separations("nb", "ah", 0.0, 1)
+    assert true_max > 20.0 and heard_max > true_max + 1.0

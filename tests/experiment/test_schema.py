@@ -214,3 +214,12 @@ def test_invalid_combination_is_named(tmp_path: Path) -> None:
         assert "exclude" in err.message and err.field == "factors"
     else:
         pytest.fail("SSD on WLAN was accepted")
+
+
+@pytest.mark.parametrize("path", sorted(EXPERIMENTS.glob("*.yaml")), ids=lambda p: p.stem)
+def test_every_bundled_experiment_loads_and_names_itself_after_its_file(path: Path) -> None:
+    """A bundled experiment is run by its file's name (`mrcomm sweep <name>`), so each
+    one must load, expand to runs and carry that name."""
+    experiment = load_experiment(path)
+    assert experiment.name == path.stem
+    assert experiment.configurations and experiment.runs()
