@@ -18,10 +18,9 @@ import argparse
 import math
 import statistics
 
-from reproduction_holds import profile_configuration
-
 from mrcomm.run.resources import ScenarioResources
 from mrcomm.sim.mission import Mission
+from reproduction_holds import profile_configuration
 
 #: The loss levels of the original's design.
 SPLS = (0.0, 25.0, 50.0, 75.0)
