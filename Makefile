@@ -66,8 +66,8 @@ $(ROS_STAMP): pyproject.toml scripts/ros2_env.sh ros2/nav2_msgs/CMakeLists.txt r
 # tests/ros2 the core environment runs only those that need no ROS) last.
 test: system-deps
 	$(MAKE) --no-print-directory -j2 $(STAMP) $(ROS_STAMP)
-	MPLBACKEND=Agg $(BIN)/pytest -q -n 2 --ignore=tests/live tests examples/mrcomm-repeat/tests
-	MPLBACKEND=Agg $(BIN)/pytest -q -n 2 --dist loadfile -m "not alone" tests/live
+	MPLBACKEND=Agg $(BIN)/pytest -q -n 2 --durations=20 --ignore=tests/live tests examples/mrcomm-repeat/tests
+	MPLBACKEND=Agg $(BIN)/pytest -q -n 2 --durations=10 --dist loadfile -m "not alone" tests/live
 	MPLBACKEND=Agg $(BIN)/pytest -q -m alone tests/live
 	@if [ -f $(ROS_VENV)/.installed ]; then \
 	  MPLBACKEND=Agg MRCOMM_ROS2_ENV=1 $(ROS_VENV)/bin/pytest -q tests/ros2; \
