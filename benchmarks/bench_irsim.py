@@ -13,7 +13,12 @@ loss, NB agents, every message). Each case runs in a fresh process pinned to one
 cases interleaved over ``--repeats`` rounds; the median real-time factor is reported
 with the ratio MRComm / IR-SIM.
 
-Run: ``.venv/bin/python benchmarks/bench_irsim.py [--repeats 3] [--sim-time 30]``
+With ``--options JSON`` MRComm runs that configuration instead (make_config's options
+over NB · WLAN · SPL 25, e.g. ``'{"network": "radio"}'``: the radio's cost beside the
+same IR-SIM runs).
+
+Run: ``.venv/bin/python benchmarks/bench_irsim.py [--repeats 3] [--sim-time 30]
+[--options JSON]``
 """
 
 from __future__ import annotations
@@ -95,21 +100,25 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--sim-time", type=float, default=30.0)
+    parser.add_argument("--options", type=json.loads, default={}, help="make_config options")
     args = parser.parse_args()
     irsim_python()
     print(f"{os.cpu_count()} CPUs, pinned to one core; {args.sim_time:g} s simulated; "
+          f"MRComm {json.dumps(args.options) if args.options else 'NB · WLAN · SPL 25'}; "
           f"load {os.getloadavg()}")  # fmt: skip
     cases = [(name, kind) for name in TEAMS for kind in ("mrcomm", "rvo", "dash")]
     runs: dict[tuple[str, str], list[dict[str, float]]] = {case: [] for case in cases}
     for _ in range(args.repeats):
         for name, kind in cases:  # interleaved: background load falls on every case alike
             if kind == "mrcomm":
-                runs[(name, kind)].append(run_case(SCENARIOS[name][1], args.sim_time))
+                runs[(name, kind)].append(
+                    run_case(SCENARIOS[name][1], args.sim_time, options=args.options)
+                )
             else:
                 runs[(name, kind)].append(run_irsim(TEAMS[name], args.sim_time, kind))
     print(f"load after: {os.getloadavg()}")
     print(
-        "| robots | MRComm (NB, WLAN, SPL 25) | IR-SIM rvo | IR-SIM dash | "
+        "| robots | MRComm | IR-SIM rvo | IR-SIM dash | "
         "MRComm / rvo | MRComm / dash | rvo arrived, collided | dash arrived, collided |"
     )
     print("|---|---|---|---|---|---|---|---|")  # fmt: skip

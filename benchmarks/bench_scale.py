@@ -15,8 +15,17 @@ With ``--old DIR`` (a ``git worktree`` of an earlier commit) every case also run
 that tree's code and its own bundled scenario file (this tree's when it has none),
 interleaved with this one's, and the table gets both and their ratio.
 
+With ``--options JSON`` (make_config's, over NB · WLAN · SPL 25) every case runs that
+configuration instead, e.g. the radio (``'{"network": "radio"}'``) or its shared channel
+(``'{"network": "radio", "params": {"network": {"channel": "shared"}}}'``); ``--core``
+picks the core the children are pinned to (two benchmarks at once, one per core), and
+``--label`` names each configuration in the tables and the figure. ``--replot OUTPUT
+--figure PNG`` draws the figure again from a saved output of this script (its printed
+table), running nothing.
+
 Run: ``.venv/bin/python benchmarks/bench_scale.py [--repeats 3] [--sim-time 120 | --whole]
-[--only s2 --only s3] [--figure docs/figures/scale.png] [--old /tmp/mrcomm-old]``
+[--only s2 --only s3] [--figure docs/figures/scale.png] [--old /tmp/mrcomm-old]
+[--options JSON] [--core 1]``
 """
 
 from __future__ import annotations
@@ -30,6 +39,7 @@ import statistics
 import subprocess
 import sys
 from pathlib import Path
+from typing import cast
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIOS = {
@@ -96,9 +106,15 @@ def result_of(child: subprocess.Popen[str]) -> dict[str, float]:
     return dict(json.loads(out.strip().splitlines()[-1]))
 
 
-def run_case(path: Path, sim_time: float, tree: Path | None = None) -> dict[str, float]:
-    """One case in a fresh process on core 0, waited for."""
-    return result_of(start_case(path, sim_time, tree))
+def run_case(
+    path: Path,
+    sim_time: float,
+    tree: Path | None = None,
+    core: int = 0,
+    options: dict[str, object] | None = None,
+) -> dict[str, float]:
+    """One case in a fresh process on ``core``, waited for."""
+    return result_of(start_case(path, sim_time, tree, core, options))
 
 
 def fit_exponent(points: list[tuple[int, float]]) -> float:
@@ -111,6 +127,19 @@ def fit_exponent(points: list[tuple[int, float]]) -> float:
     )
 
 
+def label_of(options: dict[str, object], prefix: str = "") -> str:
+    """A configuration's name in the tables: its options flattened (``network=radio
+    params.network.channel=shared``), or the default case's."""
+    if not options and not prefix:
+        return "NB · WLAN · SPL 25"
+    return " ".join(
+        label_of(cast(dict[str, object], value), f"{prefix}{key}.")
+        if isinstance(value, dict)
+        else f"{prefix}{key}={value}"
+        for key, value in options.items()
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
@@ -119,37 +148,68 @@ def main() -> None:
     parser.add_argument("--whole", action="store_true", help="each mission to its end")
     parser.add_argument("--figure", type=Path)
     parser.add_argument("--old", type=Path, help="an earlier tree to run side by side")
+    parser.add_argument(
+        "--options",
+        type=json.loads,
+        action="append",
+        help="make_config options (JSON); repeat it to interleave several configurations",
+    )
+    parser.add_argument("--core", type=int, default=0, help="the core the children run on")
+    parser.add_argument(
+        "--label", action="append", help="a name for each --options, in order (tables, figure)"
+    )
+    parser.add_argument(
+        "--replot", type=Path, help="draw --figure from a saved output of this script; run nothing"
+    )
     args = parser.parse_args()
+    if args.replot is not None:
+        if args.figure is None:
+            raise SystemExit("--replot needs --figure")
+        saved = read_table(args.replot)
+        if args.label:  # new names for the saved configurations, in order
+            saved = [(name, points) for name, (_, points) in zip(args.label, saved, strict=True)]
+        draw_figure(saved, args.figure)
+        return
+    configs: list[dict[str, object]] = args.options or [{}]
+    labels: list[str] = args.label or [label_of(c) for c in configs]
+    if len(labels) != len(configs):
+        raise SystemExit(f"{len(labels)} --label for {len(configs)} configurations")
     names = args.only or list(SCENARIOS)
     if args.whole:
         args.sim_time = 0.0
     span = "whole missions" if args.whole else f"{args.sim_time:g} s simulated"
-    print(f"Python {platform.python_version()}, {os.cpu_count()} CPUs, pinned to one core; "
-          f"NB · WLAN · SPL 25, {span}; load {os.getloadavg()}")  # fmt: skip
-    results: dict[str, list[dict[str, float]]] = {name: [] for name in names}
-    before: dict[str, list[dict[str, float]]] = {name: [] for name in names}
+    print(f"Python {platform.python_version()}, {os.cpu_count()} CPUs, pinned to core "
+          f"{args.core}; {' | '.join(labels)}; {span}; "
+          f"load {os.getloadavg()}")  # fmt: skip
+    cases = [(name, k) for name in names for k in range(len(configs))]
+    results: dict[tuple[str, int], list[dict[str, float]]] = {case: [] for case in cases}
+    before: dict[tuple[str, int], list[dict[str, float]]] = {case: [] for case in cases}
     for _ in range(args.repeats):
-        for name in names:  # interleaved: background load falls on every case alike
-            results[name].append(run_case(SCENARIOS[name][1], args.sim_time))
+        for name, k in cases:  # interleaved: background load falls on every case alike
+            path = SCENARIOS[name][1]
+            results[name, k].append(run_case(path, args.sim_time, None, args.core, configs[k]))
             if args.old is not None:
-                own = args.old / SCENARIOS[name][1].relative_to(ROOT)
-                path = own if own.exists() else SCENARIOS[name][1]
-                before[name].append(run_case(path, args.sim_time, args.old))
+                own = args.old / path.relative_to(ROOT)
+                old_path = own if own.exists() else path
+                before[name, k].append(
+                    run_case(old_path, args.sim_time, args.old, args.core, configs[k])
+                )
     print(f"load after: {os.getloadavg()}")
     if args.old is not None:
-        print(f"| scenario | robots | CPU s, {args.old} | CPU s, this tree | this / old |")
-        print("|---|---|---|---|---|")
-        for name in names:
-            old_cpu = statistics.median(r["cpu"] for r in before[name])
-            new_cpu = statistics.median(r["cpu"] for r in results[name])
-            print(f"| {name} | {SCENARIOS[name][0]} | {old_cpu:.2f} | {new_cpu:.2f} "
-                  f"| {new_cpu / old_cpu:.2f} |")  # fmt: skip
-    print("| scenario | robots | simulated s | real-time factor | wall s | CPU s | ms per step "
-          "| peak MB |")  # fmt: skip
-    print("|---|---|---|---|---|---|---|---|")
-    points = []
-    for name in names:
-        runs = results[name]
+        print(f"| scenario | robots | configuration | CPU s, {args.old} | CPU s, this tree "
+              "| this / old |")  # fmt: skip
+        print("|---|---|---|---|---|---|")
+        for name, k in cases:
+            old_cpu = statistics.median(r["cpu"] for r in before[name, k])
+            new_cpu = statistics.median(r["cpu"] for r in results[name, k])
+            print(f"| {name} | {SCENARIOS[name][0]} | {labels[k]} | {old_cpu:.2f} "
+                  f"| {new_cpu:.2f} | {new_cpu / old_cpu:.2f} |")  # fmt: skip
+    print("| scenario | robots | configuration | simulated s | real-time factor | wall s | CPU s "
+          "| ms per step | per step, against the first | peak MB |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    series: list[list[tuple[int, float]]] = [[] for _ in configs]
+    for name, k in cases:
+        runs = results[name, k]
         wall = statistics.median(r["wall"] for r in runs)
         cpu = statistics.median(r["cpu"] for r in runs)
         sim = statistics.median(r["sim"] for r in runs)
@@ -157,36 +217,62 @@ def main() -> None:
         peak = max(r["peak_mb"] for r in runs)
         per_step = cpu / steps * 1000
         n = SCENARIOS[name][0]
-        points.append((n, per_step))
-        print(f"| {name} | {n} | {sim:g} | {sim / wall:.3g}x | {wall:.2f} | {cpu:.2f} | "
-              f"{per_step:.2f} | {peak:.0f} |")  # fmt: skip
-    if len(points) >= 2:
-        print(f"cost per step ~ N^{fit_exponent(points):.2f} (log-log least squares)")
+        series[k].append((n, per_step))
+        # Missions of two configurations may differ in length: compare the cost per step.
+        first = series[0][-1][1]
+        print(f"| {name} | {n} | {labels[k]} | {sim:g} | {sim / wall:.3g}x | "
+              f"{wall:.2f} | {cpu:.2f} | {per_step:.2f} | {per_step / first:.2f} | "
+              f"{peak:.0f} |")  # fmt: skip
+    for k, points in enumerate(series):
+        if len(points) >= 2:
+            print(f"{labels[k]}: cost per step ~ N^{fit_exponent(points):.2f} "
+                  "(log-log least squares)")  # fmt: skip
     if args.figure is not None:
-        import matplotlib
+        draw_figure([(labels[k], points) for k, points in enumerate(series)], args.figure)
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
 
-        fig, ax = plt.subplots(figsize=(5, 3.6))
-        ax.loglog([n for n, _ in points], [c for _, c in points], "o", label="measured")
+def read_table(path: Path) -> list[tuple[str, list[tuple[int, float]]]]:
+    """The (configuration, [(robots, ms per step)]) series of a table this script printed
+    (its output kept in a file), in the order the configurations first appear."""
+    series: dict[str, list[tuple[int, float]]] = {}
+    for line in path.read_text().splitlines():
+        cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
+        if len(cells) != 10 or not cells[1].isdigit():
+            continue  # not a row of the main table
+        series.setdefault(cells[2], []).append((int(cells[1]), float(cells[7])))
+    if not series:
+        raise SystemExit(f"{path}: no table of bench_scale.py's in it")
+    return list(series.items())
+
+
+def draw_figure(series: list[tuple[str, list[tuple[int, float]]]], path: Path) -> None:
+    """Cost per step against team size on log-log axes, each series with its fit."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5, 3.6))
+    for name, points in series:
+        dots = ax.loglog([n for n, _ in points], [c for _, c in points], "o", label=name)
         if len(points) >= 2:
             # The least-squares line in log-log space (its slope is the exponent).
-            k = fit_exponent(points)
+            slope = fit_exponent(points)
             xs = [math.log(n) for n, _ in points]
             ys = [math.log(c) for _, c in points]
-            c0 = statistics.fmean(ys) - k * statistics.fmean(xs)
+            c0 = statistics.fmean(ys) - slope * statistics.fmean(xs)
             ends = [points[0][0], points[-1][0]]
-            ax.loglog(ends, [math.exp(c0 + k * math.log(n)) for n in ends], "--",
-                      label=f"fit: cost ~ N^{k:.2f}")  # fmt: skip
-            ax.legend()
-        ax.set_xlabel("robots")
-        ax.set_ylabel("CPU ms per 0.1 s step")
-        ax.set_title("Simulation cost against team size")
-        ax.grid(True, which="both", alpha=0.3)
-        fig.tight_layout()
-        fig.savefig(args.figure, dpi=150)
-        print(f"figure {args.figure}")
+            ax.loglog(ends, [math.exp(c0 + slope * math.log(n)) for n in ends], "--",
+                      color=dots[0].get_color(),
+                      label=f"fit: cost ~ N^{slope:.2f}")  # fmt: skip
+    ax.legend(fontsize="small", loc="upper left")
+    ax.set_xlabel("robots")
+    ax.set_ylabel("CPU ms per 0.1 s step")
+    ax.set_title("Simulation cost against team size")
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=150)
+    print(f"figure {path}")
 
 
 if __name__ == "__main__":
