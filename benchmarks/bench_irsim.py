@@ -33,7 +33,7 @@ import venv
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_scale import SCENARIOS, run_case
+from bench_scale import SCENARIOS, label_of, run_case
 
 IRSIM_VERSION = "2.12.0"
 VENV = Path(__file__).resolve().parent / ".irsim-venv"
@@ -104,7 +104,7 @@ def main() -> None:
     args = parser.parse_args()
     irsim_python()
     print(f"{os.cpu_count()} CPUs, pinned to one core; {args.sim_time:g} s simulated; "
-          f"MRComm {json.dumps(args.options) if args.options else 'NB · WLAN · SPL 25'}; "
+          f"MRComm {label_of(args.options)}; "
           f"load {os.getloadavg()}")  # fmt: skip
     cases = [(name, kind) for name in TEAMS for kind in ("mrcomm", "rvo", "dash")]
     runs: dict[tuple[str, str], list[dict[str, float]]] = {case: [] for case in cases}

@@ -498,12 +498,14 @@ def advance(
 @compiled
 def set_links(
     power_dbm: Any, sense_dbm: float, sensitivity_dbm: float, senses: Any, hears: Any,
-    radio: Any,
+    radio: Any, power_mw: Any,
 ) -> None:  # fmt: skip
     """Who senses whom and who can hear whom at the step's ``power_dbm[s, r]`` (never
     oneself), and who has a radio: a node with no power to anyone (NaN: the operator's
     virtual node) has none, so it is never blocked and its frames neither are sensed nor
-    interfere (a node alone keeps its radio)."""
+    interfere (a node alone keeps its radio). Also ``power_mw``, the power in mW (0 for
+    NaN) by the C library's ``pow``: numpy's own power picks its routine by the
+    processor (AVX-512's give other last bits), so the air would depend on the machine."""
     n = power_dbm.shape[0]
     for r in range(n):
         anyone = False
@@ -514,6 +516,7 @@ def set_links(
             hears[s, r] = other and power >= sensitivity_dbm
             if other and not math.isnan(power):
                 anyone = True
+            power_mw[s, r] = 0.0 if math.isnan(power) else 10.0 ** (power / 10.0)
         radio[r] = anyone or n == 1
 
 

@@ -58,7 +58,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mrcomm.compiled import compiled
 from mrcomm.net.radio import air
 from mrcomm.net.radio.profile import RadioProfile
 from mrcomm.net.radio.reception import rule_of
@@ -119,27 +118,6 @@ class Frame:
     @property
     def airtime(self) -> float:
         return self.end - self.start
-
-
-def _dbm_to_mw(dbm: FloatArray) -> FloatArray:
-    """Power in mW (0 for NaN: a node without a position has no radio), the same bits on
-    every machine (:func:`_mw_of`)."""
-    mw = np.empty_like(dbm)
-    _mw_of(dbm, mw)
-    return mw
-
-
-@compiled
-def _mw_of(dbm: Any, out: Any) -> None:
-    """``out[s, r] = 10 ** (dbm[s, r] / 10)`` by the C library's ``pow``, one value at a
-    time (0 for NaN). numpy's own power picks its code by the processor: with AVX-512
-    it uses other routines, whose last bits differ, so the shared channel's air (and a
-    run's results) would depend on the machine. Compiled or plain, this loop gives the
-    C library's values, which numpy gives too where it has no such routines."""
-    for s in range(dbm.shape[0]):
-        for r in range(dbm.shape[1]):
-            value = dbm[s, r]
-            out[s, r] = 0.0 if value != value else 10.0 ** (value / 10.0)
 
 
 class SharedMedium:
@@ -204,11 +182,12 @@ class SharedMedium:
         """The step's mean received power ``power_dbm[s, r]`` (dBm; NaN: no radio)."""
         power_dbm = np.ascontiguousarray(power_dbm, dtype=np.float64)
         senses, hears = self._links[2], self._links[3]
+        power_mw = np.empty_like(power_dbm)
         air.set_links(
             power_dbm, self._sense_dbm, self.profile.sensitivity_dbm, senses, hears,
-            self._nodes[8],
+            self._nodes[8], power_mw,
         )  # fmt: skip
-        self._links = (_dbm_to_mw(power_dbm), power_dbm, senses, hears)
+        self._links = (power_mw, power_dbm, senses, hears)
 
     def airtime(self, bits: int) -> float:
         """Seconds on the air of a frame of ``bits``: preamble and bits at the rate."""
