@@ -198,3 +198,44 @@ def test_a_memo_answers_a_repeated_search_as_the_search_would() -> None:
     none = PlanMemo()
     assert sealed.plan((1.0, 1.0), (9.0, 4.0), memo=none) is None
     assert sealed.plan((1.0, 1.0), (9.0, 4.0), memo=none) is None
+
+
+def _corridor_mouth() -> OccupancyGrid:
+    """A room (y > 6) over a 2 m corridor (x = 2..4, y < 6), on 0.1 m cells."""
+    occ = np.zeros((100, 60), dtype=bool)
+    occ[0, :] = occ[-1, :] = occ[:, 0] = occ[:, -1] = True
+    occ[:60, :20] = occ[:60, 40:] = True
+    return OccupancyGrid(occ, 0.1)
+
+
+def _closest(point: tuple[float, float], path: PlannedPath) -> float:
+    pts = np.array(path.waypoints)
+    best = math.inf
+    for a, b in itertools.pairwise(pts):
+        d = b - a
+        t = float(np.clip(np.dot(np.subtract(point, a), d) / max(float(np.dot(d, d)), 1e-12), 0, 1))
+        best = min(best, math.dist(point, a + t * d))
+    return best
+
+
+def test_a_mate_inside_the_blocking_distance_is_left_not_crossed() -> None:
+    # The S4 knot: at the mouth of a corridor, on S4's 0.2 m planning cells, a mate
+    # 0.41 m away (closer than the blocking distance, 0.46 m). A disc shrunk to clear
+    # the start (0.41 - 0.2 m) let the path run 0.25 m from the mate's centre, through
+    # its body; the path must leave it by the escape cone instead (its cells are never
+    # closer to the mate than the start), and then go round it.
+    params = RobotParams(planner_resolution=0.2)
+    planner = GridPlanner(_corridor_mouth(), params)
+    start, mate = (2.921, 5.75), (3.164, 5.418)
+    near = math.dist(start, mate)
+    assert near < 2 * params.radius + params.block_margin
+    path = planner.plan(start, (2.8, 1.0), obstacles=[mate])
+    assert path is not None
+    assert _closest(mate, path) > near - 0.01
+    # A mate farther than the blocking distance is still shrunk to a disc short of the
+    # start (a path may pass it closer than two footprints and the margin, not touch it).
+    farther = (3.3, 5.2)
+    assert math.dist(start, farther) > 2 * params.radius + params.block_margin
+    path = planner.plan(start, (2.8, 1.0), obstacles=[farther])
+    assert path is not None
+    assert _closest(farther, path) > 2 * params.radius
