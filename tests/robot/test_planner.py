@@ -233,7 +233,7 @@ def test_a_mate_inside_the_blocking_distance_is_left_not_crossed() -> None:
     assert path is not None
     assert _closest(mate, path) > near - 0.01
     # A mate farther than the blocking distance is still shrunk to a disc short of the
-    # start (a path may pass it closer than two footprints and the margin, not touch it).
+    # start: here the path passes it closer than the blocking distance, not touching it.
     farther = (3.3, 5.2)
     assert math.dist(start, farther) > 2 * params.radius + params.block_margin
     path = planner.plan(start, (2.8, 1.0), obstacles=[farther])

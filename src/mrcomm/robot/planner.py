@@ -276,9 +276,9 @@ class GridPlanner:
         margin) is shrunk to a disc just short of the start. A nearer one keeps its
         whole disc but for an escape cone: the cells at least as far from it as the
         start is, within :data:`ESCAPE_HALF_ANGLE` of the way straight away from it.
-        A disc shrunk that far would let the path pass through the mate's body (at 0.45
-        m, a 0.31 m disc: the robot's path ran 0.26 m from the mate's centre, and the
-        base held before it for ever; see BENCHMARKS.md, the S4 knot)."""
+        A disc shrunk that far would let the path pass through the mate's body (on 0.2 m
+        cells a mate 0.41 m away blocked 0.21 m, the path ran 0.25 m from its centre,
+        and the base held before it for minutes: BENCHMARKS.md, the S4 knot)."""
         res = self.resolution
         hc, wc = self.shape
         cx, cy = self.cell_centre(0, 0)
