@@ -165,13 +165,10 @@ def test_lf_on_the_radio_with_esd_succeeds_where_nb_loses_statuses(
 #: again when the shadowing grid became finer (dc/32, was dc/8; the SSD-LF run, whose
 #: robots stay close in sight, lost nothing to the radio either way and kept its digest);
 #: and again (SLT-NB, ESD-LF) when a mission stopped waiting for a step without a pose
-#: in flight: they end 0.1 s sooner, and the old end rule gives the old digests; and
-#: again (SSD-LF) when the planner left a mate closer than the blocking distance by an
-#: escape cone instead of a disc shrunk into its body: successful, 7 tasks, execution
-#: 501.5 -> 492.3 s, 57 -> 50 near collisions (the old planner gives the old digest).
+#: in flight: they end 0.1 s sooner, and the old end rule gives the old digests.
 RADIO_DIGESTS = {
     "slt-nb": "03f92f95730a3f33b52ecec6a32058f646063df28dc23c892e190db056a36b71",
-    "ssd-lf": "a3ae2b36dce93dde34f79c5889f43670e4dba58e14917d2fe17db162571a160d",
+    "ssd-lf": "c082968f789a365048f2478600a4af47421a80ecebb9eb1ca7f0607201ba6229",
     "esd-lf": "9eae2cfae9ada8946c02e6bcde4edee5129a0d258bccbd9053612ff58911f126",
 }
 

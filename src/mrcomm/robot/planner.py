@@ -57,9 +57,6 @@ FIRST_STRETCH = 1.5
 #: does not make mates bigger (with one 0.2 m cell, 10 robots on the generated office
 #: S2 found fewer ways round each other and LF knotted at a junction in 3 of 15 runs).
 MATE_DISC_SLACK = 0.1
-#: A mate nearer than the blocking distance is left by a path that starts within this
-#: angle of the way straight away from it (see ``Planner._discs``).
-ESCAPE_HALF_ANGLE = math.radians(45.0)
 
 
 def astar_cells(
@@ -270,25 +267,14 @@ class GridPlanner:
         """The cells each of ``obstacles`` blocks: a disc of ``radius``, never covering
         the start (``starts``: the robot's position, and the centre of the free cell it
         was snapped to when it stands in the inflated zone), or the robot could not
-        leave its own cell.
-
-        A mate farther than the blocking distance (two footprints and the block
-        margin) is shrunk to a disc just short of the start. A nearer one keeps its
-        whole disc but for an escape cone: the cells at least as far from it as the
-        start is, within :data:`ESCAPE_HALF_ANGLE` of the way straight away from it.
-        A disc shrunk that far would let the path pass through the mate's body (on 0.2 m
-        cells a mate 0.41 m away blocked 0.21 m, the path ran 0.25 m from its centre,
-        and the base held before it for minutes: BENCHMARKS.md, the S4 knot)."""
+        leave its own cell."""
         res = self.resolution
         hc, wc = self.shape
         cx, cy = self.cell_centre(0, 0)
-        block = 2 * self.params.radius + self.params.block_margin
-        cos_escape = math.cos(ESCAPE_HALF_ANGLE)
         discs: list[Disc] = []
         for ox, oy in obstacles:
             near = min(math.hypot(sx - ox, sy - oy) for sx, sy in starts)
-            escape = near < block
-            r = radius if escape else min(radius, near - res)
+            r = min(radius, near - res)
             if r <= 0:
                 continue
             iy, ix = self.cell_of(ox, oy)
@@ -300,22 +286,7 @@ class GridPlanner:
             # (np.ogrid's rows and columns, made directly: the same numbers, less work)
             yy = np.arange(y0, y1)[:, None]
             xx = np.arange(x0, x1)[None, :]
-            dx = cx + xx * res - ox
-            dy = cy + yy * res - oy
-            d2 = dx**2 + dy**2
-            inside = d2 <= r * r
-            if escape:
-                sx, sy = starts[0]
-                ux, uy = sx - ox, sy - oy
-                u = math.hypot(ux, uy)
-                if u > 0.0:
-                    along = (dx * ux + dy * uy) / u  # distance along the way out
-                    cone = (d2 >= near * near) & (along >= cos_escape * np.sqrt(d2))
-                    inside &= ~cone
-                for sx, sy in starts:  # the start's own cells stay open
-                    sy_cell, sx_cell = self.cell_of(sx, sy)
-                    if y0 <= sy_cell < y1 and x0 <= sx_cell < x1:
-                        inside[sy_cell - y0, sx_cell - x0] = False
+            inside = ((cx + xx * res - ox) ** 2 + (cy + yy * res - oy) ** 2) <= r * r
             discs.append((y0, y1, x0, x1, inside))
         return discs
 
